@@ -1,0 +1,223 @@
+//! `meshletlab bench build`: every mesh in a folder x every strategy at one limit, timed (median of
+//! several runs), validated and measured; writes results/build.md and results/build.csv with the
+//! paper's Bunny figures beside ours.
+
+use super::{evaluate, machine_note, median, paper, right_align_numbers, today, Evaluation};
+use crate::mesh::{self, Mesh};
+use crate::meshlet::Limits;
+use crate::strategy::{self, Options};
+use anyhow::{bail, Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// Folder of input meshes (every supported file in it).
+    pub meshes: PathBuf,
+    /// Builds per (mesh, strategy); the median time is reported.
+    pub runs: usize,
+    /// Where build.md and build.csv go.
+    pub out: PathBuf,
+    /// Meshlet limits.
+    pub limits: Limits,
+    /// Strategy names (empty = all).
+    pub strategies: Vec<String>,
+    /// Strategy options.
+    pub options: Options,
+    /// No progress bar.
+    pub quiet: bool,
+}
+
+/// One row of the results.
+pub struct Row {
+    /// Mesh file stem.
+    pub mesh: String,
+    /// Triangles in the mesh.
+    pub triangles: usize,
+    /// The evaluation.
+    pub eval: Evaluation,
+}
+
+/// Mesh files in `dir`, sorted by name.
+pub fn mesh_files(dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("{}: cannot list mesh folder", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file() && mesh::Format::of(p).is_some())
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        bail!("{}: no mesh files (.ply, .obj, .gltf, .glb, optionally .zst)", dir.display());
+    }
+    Ok(files)
+}
+
+/// Short name of a mesh file: the file name without format extensions.
+pub fn mesh_name(p: &Path) -> String {
+    let n = p.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let n = n.strip_suffix(".zst").unwrap_or(&n).to_string();
+    match n.rsplit_once('.') {
+        Some((stem, _)) => stem.to_string(),
+        None => n,
+    }
+}
+
+/// Runs the benchmark and writes the results.
+pub fn run(cfg: &Config) -> Result<Vec<Row>> {
+    let files = mesh_files(&cfg.meshes)?;
+    let strategies = if cfg.strategies.is_empty() {
+        strategy::all(&cfg.options)
+    } else {
+        cfg.strategies.iter().map(|n| strategy::by_name(n, &cfg.options)).collect::<Result<_, _>>()?
+    };
+    let pb = if cfg.quiet { ProgressBar::hidden() } else { ProgressBar::new((files.len() * strategies.len()) as u64) };
+    pb.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
+    let mut rows = Vec::new();
+    for f in &files {
+        let name = mesh_name(f);
+        pb.set_message(format!("loading {name}"));
+        let m: Mesh = mesh::load(f)?;
+        for s in &strategies {
+            pb.set_message(format!("{name} / {}", s.name()));
+            let eval = evaluate(&m, s.as_ref(), cfg.limits, cfg.runs);
+            rows.push(Row { mesh: name.clone(), triangles: m.triangle_count(), eval });
+            pb.inc(1);
+        }
+    }
+    pb.finish_and_clear();
+    std::fs::create_dir_all(&cfg.out).with_context(|| format!("{}: cannot create", cfg.out.display()))?;
+    let csv = cfg.out.join("build.csv");
+    std::fs::write(&csv, to_csv(&rows)).with_context(|| format!("{}: cannot write", csv.display()))?;
+    let md = cfg.out.join("build.md");
+    std::fs::write(&md, to_markdown(&rows, cfg)).with_context(|| format!("{}: cannot write", md.display()))?;
+    if let Some(bad) = rows.iter().find(|r| r.eval.invalid.is_some()) {
+        bail!(
+            "{} / {}: invalid meshlets: {}",
+            bad.mesh,
+            bad.eval.strategy,
+            bad.eval.invalid.as_deref().unwrap_or_default()
+        );
+    }
+    Ok(rows)
+}
+
+fn to_csv(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "mesh,triangles,strategy,limits,time_ms_median,time_ms_min,runs,meshlets,mean_vertices,mean_triangles,\
+         vertex_fill,primitive_fill,cone_cullable,mean_radius_rel,duplication,connected,valid\n",
+    );
+    for r in rows {
+        let m = &r.eval.metrics;
+        let min = r.eval.times_ms.iter().copied().fold(f64::INFINITY, f64::min);
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{:.4},{:.4},{},{},{:.3},{:.3},{:.5},{:.5},{:.5},{:.6},{:.5},{:.5},{}",
+            r.mesh,
+            r.triangles,
+            r.eval.strategy,
+            r.eval.limits,
+            median(&r.eval.times_ms),
+            min,
+            r.eval.times_ms.len(),
+            m.meshlets,
+            m.mean_vertices,
+            m.mean_triangles,
+            m.vertex_fill,
+            m.primitive_fill,
+            m.cone_cullable,
+            m.mean_radius_rel,
+            m.duplication,
+            m.connected,
+            r.eval.invalid.is_none()
+        );
+    }
+    s
+}
+
+fn opt<T: std::fmt::Display>(x: Option<T>) -> String {
+    x.map(|v| v.to_string()).unwrap_or_else(|| "—".into())
+}
+
+fn to_markdown(rows: &[Row], cfg: &Config) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# Meshlet build benchmark\n");
+    let _ = writeln!(
+        s,
+        "Written by `meshletlab bench build --runs {} --limits {}` on {}. Do not edit: rerun the command.\n",
+        cfg.runs,
+        cfg.limits,
+        today()
+    );
+    let _ = writeln!(s, "Machine: {}.\n", machine_note());
+    let _ = writeln!(
+        s,
+        "Time is the median of {} builds (wall clock, one thread unless the strategy parallelises). Every output \
+         passed the validator. Columns: vfill/pfill = mean vertices/triangles per meshlet over the limits; \
+         cullable = fraction of meshlets whose normal cone can cull; radius = mean bounding-sphere radius over the \
+         mesh bounding-box diagonal; dup = meshlet vertices over referenced vertices; connected = fraction of \
+         meshlets that are one edge-connected piece.\n",
+        cfg.runs
+    );
+
+    if let Some(bunny) = rows.iter().find(|r| r.mesh == "stanford_bunny") {
+        let _ = writeln!(s, "## Bunny beside the paper\n");
+        let _ = writeln!(
+            s,
+            "Paper: Jensen, Frisvad, Bærentzen, JCGT 12(2), 2023, Tables 4, 7 and 8 (their bunny: {} triangles, their \
+             machine). Ours: the shared bunny ({} triangles), this machine. `—` = not published / not implemented yet.\n",
+            69_666, bunny.triangles
+        );
+        let mut t = comfy_table::Table::new();
+        t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+        t.set_header(["strategy (paper name)", "ms ours", "ms paper", "speed-up", "meshlets ours", "meshlets paper", "pfill ours", "pfill paper"]);
+        for p in paper::BUNNY {
+            let ours = rows.iter().find(|r| r.mesh == "stanford_bunny" && r.eval.strategy == p.ours);
+            let ms = ours.map(|r| median(&r.eval.times_ms));
+            t.add_row([
+                format!("{} ({})", p.ours, p.paper_name),
+                opt(ms.map(|v| format!("{v:.2}"))),
+                opt(p.time_ms.map(|v| format!("{v:.2}"))),
+                opt(ms.zip(p.time_ms).map(|(o, p)| format!("{:.1}x", p / o))),
+                opt(ours.map(|r| r.eval.metrics.meshlets)),
+                opt(p.meshlets),
+                opt(ours.map(|r| format!("{:.3}", r.eval.metrics.primitive_fill))),
+                opt(p.primitive_fill.map(|v| format!("{v:.3}"))),
+            ]);
+        }
+        right_align_numbers(&mut t, 1..8);
+        let _ = writeln!(s, "{t}\n");
+    }
+
+    let mut meshes: Vec<&str> = rows.iter().map(|r| r.mesh.as_str()).collect();
+    meshes.dedup();
+    let _ = writeln!(s, "## All meshes at {}\n", cfg.limits);
+    let mut t = comfy_table::Table::new();
+    t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+    t.set_header(["mesh", "triangles", "strategy", "ms", "meshlets", "vfill", "pfill", "cullable", "radius", "dup", "connected"]);
+    for r in rows {
+        let m = &r.eval.metrics;
+        t.add_row([
+            r.mesh.clone(),
+            r.triangles.to_string(),
+            r.eval.strategy.clone(),
+            format!("{:.2}", median(&r.eval.times_ms)),
+            m.meshlets.to_string(),
+            format!("{:.3}", m.vertex_fill),
+            format!("{:.3}", m.primitive_fill),
+            format!("{:.3}", m.cone_cullable),
+            format!("{:.4}", m.mean_radius_rel),
+            format!("{:.3}", m.duplication),
+            format!("{:.3}", m.connected),
+        ]);
+    }
+    right_align_numbers(&mut t, 1..2);
+    right_align_numbers(&mut t, 3..11);
+    let _ = writeln!(s, "{t}");
+    s
+}

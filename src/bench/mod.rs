@@ -1,0 +1,160 @@
+//! Measurement: one evaluation path (build, validate, bounds, metrics) shared by `stats`, `demo` and
+//! the `bench` commands, plus machine notes and tables for results/.
+
+pub mod build;
+pub mod paper;
+
+use crate::mesh::Mesh;
+use crate::meshlet::{bounds, validate, Limits, Meshlets, Metrics};
+use crate::strategy::Strategy;
+use serde::Serialize;
+use std::time::{Duration, Instant};
+
+/// One strategy's result on one mesh.
+#[derive(Clone, Debug, Serialize)]
+pub struct Evaluation {
+    /// Strategy name.
+    pub strategy: String,
+    /// Limits used.
+    pub limits: Limits,
+    /// Quality metrics (build time = median over the runs).
+    pub metrics: Metrics,
+    /// All measured build times in ms.
+    pub times_ms: Vec<f64>,
+    /// `None` when the validator accepted the output, else its message.
+    pub invalid: Option<String>,
+    /// The meshlets of the last run (not serialised).
+    #[serde(skip)]
+    pub meshlets: Meshlets,
+}
+
+/// Median of a non-empty slice.
+pub fn median(xs: &[f64]) -> f64 {
+    let mut v = xs.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    }
+}
+
+/// Builds `runs` times (>= 1), then validates the output and computes bounds and metrics.
+/// Also checks that repeated builds agree (determinism); a difference is reported as invalid.
+pub fn evaluate(mesh: &Mesh, strategy: &dyn Strategy, limits: Limits, runs: usize) -> Evaluation {
+    let mut times = Vec::with_capacity(runs.max(1));
+    let mut first: Option<Meshlets> = None;
+    let mut nondeterministic = false;
+    for _ in 0..runs.max(1) {
+        let t0 = Instant::now();
+        let ml = strategy.build(mesh, limits);
+        times.push(t0.elapsed().as_secs_f64() * 1e3);
+        match &first {
+            None => first = Some(ml),
+            Some(f) => nondeterministic |= *f != ml,
+        }
+    }
+    let ml = first.expect("at least one run");
+    let mut invalid = validate(mesh, &ml, limits).err().map(|e| e.to_string());
+    if nondeterministic && invalid.is_none() {
+        invalid = Some("repeated builds gave different meshlets".into());
+    }
+    let b = bounds::compute_bounds(mesh, &ml);
+    let med = median(&times);
+    let metrics = Metrics::compute(mesh, &ml, limits, &b, Some(Duration::from_secs_f64(med / 1e3)));
+    Evaluation { strategy: strategy.name().to_string(), limits, metrics, times_ms: times, invalid, meshlets: ml }
+}
+
+/// A short description of this machine and build for results/ headers.
+pub fn machine_note() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| s.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string()))
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let os = std::fs::read_to_string("/etc/os-release")
+        .ok()
+        .and_then(|s| s.lines().find(|l| l.starts_with("PRETTY_NAME=")).map(|l| l[12..].trim_matches('"').to_string()))
+        .unwrap_or_else(|| std::env::consts::OS.into());
+    let profile = if cfg!(debug_assertions) { "debug build" } else { "release build" };
+    format!(
+        "{cpu}, {cores} cores ({} rayon threads), {os}; meshletlab {} ({profile}), meshoptimizer 1.3 via meshopt 0.7",
+        rayon::current_num_threads(),
+        env!("CARGO_PKG_VERSION")
+    )
+}
+
+/// Today's date (UTC) as YYYY-MM-DD, without a date crate.
+pub fn today() -> String {
+    let days = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs() / 86_400).unwrap_or(0) as i64;
+    // Civil-from-days (Howard Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + (m <= 2) as i64;
+    format!("{y:04}-{m:02}-{d:02}")
+}
+
+/// The metrics table `stats` and `demo` print: one row per evaluation.
+pub fn metrics_table(rows: &[Evaluation]) -> comfy_table::Table {
+    let mut t = comfy_table::Table::new();
+    t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+    t.set_header([
+        "strategy", "meshlets", "verts/ml", "tris/ml", "vfill", "pfill", "radius/diag", "cullable", "dup", "connected",
+        "ms", "valid",
+    ]);
+    for r in rows {
+        let m = &r.metrics;
+        t.add_row([
+            r.strategy.clone(),
+            m.meshlets.to_string(),
+            format!("{:.1}", m.mean_vertices),
+            format!("{:.1}", m.mean_triangles),
+            format!("{:.3}", m.vertex_fill),
+            format!("{:.3}", m.primitive_fill),
+            format!("{:.4}", m.mean_radius_rel),
+            format!("{:.3}", m.cone_cullable),
+            format!("{:.3}", m.duplication),
+            format!("{:.3}", m.connected),
+            format!("{:.2}", m.build_ms.unwrap_or(f64::NAN)),
+            match &r.invalid {
+                None => "ok".into(),
+                Some(e) => format!("INVALID: {e}"),
+            },
+        ]);
+    }
+    right_align_numbers(&mut t, 1..11);
+    t
+}
+
+/// Right-aligns the given columns.
+pub fn right_align_numbers(t: &mut comfy_table::Table, cols: std::ops::Range<usize>) {
+    for c in cols {
+        if let Some(col) = t.column_mut(c) {
+            col.set_cell_alignment(comfy_table::CellAlignment::Right);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_and_date() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+        let d = today();
+        assert_eq!(d.len(), 10);
+        assert!(d.starts_with("20"));
+    }
+}

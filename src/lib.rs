@@ -1,0 +1,12 @@
+//! meshletlab: build, measure, render, compress and level-of-detail meshlets (triangle clusters for
+//! GPU mesh shaders).
+//!
+//! Data flows one way: [`mesh`] (load, validate, generate) -> [`adjacency`] -> [`strategy`] ->
+//! [`meshlet`] (model, validator, bounds, metrics) -> [`bench`] results.
+
+pub mod adjacency;
+pub mod bench;
+pub mod cli;
+pub mod mesh;
+pub mod meshlet;
+pub mod strategy;

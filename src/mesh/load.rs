@@ -1,0 +1,84 @@
+//! Format dispatch by file extension, with in-process zstd decompression of `*.zst`.
+
+use super::error::{MeshError, MeshErrorKind};
+use super::{gltf_io, obj, ply, Mesh};
+use std::path::Path;
+
+/// A supported mesh container.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// Stanford PLY, ASCII or binary.
+    Ply,
+    /// Wavefront OBJ.
+    Obj,
+    /// glTF 2.0 JSON with external or embedded buffers.
+    Gltf,
+    /// glTF 2.0 binary container.
+    Glb,
+}
+
+impl Format {
+    /// Format of a file name (case-insensitive; a trailing `.zst` is looked through) and whether it is
+    /// zstd-compressed.
+    pub fn of(path: &Path) -> Option<(Format, bool)> {
+        let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
+        let (stem, zst) = match name.strip_suffix(".zst") {
+            Some(s) => (s.to_string(), true),
+            None => (name, false),
+        };
+        let ext = Path::new(&stem).extension()?.to_str()?.to_string();
+        let f = match ext.as_str() {
+            "ply" => Format::Ply,
+            "obj" => Format::Obj,
+            "gltf" => Format::Gltf,
+            "glb" => Format::Glb,
+            _ => return None,
+        };
+        Some((f, zst))
+    }
+}
+
+/// Loads and validates a mesh from a file. Errors name the file.
+pub fn load(path: &Path) -> Result<Mesh, MeshError> {
+    if Format::of(path).is_none() {
+        return Err(MeshError::new(path, MeshErrorKind::UnknownFormat));
+    }
+    let bytes = std::fs::read(path).map_err(|e| MeshError::new(path, MeshErrorKind::Io(e)))?;
+    load_bytes(&bytes, path)
+}
+
+/// Loads and validates a mesh from bytes; `path` picks the format and labels errors (and is the base
+/// for a glTF file's external buffers).
+pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
+    let err = |k| MeshError::new(path, k);
+    let (format, zst) = Format::of(path).ok_or_else(|| err(MeshErrorKind::UnknownFormat))?;
+    let owned;
+    let data: &[u8] = if zst {
+        owned = zstd::stream::decode_all(bytes).map_err(|e| err(MeshErrorKind::Decompress(e.to_string())))?;
+        &owned
+    } else {
+        bytes
+    };
+    let (positions, indices) = match format {
+        Format::Ply => ply::parse(data),
+        Format::Obj => obj::parse(data),
+        Format::Gltf | Format::Glb => gltf_io::parse(data, path.parent()),
+    }
+    .map_err(err)?;
+    Mesh::new(positions, indices, path)
+}
+
+/// Writes a mesh as binary PLY, zstd-compressed when the name ends in `.zst`.
+pub fn save_ply(mesh: &Mesh, path: &Path) -> Result<(), MeshError> {
+    let err = |e| MeshError::new(path, MeshErrorKind::Io(e));
+    let file = std::io::BufWriter::new(std::fs::File::create(path).map_err(err)?);
+    let zst = path.to_string_lossy().to_ascii_lowercase().ends_with(".zst");
+    if zst {
+        let mut enc = zstd::stream::Encoder::new(file, 3).map_err(err)?;
+        ply::write_binary(&mesh.positions, &mesh.indices, &mut enc).map_err(err)?;
+        enc.finish().map_err(err)?;
+    } else {
+        ply::write_binary(&mesh.positions, &mesh.indices, file).map_err(err)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,51 @@
+//! Wavefront OBJ through `tobj`.
+//!
+//! Vertex-count semantics: tobj re-indexes every object/group to the vertices its faces reference.
+//! So the loaded mesh holds, object after object, only referenced vertices; unreferenced `v` lines
+//! are dropped, and a vertex shared by two objects appears once per object (bit-identical
+//! positions). Polygons are fan-triangulated; points and lines are ignored.
+
+use super::error::{parse_err, MeshErrorKind};
+
+/// Parses OBJ text into positions and triangle indices.
+pub fn parse(data: &[u8]) -> Result<(Vec<[f32; 3]>, Vec<u32>), MeshErrorKind> {
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let mut reader = std::io::BufReader::new(data);
+    // Materials are irrelevant here; never touch the file system for .mtl files.
+    let (models, _) = tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
+        .map_err(|e| parse_err("OBJ", e.to_string()))?;
+    let mut positions: Vec<[f32; 3]> = Vec::new();
+    let mut indices: Vec<u32> = Vec::new();
+    for m in &models {
+        let base = positions.len() as u64;
+        if m.mesh.positions.len() % 3 != 0 {
+            return Err(parse_err(format!("object '{}'", m.name), "position count is not a multiple of 3"));
+        }
+        positions.extend(m.mesh.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
+        if positions.len() as u64 > u32::MAX as u64 {
+            return Err(MeshErrorKind::TooLarge("more than 2^32 vertices".into()));
+        }
+        indices.extend(m.mesh.indices.iter().map(|&i| (base + i as u64) as u32));
+    }
+    Ok((positions, indices))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quads_and_objects() {
+        let src = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 9 9 9\no a\nf 1 2 3 4\no b\nf -4 -3 -2\n";
+        let (p, i) = parse(src.as_bytes()).unwrap();
+        // Object a: 4 vertices, 2 triangles; object b references 3 vertices again; v 9 9 9 is dropped.
+        assert_eq!(p.len(), 7);
+        assert_eq!(i.len(), 9);
+        assert!(!p.contains(&[9.0, 9.0, 9.0]));
+    }
+}

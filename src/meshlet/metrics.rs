@@ -1,0 +1,131 @@
+//! Quality metrics of a meshlet collection: what the tables in results/ and `meshletlab stats` show.
+
+use super::{bounds::MeshletBounds, Limits, Meshlets};
+use crate::mesh::Mesh;
+use serde::Serialize;
+use std::time::Duration;
+
+/// Metrics of one meshlet collection.
+#[derive(Clone, Debug, Serialize)]
+pub struct Metrics {
+    /// Number of meshlets.
+    pub meshlets: usize,
+    /// Mean vertices per meshlet.
+    pub mean_vertices: f64,
+    /// Mean triangles per meshlet.
+    pub mean_triangles: f64,
+    /// Mean vertices / max vertices.
+    pub vertex_fill: f64,
+    /// Mean triangles / max triangles (the paper's "primitive fill", Table 8).
+    pub primitive_fill: f64,
+    /// `vertex_histogram[k]` = meshlets with k vertices (k = 0..=max vertices; paper Figure 9).
+    pub vertex_histogram: Vec<u32>,
+    /// `triangle_histogram[k]` = meshlets with k triangles (k = 0..=max triangles).
+    pub triangle_histogram: Vec<u32>,
+    /// Mean bounding-sphere radius divided by the mesh bounding-box diagonal.
+    pub mean_radius_rel: f64,
+    /// Fraction of meshlets whose normal cone can cull from some viewpoint.
+    pub cone_cullable: f64,
+    /// Sum of meshlet vertex counts / vertices referenced by the mesh (1 = no vertex shared).
+    pub duplication: f64,
+    /// Fraction of meshlets whose triangles form one edge-connected piece.
+    pub connected: f64,
+    /// Wall time of the build in milliseconds (None when not measured).
+    pub build_ms: Option<f64>,
+}
+
+impl Metrics {
+    /// Computes the metrics; `bounds` must come from [`super::bounds::compute_bounds`] on the same meshlets.
+    pub fn compute(
+        mesh: &Mesh,
+        ml: &Meshlets,
+        limits: Limits,
+        bounds: &[MeshletBounds],
+        build_time: Option<Duration>,
+    ) -> Self {
+        let n = ml.len().max(1) as f64;
+        let mut vh = vec![0u32; limits.max_vertices as usize + 1];
+        let mut th = vec![0u32; limits.max_triangles as usize + 1];
+        let (mut sv, mut st) = (0usize, 0usize);
+        for m in &ml.meshlets {
+            sv += m.vertex_count as usize;
+            st += m.triangle_count as usize;
+            // Clamp: metrics of invalid collections still compute (the validator reports those).
+            let (vmax, tmax) = (vh.len() - 1, th.len() - 1);
+            vh[(m.vertex_count as usize).min(vmax)] += 1;
+            th[(m.triangle_count as usize).min(tmax)] += 1;
+        }
+        let mut referenced = vec![false; mesh.vertex_count()];
+        for &i in &mesh.indices {
+            referenced[i as usize] = true;
+        }
+        let referenced = referenced.iter().filter(|&&r| r).count().max(1);
+        let diag = mesh.bounding_box_diagonal().max(f32::MIN_POSITIVE) as f64;
+        let connected = (0..ml.len()).filter(|&i| is_edge_connected(ml.meshlet_triangles(i))).count();
+        Self {
+            meshlets: ml.len(),
+            mean_vertices: sv as f64 / n,
+            mean_triangles: st as f64 / n,
+            vertex_fill: sv as f64 / n / limits.max_vertices as f64,
+            primitive_fill: st as f64 / n / limits.max_triangles as f64,
+            vertex_histogram: vh,
+            triangle_histogram: th,
+            mean_radius_rel: bounds.iter().map(|b| b.sphere.radius as f64).sum::<f64>() / n / diag,
+            cone_cullable: bounds.iter().filter(|b| b.cone.can_cull()).count() as f64 / n,
+            duplication: sv as f64 / referenced as f64,
+            connected: connected as f64 / n,
+            build_ms: build_time.map(|d| d.as_secs_f64() * 1e3),
+        }
+    }
+}
+
+/// Whether a meshlet's triangles (local corners) form one piece through shared edges.
+pub fn is_edge_connected(tris: &[u8]) -> bool {
+    let t = tris.len() / 3;
+    if t <= 1 {
+        return true;
+    }
+    let mut parent: Vec<u16> = (0..t as u16).collect();
+    fn find(p: &mut [u16], mut x: u16) -> u16 {
+        while p[x as usize] != x {
+            p[x as usize] = p[p[x as usize] as usize];
+            x = p[x as usize];
+        }
+        x
+    }
+    // (edge key, triangle) pairs sorted: runs of equal keys are triangles sharing an edge.
+    let mut keys: Vec<(u16, u16)> = Vec::with_capacity(3 * t);
+    for (k, c) in tris.chunks_exact(3).enumerate() {
+        for i in 0..3 {
+            let (a, b) = (c[i], c[(i + 1) % 3]);
+            if a != b {
+                keys.push(((a.min(b) as u16) << 8 | a.max(b) as u16, k as u16));
+            }
+        }
+    }
+    keys.sort_unstable();
+    let mut pieces = t;
+    for w in keys.windows(2) {
+        if w[0].0 == w[1].0 {
+            let (ra, rb) = (find(&mut parent, w[0].1), find(&mut parent, w[1].1));
+            if ra != rb {
+                parent[ra.max(rb) as usize] = ra.min(rb);
+                pieces -= 1;
+            }
+        }
+    }
+    pieces == 1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn connectivity() {
+        assert!(is_edge_connected(&[0, 1, 2, 2, 1, 3]));
+        // Sharing only a vertex is not edge-connected.
+        assert!(!is_edge_connected(&[0, 1, 2, 2, 3, 4]));
+        assert!(is_edge_connected(&[0, 1, 2]));
+    }
+}
