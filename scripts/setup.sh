@@ -9,6 +9,11 @@ set -euo pipefail
 
 log() { echo "setup: $*" >&2; }
 
+if ! command -v cargo >/dev/null 2>&1; then
+  log "cargo not found: install a Rust toolchain (rustup, stable >= 1.87) first."
+  exit 1
+fi
+
 # Packages and the minimum version each needs ("" = any). mesa-vulkan-drivers must come from backports.
 declare -A MIN_VERSION=(
   [mesa-vulkan-drivers]="24"

@@ -54,7 +54,11 @@ impl Csr {
 pub fn vertex_triangles(mesh: &Mesh) -> Csr {
     let pairs = (0..mesh.triangle_count() as u32).flat_map(move |t| {
         let [a, b, c] = mesh.triangle(t as usize);
-        let uniq = [Some(a), (b != a).then_some(b), (c != a && c != b).then_some(c)];
+        let uniq = [
+            Some(a),
+            (b != a).then_some(b),
+            (c != a && c != b).then_some(c),
+        ];
         uniq.into_iter().flatten().map(move |v| (v, t))
     });
     Csr::from_pairs(mesh.vertex_count(), pairs)
@@ -103,7 +107,11 @@ impl EdgeTable {
             pairs.push((e, s / 3));
         }
         let faces = Csr::from_pairs(edges.len(), pairs.iter().copied());
-        Self { edges, faces, side_edge }
+        Self {
+            edges,
+            faces,
+            side_edge,
+        }
     }
 
     /// Number of triangle sides on edge `e`.
@@ -152,7 +160,7 @@ mod tests {
         let e02 = et.edges.iter().position(|&e| e == [0, 2]).unwrap();
         assert_eq!(et.faces.row(e02), &[0, 1, 2]);
         assert_eq!(et.side_edge[9], NO_EDGE); // side (5,5) of the degenerate triangle
-        assert_eq!(et.edges.windows(2).all(|w| w[0] < w[1]), true);
+        assert!(et.edges.windows(2).all(|w| w[0] < w[1]));
     }
 
     #[test]

@@ -49,14 +49,20 @@ pub fn mesh_files(dir: &Path) -> Result<Vec<PathBuf>> {
         .collect();
     files.sort();
     if files.is_empty() {
-        bail!("{}: no mesh files (.ply, .obj, .gltf, .glb, optionally .zst)", dir.display());
+        bail!(
+            "{}: no mesh files (.ply, .obj, .gltf, .glb, optionally .zst)",
+            dir.display()
+        );
     }
     Ok(files)
 }
 
 /// Short name of a mesh file: the file name without format extensions.
 pub fn mesh_name(p: &Path) -> String {
-    let n = p.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let n = p
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let n = n.strip_suffix(".zst").unwrap_or(&n).to_string();
     match n.rsplit_once('.') {
         Some((stem, _)) => stem.to_string(),
@@ -70,9 +76,16 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
     let strategies = if cfg.strategies.is_empty() {
         strategy::all(&cfg.options)
     } else {
-        cfg.strategies.iter().map(|n| strategy::by_name(n, &cfg.options)).collect::<Result<_, _>>()?
+        cfg.strategies
+            .iter()
+            .map(|n| strategy::by_name(n, &cfg.options))
+            .collect::<Result<_, _>>()?
     };
-    let pb = if cfg.quiet { ProgressBar::hidden() } else { ProgressBar::new((files.len() * strategies.len()) as u64) };
+    let pb = if cfg.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new((files.len() * strategies.len()) as u64)
+    };
     pb.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
             .expect("static template")
@@ -86,16 +99,23 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
         for s in &strategies {
             pb.set_message(format!("{name} / {}", s.name()));
             let eval = evaluate(&m, s.as_ref(), cfg.limits, cfg.runs);
-            rows.push(Row { mesh: name.clone(), triangles: m.triangle_count(), eval });
+            rows.push(Row {
+                mesh: name.clone(),
+                triangles: m.triangle_count(),
+                eval,
+            });
             pb.inc(1);
         }
     }
     pb.finish_and_clear();
-    std::fs::create_dir_all(&cfg.out).with_context(|| format!("{}: cannot create", cfg.out.display()))?;
+    std::fs::create_dir_all(&cfg.out)
+        .with_context(|| format!("{}: cannot create", cfg.out.display()))?;
     let csv = cfg.out.join("build.csv");
-    std::fs::write(&csv, to_csv(&rows)).with_context(|| format!("{}: cannot write", csv.display()))?;
+    std::fs::write(&csv, to_csv(&rows))
+        .with_context(|| format!("{}: cannot write", csv.display()))?;
     let md = cfg.out.join("build.md");
-    std::fs::write(&md, to_markdown(&rows, cfg)).with_context(|| format!("{}: cannot write", md.display()))?;
+    std::fs::write(&md, to_markdown(&rows, cfg))
+        .with_context(|| format!("{}: cannot write", md.display()))?;
     if let Some(bad) = rows.iter().find(|r| r.eval.invalid.is_some()) {
         bail!(
             "{} / {}: invalid meshlets: {}",
@@ -114,7 +134,12 @@ fn to_csv(rows: &[Row]) -> String {
     );
     for r in rows {
         let m = &r.eval.metrics;
-        let min = r.eval.times_ms.iter().copied().fold(f64::INFINITY, f64::min);
+        let min = r
+            .eval
+            .times_ms
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
         let _ = writeln!(
             s,
             "{},{},{},{},{:.4},{:.4},{},{},{:.3},{:.3},{:.5},{:.5},{:.5},{:.6},{:.5},{:.5},{}",
@@ -175,9 +200,20 @@ fn to_markdown(rows: &[Row], cfg: &Config) -> String {
         );
         let mut t = comfy_table::Table::new();
         t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
-        t.set_header(["strategy (paper name)", "ms ours", "ms paper", "speed-up", "meshlets ours", "meshlets paper", "pfill ours", "pfill paper"]);
+        t.set_header([
+            "strategy (paper name)",
+            "ms ours",
+            "ms paper",
+            "speed-up",
+            "meshlets ours",
+            "meshlets paper",
+            "pfill ours",
+            "pfill paper",
+        ]);
         for p in paper::BUNNY {
-            let ours = rows.iter().find(|r| r.mesh == "stanford_bunny" && r.eval.strategy == p.ours);
+            let ours = rows
+                .iter()
+                .find(|r| r.mesh == "stanford_bunny" && r.eval.strategy == p.ours);
             let ms = ours.map(|r| median(&r.eval.times_ms));
             t.add_row([
                 format!("{} ({})", p.ours, p.paper_name),
@@ -199,7 +235,19 @@ fn to_markdown(rows: &[Row], cfg: &Config) -> String {
     let _ = writeln!(s, "## All meshes at {}\n", cfg.limits);
     let mut t = comfy_table::Table::new();
     t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
-    t.set_header(["mesh", "triangles", "strategy", "ms", "meshlets", "vfill", "pfill", "cullable", "radius", "dup", "connected"]);
+    t.set_header([
+        "mesh",
+        "triangles",
+        "strategy",
+        "ms",
+        "meshlets",
+        "vfill",
+        "pfill",
+        "cullable",
+        "radius",
+        "dup",
+        "connected",
+    ]);
     for r in rows {
         let m = &r.eval.metrics;
         t.add_row([

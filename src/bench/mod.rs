@@ -65,22 +65,49 @@ pub fn evaluate(mesh: &Mesh, strategy: &dyn Strategy, limits: Limits, runs: usiz
     }
     let b = bounds::compute_bounds(mesh, &ml);
     let med = median(&times);
-    let metrics = Metrics::compute(mesh, &ml, limits, &b, Some(Duration::from_secs_f64(med / 1e3)));
-    Evaluation { strategy: strategy.name().to_string(), limits, metrics, times_ms: times, invalid, meshlets: ml }
+    let metrics = Metrics::compute(
+        mesh,
+        &ml,
+        limits,
+        &b,
+        Some(Duration::from_secs_f64(med / 1e3)),
+    );
+    Evaluation {
+        strategy: strategy.name().to_string(),
+        limits,
+        metrics,
+        times_ms: times,
+        invalid,
+        meshlets: ml,
+    }
 }
 
 /// A short description of this machine and build for results/ headers.
 pub fn machine_note() -> String {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
         .unwrap_or_else(|| "unknown CPU".into());
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
     let os = std::fs::read_to_string("/etc/os-release")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("PRETTY_NAME=")).map(|l| l[12..].trim_matches('"').to_string()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("PRETTY_NAME="))
+                .map(|l| l[12..].trim_matches('"').to_string())
+        })
         .unwrap_or_else(|| std::env::consts::OS.into());
-    let profile = if cfg!(debug_assertions) { "debug build" } else { "release build" };
+    let profile = if cfg!(debug_assertions) {
+        "debug build"
+    } else {
+        "release build"
+    };
     format!(
         "{cpu}, {cores} cores ({} rayon threads), {os}; meshletlab {} ({profile}), meshoptimizer 1.3 via meshopt 0.7",
         rayon::current_num_threads(),
@@ -90,7 +117,10 @@ pub fn machine_note() -> String {
 
 /// Today's date (UTC) as YYYY-MM-DD, without a date crate.
 pub fn today() -> String {
-    let days = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs() / 86_400).unwrap_or(0) as i64;
+    let days = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs() / 86_400)
+        .unwrap_or(0) as i64;
     // Civil-from-days (Howard Hinnant's algorithm).
     let z = days + 719_468;
     let era = z.div_euclid(146_097);
@@ -109,8 +139,18 @@ pub fn metrics_table(rows: &[Evaluation]) -> comfy_table::Table {
     let mut t = comfy_table::Table::new();
     t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
     t.set_header([
-        "strategy", "meshlets", "verts/ml", "tris/ml", "vfill", "pfill", "radius/diag", "cullable", "dup", "connected",
-        "ms", "valid",
+        "strategy",
+        "meshlets",
+        "verts/ml",
+        "tris/ml",
+        "vfill",
+        "pfill",
+        "radius/diag",
+        "cullable",
+        "dup",
+        "connected",
+        "ms",
+        "valid",
     ]);
     for r in rows {
         let m = &r.metrics;

@@ -21,11 +21,41 @@ pub struct PaperBunny {
 
 /// The paper's Bunny rows, in its order.
 pub const BUNNY: &[PaperBunny] = &[
-    PaperBunny { paper_name: "NVIDIA + tipsify", ours: "nvidia+tipsify", time_ms: Some(13.54), meshlets: Some(762), primitive_fill: Some(0.725) },
-    PaperBunny { paper_name: "Kapoulkine (meshoptimizer)", ours: "meshopt", time_ms: Some(46.86), meshlets: Some(740), primitive_fill: None },
-    PaperBunny { paper_name: "Greedy", ours: "greedy", time_ms: Some(133.6), meshlets: Some(756), primitive_fill: Some(0.731) },
-    PaperBunny { paper_name: "Bounding sphere", ours: "bsphere", time_ms: Some(255.1), meshlets: Some(731), primitive_fill: Some(0.756) },
-    PaperBunny { paper_name: "k-medoids", ours: "kmedoids", time_ms: Some(50_769.0), meshlets: Some(921), primitive_fill: Some(0.600) },
+    PaperBunny {
+        paper_name: "NVIDIA + tipsify",
+        ours: "nvidia+tipsify",
+        time_ms: Some(13.54),
+        meshlets: Some(762),
+        primitive_fill: Some(0.725),
+    },
+    PaperBunny {
+        paper_name: "Kapoulkine (meshoptimizer)",
+        ours: "meshopt",
+        time_ms: Some(46.86),
+        meshlets: Some(740),
+        primitive_fill: None,
+    },
+    PaperBunny {
+        paper_name: "Greedy",
+        ours: "greedy",
+        time_ms: Some(133.6),
+        meshlets: Some(756),
+        primitive_fill: Some(0.731),
+    },
+    PaperBunny {
+        paper_name: "Bounding sphere",
+        ours: "bsphere",
+        time_ms: Some(255.1),
+        meshlets: Some(731),
+        primitive_fill: Some(0.756),
+    },
+    PaperBunny {
+        paper_name: "k-medoids",
+        ours: "kmedoids",
+        time_ms: Some(50_769.0),
+        meshlets: Some(921),
+        primitive_fill: Some(0.600),
+    },
 ];
 
 /// The paper's row for one of our strategies.

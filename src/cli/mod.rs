@@ -48,7 +48,11 @@ pub struct StrategyArgs {
 
 impl StrategyArgs {
     fn options(&self) -> Options {
-        Options { cone_weight: self.cone_weight, cache_size: self.cache_size, fill_weight: self.fill_weight.max(0.0) }
+        Options {
+            cone_weight: self.cone_weight,
+            cache_size: self.cache_size,
+            fill_weight: self.fill_weight.max(0.0),
+        }
     }
 }
 
@@ -151,7 +155,9 @@ pub enum BenchCommand {
 
 /// The default folder of real test meshes.
 pub fn default_meshes_dir() -> PathBuf {
-    std::env::var_os("MESHLETLAB_MESHES").map(PathBuf::from).unwrap_or_else(|| PathBuf::from("../shared/meshes"))
+    std::env::var_os("MESHLETLAB_MESHES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("../shared/meshes"))
 }
 
 /// Parses arguments and runs the command.
@@ -169,16 +175,40 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
         }
     };
     if let Some(n) = cli.threads {
-        rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build_global().context("cannot set thread count")?;
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+            .context("cannot set thread count")?;
     }
     let q = cli.quiet;
     match cli.command {
-        Command::Stats { mesh, strategy, runs, json, args } => stats(&mesh, &strategy, runs, json, &args, q),
-        Command::Build { mesh, strategy, output, args } => build(&mesh, &strategy, &output, &args, q),
+        Command::Stats {
+            mesh,
+            strategy,
+            runs,
+            json,
+            args,
+        } => stats(&mesh, &strategy, runs, json, &args, q),
+        Command::Build {
+            mesh,
+            strategy,
+            output,
+            args,
+        } => build(&mesh, &strategy, &output, &args, q),
         Command::Check { mesh, file } => check(&mesh, &file, q),
         Command::Demo { mesh, seed, args } => demo(&mesh, seed, &args, q),
-        Command::Subdivide { mesh, output, levels } => subdivide(&mesh, &output, levels, q),
-        Command::Bench(BenchCommand::Build { meshes, runs, out, strategy, args }) => {
+        Command::Subdivide {
+            mesh,
+            output,
+            levels,
+        } => subdivide(&mesh, &output, levels, q),
+        Command::Bench(BenchCommand::Build {
+            meshes,
+            runs,
+            out,
+            strategy,
+            args,
+        }) => {
             let cfg = bench::build::Config {
                 meshes: meshes.unwrap_or_else(default_meshes_dir),
                 runs: runs as usize,
@@ -205,7 +235,9 @@ fn spinner(quiet: bool, msg: String) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let pb = ProgressBar::new_spinner();
-    pb.set_style(ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("static template"));
+    pb.set_style(
+        ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("static template"),
+    );
     pb.set_message(msg);
     pb.enable_steady_tick(Duration::from_millis(120));
     pb
@@ -222,7 +254,9 @@ fn strategies(spec: &str, opts: &Options) -> Result<Vec<Box<dyn Strategy>>> {
     if spec == "all" {
         return Ok(strategy::all(opts));
     }
-    spec.split(',').map(|n| strategy::by_name(n.trim(), opts).map_err(Into::into)).collect()
+    spec.split(',')
+        .map(|n| strategy::by_name(n.trim(), opts).map_err(Into::into))
+        .collect()
 }
 
 fn evaluate_all(
@@ -233,8 +267,16 @@ fn evaluate_all(
     label: &str,
     quiet: bool,
 ) -> Vec<Evaluation> {
-    let pb = if quiet { ProgressBar::hidden() } else { ProgressBar::new(list.len() as u64) };
-    pb.set_style(ProgressStyle::with_template("[{bar:20}] {pos}/{len} {msg}").expect("static template").progress_chars("=> "));
+    let pb = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(list.len() as u64)
+    };
+    pb.set_style(
+        ProgressStyle::with_template("[{bar:20}] {pos}/{len} {msg}")
+            .expect("static template")
+            .progress_chars("=> "),
+    );
     let rows = list
         .iter()
         .map(|s| {
@@ -267,16 +309,34 @@ fn describe(name: &str, s: &MeshStats) -> String {
 
 fn fail_on_invalid(rows: &[Evaluation], mesh: &str) -> Result<()> {
     if let Some(bad) = rows.iter().find(|r| r.invalid.is_some()) {
-        bail!("{mesh}: strategy {} produced invalid meshlets: {}", bad.strategy, bad.invalid.as_deref().unwrap_or(""));
+        bail!(
+            "{mesh}: strategy {} produced invalid meshlets: {}",
+            bad.strategy,
+            bad.invalid.as_deref().unwrap_or("")
+        );
     }
     Ok(())
 }
 
-fn stats(path: &Path, spec: &str, runs: usize, json: bool, args: &StrategyArgs, quiet: bool) -> Result<()> {
+fn stats(
+    path: &Path,
+    spec: &str,
+    runs: usize,
+    json: bool,
+    args: &StrategyArgs,
+    quiet: bool,
+) -> Result<()> {
     let list = strategies(spec, &args.options())?;
     let m = load(path, quiet)?;
     let st = MeshStats::of(&m);
-    let rows = evaluate_all(&m, &list, args.limits, runs.max(1), &path.display().to_string(), quiet);
+    let rows = evaluate_all(
+        &m,
+        &list,
+        args.limits,
+        runs.max(1),
+        &path.display().to_string(),
+        quiet,
+    );
     if json {
         let out = serde_json::json!({
             "mesh": path.display().to_string(),
@@ -301,7 +361,12 @@ fn build(path: &Path, name: &str, output: &Path, args: &StrategyArgs, quiet: boo
     let ml = s.build(&m, args.limits);
     let ms = t0.elapsed().as_secs_f64() * 1e3;
     pb.finish_and_clear();
-    validate(&m, &ml, args.limits).with_context(|| format!("{}: strategy {name} produced invalid meshlets", path.display()))?;
+    validate(&m, &ml, args.limits).with_context(|| {
+        format!(
+            "{}: strategy {name} produced invalid meshlets",
+            path.display()
+        )
+    })?;
     let file = MeshletFile {
         limits: args.limits,
         source_vertices: m.vertex_count() as u32,
@@ -325,7 +390,9 @@ fn build(path: &Path, name: &str, output: &Path, args: &StrategyArgs, quiet: boo
 fn check(path: &Path, file: &Path, quiet: bool) -> Result<()> {
     let f = MeshletFile::load(file)?;
     let m = load(path, quiet)?;
-    if f.source_vertices as usize != m.vertex_count() || f.source_triangles as usize != m.triangle_count() {
+    if f.source_vertices as usize != m.vertex_count()
+        || f.source_triangles as usize != m.triangle_count()
+    {
         bail!(
             "{}: built from a mesh with {} vertices / {} triangles, but {} has {} / {}",
             file.display(),
@@ -337,7 +404,11 @@ fn check(path: &Path, file: &Path, quiet: bool) -> Result<()> {
         );
     }
     if f.fingerprint != m.fingerprint() {
-        bail!("{}: built from a different mesh than {} (fingerprint differs)", file.display(), path.display());
+        bail!(
+            "{}: built from a different mesh than {} (fingerprint differs)",
+            file.display(),
+            path.display()
+        );
     }
     validate(&m, &f.meshlets, f.limits).with_context(|| format!("{}: invalid", file.display()))?;
     println!(
@@ -354,11 +425,20 @@ fn check(path: &Path, file: &Path, quiet: bool) -> Result<()> {
 fn demo(files: &[PathBuf], seed: u64, args: &StrategyArgs, quiet: bool) -> Result<()> {
     let list = strategy::all(&args.options());
     let meshes: Vec<(String, Mesh)> = if files.is_empty() {
-        println!("meshletlab demo: all strategies on generated meshes (seed {seed}), limits {}.", args.limits);
+        println!(
+            "meshletlab demo: all strategies on generated meshes (seed {seed}), limits {}.",
+            args.limits
+        );
         println!("Pass --mesh FILE to use real meshes instead.\n");
-        generate::demo_set(seed).into_iter().map(|g| (g.name.to_string(), g.mesh)).collect()
+        generate::demo_set(seed)
+            .into_iter()
+            .map(|g| (g.name.to_string(), g.mesh))
+            .collect()
     } else {
-        files.iter().map(|p| Ok((p.display().to_string(), load(p, quiet)?))).collect::<Result<_>>()?
+        files
+            .iter()
+            .map(|p| Ok((p.display().to_string(), load(p, quiet)?)))
+            .collect::<Result<_>>()?
     };
     let mut totals: Vec<(String, usize)> = list.iter().map(|s| (s.name().to_string(), 0)).collect();
     for (name, m) in &meshes {
@@ -371,8 +451,16 @@ fn demo(files: &[PathBuf], seed: u64, args: &StrategyArgs, quiet: bool) -> Resul
             t.1 += r.metrics.meshlets;
         }
     }
-    let reference = totals.iter().find(|t| t.0 == "meshopt").map(|t| t.1).unwrap_or(1).max(1);
-    println!("Total meshlets over {} meshes (fewer is better; relative to meshopt):", meshes.len());
+    let reference = totals
+        .iter()
+        .find(|t| t.0 == "meshopt")
+        .map(|t| t.1)
+        .unwrap_or(1)
+        .max(1);
+    println!(
+        "Total meshlets over {} meshes (fewer is better; relative to meshopt):",
+        meshes.len()
+    );
     for (n, c) in &totals {
         println!("  {n:<16} {c:>8}  {:>6.3}", *c as f64 / reference as f64);
     }
@@ -383,7 +471,8 @@ fn demo(files: &[PathBuf], seed: u64, args: &StrategyArgs, quiet: bool) -> Resul
 fn subdivide(path: &Path, output: &Path, levels: u32, quiet: bool) -> Result<()> {
     let m = load(path, quiet)?;
     let pb = spinner(quiet, format!("subdividing {} level(s)", levels));
-    let s = mesh::subdivide::subdivide(&m, levels).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    let s = mesh::subdivide::subdivide(&m, levels)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     pb.set_message(format!("writing {}", output.display()));
     mesh::save_ply(&s, output)?;
     pb.finish_and_clear();

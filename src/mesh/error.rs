@@ -51,7 +51,9 @@ pub enum MeshErrorKind {
         value: String,
     },
     /// A triangle references a vertex that does not exist.
-    #[error("triangle {triangle} references vertex {index}, but there are only {vertex_count} vertices")]
+    #[error(
+        "triangle {triangle} references vertex {index}, but there are only {vertex_count} vertices"
+    )]
     IndexOutOfRange {
         /// Triangle number (0-based, after triangulation).
         triangle: usize,
@@ -71,11 +73,17 @@ pub enum MeshErrorKind {
 impl MeshError {
     /// Creates an error for `path`.
     pub fn new(path: impl Into<PathBuf>, kind: MeshErrorKind) -> Self {
-        Self { path: path.into(), kind }
+        Self {
+            path: path.into(),
+            kind,
+        }
     }
 }
 
 /// Shorthand for a parse error at a location.
 pub(crate) fn parse_err(location: impl Into<String>, message: impl Into<String>) -> MeshErrorKind {
-    MeshErrorKind::Parse { location: location.into(), message: message.into() }
+    MeshErrorKind::Parse {
+        location: location.into(),
+        message: message.into(),
+    }
 }

@@ -18,9 +18,18 @@ pub struct Generated {
 /// The three demo meshes (each tens of thousands of triangles).
 pub fn demo_set(seed: u64) -> Vec<Generated> {
     vec![
-        Generated { name: "noisy-sphere", mesh: noisy_sphere(5, 0.15, seed) },
-        Generated { name: "knot-tube", mesh: knot_tube(640, 40, seed) },
-        Generated { name: "terrain", mesh: terrain(160, seed) },
+        Generated {
+            name: "noisy-sphere",
+            mesh: noisy_sphere(5, 0.15, seed),
+        },
+        Generated {
+            name: "knot-tube",
+            mesh: knot_tube(640, 40, seed),
+        },
+        Generated {
+            name: "terrain",
+            mesh: terrain(160, seed),
+        },
     ]
 }
 
@@ -33,7 +42,9 @@ pub fn splitmix64(mut x: u64) -> u64 {
 }
 
 fn lattice(ix: i32, iy: i32, iz: i32, seed: u64) -> f32 {
-    let h = splitmix64(seed ^ (ix as u32 as u64) ^ ((iy as u32 as u64) << 21) ^ ((iz as u32 as u64) << 42));
+    let h = splitmix64(
+        seed ^ (ix as u32 as u64) ^ ((iy as u32 as u64) << 21) ^ ((iz as u32 as u64) << 42),
+    );
     (h >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
 }
 
@@ -74,13 +85,23 @@ pub fn fbm(p: Vec3, octaves: u32, seed: u64) -> f32 {
 pub fn noisy_sphere(levels: u32, roughness: f32, seed: u64) -> Mesh {
     let t = (1.0 + 5f32.sqrt()) / 2.0;
     let positions = vec![
-        [-1.0, t, 0.0], [1.0, t, 0.0], [-1.0, -t, 0.0], [1.0, -t, 0.0],
-        [0.0, -1.0, t], [0.0, 1.0, t], [0.0, -1.0, -t], [0.0, 1.0, -t],
-        [t, 0.0, -1.0], [t, 0.0, 1.0], [-t, 0.0, -1.0], [-t, 0.0, 1.0],
+        [-1.0, t, 0.0],
+        [1.0, t, 0.0],
+        [-1.0, -t, 0.0],
+        [1.0, -t, 0.0],
+        [0.0, -1.0, t],
+        [0.0, 1.0, t],
+        [0.0, -1.0, -t],
+        [0.0, 1.0, -t],
+        [t, 0.0, -1.0],
+        [t, 0.0, 1.0],
+        [-t, 0.0, -1.0],
+        [-t, 0.0, 1.0],
     ];
     let indices = vec![
-        0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
-        3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1,
+        0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7,
+        1, 8, 3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9,
+        8, 1,
     ];
     let ico = Mesh { positions, indices };
     let mut m = subdivide::subdivide(&ico, levels).expect("icosphere fits u32");
@@ -134,7 +155,10 @@ pub fn terrain(n: usize, seed: u64) -> Mesh {
     let mut positions = Vec::with_capacity(n * n);
     for y in 0..n {
         for x in 0..n {
-            let (fx, fy) = (x as f32 / (n - 1) as f32 * 2.0 - 1.0, y as f32 / (n - 1) as f32 * 2.0 - 1.0);
+            let (fx, fy) = (
+                x as f32 / (n - 1) as f32 * 2.0 - 1.0,
+                y as f32 / (n - 1) as f32 * 2.0 - 1.0,
+            );
             let h = 0.35 * fbm(Vec3::new(fx * 2.5, fy * 2.5, 0.5), 6, seed);
             positions.push([fx, h, fy]);
         }

@@ -25,10 +25,14 @@ pub fn parse(data: &[u8], base: Option<&Path>) -> Result<(Vec<[f32; 3]>, Vec<u32
         None => doc.scenes().flat_map(|s| s.nodes()).collect(),
     };
     // Iterative walk; a depth cap guards against cyclic node graphs in malformed files.
-    let mut stack: Vec<(gltf::Node, Mat4, usize)> = roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    let mut stack: Vec<(gltf::Node, Mat4, usize)> =
+        roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
     while let Some((node, parent, depth)) = stack.pop() {
         if depth > 1024 {
-            return Err(parse_err(format!("node {}", node.index()), "node hierarchy deeper than 1024 (cycle?)"));
+            return Err(parse_err(
+                format!("node {}", node.index()),
+                "node hierarchy deeper than 1024 (cycle?)",
+            ));
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if let Some(mesh) = node.mesh() {
@@ -52,7 +56,10 @@ fn append_mesh(
     let flip = world.determinant() < 0.0;
     for prim in mesh.primitives() {
         let loc = || format!("mesh {} primitive {}", mesh.index(), prim.index());
-        if !matches!(prim.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+        if !matches!(
+            prim.mode(),
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
             continue;
         }
         let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
@@ -67,12 +74,18 @@ fn append_mesh(
             None => (0..n).collect(),
         };
         if let Some(&bad) = local.iter().find(|&&i| i >= n) {
-            return Err(parse_err(loc(), format!("index {bad} out of range ({n} vertices)")));
+            return Err(parse_err(
+                loc(),
+                format!("index {bad} out of range ({n} vertices)"),
+            ));
         }
         let tris: Vec<[u32; 3]> = match prim.mode() {
             Mode::Triangles => {
-                if local.len() % 3 != 0 {
-                    return Err(parse_err(loc(), format!("{} indices is not a multiple of 3", local.len())));
+                if !local.len().is_multiple_of(3) {
+                    return Err(parse_err(
+                        loc(),
+                        format!("{} indices is not a multiple of 3", local.len()),
+                    ));
                 }
                 local.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect()
             }
@@ -85,7 +98,9 @@ fn append_mesh(
                     }
                 })
                 .collect(),
-            _ => (2..local.len()).map(|i| [local[0], local[i - 1], local[i]]).collect(),
+            _ => (2..local.len())
+                .map(|i| [local[0], local[i - 1], local[i]])
+                .collect(),
         };
         if positions.len() > u32::MAX as usize {
             return Err(MeshErrorKind::TooLarge("more than 2^32 vertices".into()));

@@ -54,7 +54,8 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
     let (format, zst) = Format::of(path).ok_or_else(|| err(MeshErrorKind::UnknownFormat))?;
     let owned;
     let data: &[u8] = if zst {
-        owned = zstd::stream::decode_all(bytes).map_err(|e| err(MeshErrorKind::Decompress(e.to_string())))?;
+        owned = zstd::stream::decode_all(bytes)
+            .map_err(|e| err(MeshErrorKind::Decompress(e.to_string())))?;
         &owned
     } else {
         bytes
@@ -72,7 +73,10 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
 pub fn save_ply(mesh: &Mesh, path: &Path) -> Result<(), MeshError> {
     let err = |e| MeshError::new(path, MeshErrorKind::Io(e));
     let file = std::io::BufWriter::new(std::fs::File::create(path).map_err(err)?);
-    let zst = path.to_string_lossy().to_ascii_lowercase().ends_with(".zst");
+    let zst = path
+        .to_string_lossy()
+        .to_ascii_lowercase()
+        .ends_with(".zst");
     if zst {
         let mut enc = zstd::stream::Encoder::new(file, 3).map_err(err)?;
         ply::write_binary(&mesh.positions, &mesh.indices, &mut enc).map_err(err)?;

@@ -55,7 +55,11 @@ impl Mesh {
     /// The three vertex indices of triangle `t`.
     #[inline]
     pub fn triangle(&self, t: usize) -> [u32; 3] {
-        [self.indices[3 * t], self.indices[3 * t + 1], self.indices[3 * t + 2]]
+        [
+            self.indices[3 * t],
+            self.indices[3 * t + 1],
+            self.indices[3 * t + 2],
+        ]
     }
 
     /// Position of vertex `v` as a vector.
@@ -91,7 +95,7 @@ impl Mesh {
                 self.positions.len()
             )));
         }
-        if self.indices.len() % 3 != 0 {
+        if !self.indices.len().is_multiple_of(3) {
             return Err(MeshErrorKind::CountMismatch(format!(
                 "index count {} is not a multiple of 3",
                 self.indices.len()
@@ -105,7 +109,10 @@ impl Mesh {
         }
         for (v, p) in self.positions.iter().enumerate() {
             if let Some(c) = p.iter().find(|c| !c.is_finite()) {
-                return Err(MeshErrorKind::NonFinite { vertex: v, value: c.to_string() });
+                return Err(MeshErrorKind::NonFinite {
+                    vertex: v,
+                    value: c.to_string(),
+                });
             }
         }
         let n = self.positions.len();

@@ -1,9 +1,9 @@
 //! Wavefront OBJ through `tobj`.
 //!
-//! Vertex-count semantics: tobj re-indexes every object/group to the vertices its faces reference.
-//! So the loaded mesh holds, object after object, only referenced vertices; unreferenced `v` lines
-//! are dropped, and a vertex shared by two objects appears once per object (bit-identical
-//! positions). Polygons are fan-triangulated; points and lines are ignored.
+//! Vertex-count semantics: tobj re-indexes every object/group to the vertices its faces reference,
+//! numbered in order of first use. So the loaded mesh holds, object after object, only referenced
+//! vertices; unreferenced `v` lines are dropped, and a vertex shared by two objects appears once per
+//! object (bit-identical positions). Triangles keep their file order and winding. Polygons are fan-triangulated; points and lines are ignored.
 
 use super::error::{parse_err, MeshErrorKind};
 
@@ -17,14 +17,18 @@ pub fn parse(data: &[u8]) -> Result<(Vec<[f32; 3]>, Vec<u32>), MeshErrorKind> {
     };
     let mut reader = std::io::BufReader::new(data);
     // Materials are irrelevant here; never touch the file system for .mtl files.
-    let (models, _) = tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
-        .map_err(|e| parse_err("OBJ", e.to_string()))?;
+    let (models, _) =
+        tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
+            .map_err(|e| parse_err("OBJ", e.to_string()))?;
     let mut positions: Vec<[f32; 3]> = Vec::new();
     let mut indices: Vec<u32> = Vec::new();
     for m in &models {
         let base = positions.len() as u64;
         if m.mesh.positions.len() % 3 != 0 {
-            return Err(parse_err(format!("object '{}'", m.name), "position count is not a multiple of 3"));
+            return Err(parse_err(
+                format!("object '{}'", m.name),
+                "position count is not a multiple of 3",
+            ));
         }
         positions.extend(m.mesh.positions.chunks_exact(3).map(|p| [p[0], p[1], p[2]]));
         if positions.len() as u64 > u32::MAX as u64 {

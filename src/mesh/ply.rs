@@ -89,18 +89,32 @@ enum Role {
 /// Parses a whole PLY file into positions and a triangle index buffer (not yet validated as a mesh).
 pub fn parse(data: &[u8]) -> Result<(Vec<[f32; 3]>, Vec<u32>), MeshErrorKind> {
     let (encoding, elements, body_start, header_lines) = parse_header(data)?;
-    let vertex_count = elements.iter().find(|e| e.name == "vertex").map(|e| e.count).ok_or_else(|| {
-        parse_err("header", "no 'vertex' element")
-    })?;
+    let vertex_count = elements
+        .iter()
+        .find(|e| e.name == "vertex")
+        .map(|e| e.count)
+        .ok_or_else(|| parse_err("header", "no 'vertex' element"))?;
     if vertex_count > u32::MAX as u64 {
-        return Err(MeshErrorKind::TooLarge(format!("{vertex_count} vertices do not fit 32-bit indices")));
+        return Err(MeshErrorKind::TooLarge(format!(
+            "{vertex_count} vertices do not fit 32-bit indices"
+        )));
     }
-    if !elements.iter().any(|e| e.name == "face" || e.name == "tristrips") {
+    if !elements
+        .iter()
+        .any(|e| e.name == "face" || e.name == "tristrips")
+    {
         return Err(parse_err("header", "no 'face' or 'tristrips' element"));
     }
-    let roles = elements.iter().map(role_of).collect::<Result<Vec<_>, _>>()?;
+    let roles = elements
+        .iter()
+        .map(role_of)
+        .collect::<Result<Vec<_>, _>>()?;
 
-    let mut out = Output { positions: Vec::new(), indices: Vec::new(), vertex_count };
+    let mut out = Output {
+        positions: Vec::new(),
+        indices: Vec::new(),
+        vertex_count,
+    };
     let body = &data[body_start..];
     match encoding {
         Encoding::Ascii => read_ascii(body, header_lines, &elements, &roles, &mut out)?,
@@ -123,9 +137,14 @@ fn parse_header(data: &[u8]) -> Result<(Encoding, Vec<Element>, usize, usize), M
                 parse_err("header", "no 'end_header' in the first 1 MiB")
             });
         }
-        let end = data[pos..].iter().position(|&b| b == b'\n').map(|i| pos + i);
+        let end = data[pos..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .map(|i| pos + i);
         let Some(end) = end else {
-            return Err(MeshErrorKind::Truncated("header has no 'end_header' line".into()));
+            return Err(MeshErrorKind::Truncated(
+                "header has no 'end_header' line".into(),
+            ));
         };
         let raw = &data[pos..end];
         pos = end + 1;
@@ -160,16 +179,28 @@ fn parse_header(data: &[u8]) -> Result<(Encoding, Vec<Element>, usize, usize), M
                 encoding = Some(enc);
             }
             "element" => {
-                let name = words.next().ok_or_else(|| parse_err(loc(), "element without a name"))?;
+                let name = words
+                    .next()
+                    .ok_or_else(|| parse_err(loc(), "element without a name"))?;
                 let count = words
                     .next()
                     .and_then(|c| c.parse::<u64>().ok())
-                    .ok_or_else(|| parse_err(loc(), "element count is not a non-negative integer"))?;
-                elements.push(Element { name: name.to_string(), count, props: Vec::new() });
+                    .ok_or_else(|| {
+                        parse_err(loc(), "element count is not a non-negative integer")
+                    })?;
+                elements.push(Element {
+                    name: name.to_string(),
+                    count,
+                    props: Vec::new(),
+                });
             }
             "property" => {
-                let el = elements.last_mut().ok_or_else(|| parse_err(loc(), "property before any element"))?;
-                let ty = words.next().ok_or_else(|| parse_err(loc(), "property without a type"))?;
+                let el = elements
+                    .last_mut()
+                    .ok_or_else(|| parse_err(loc(), "property before any element"))?;
+                let ty = words
+                    .next()
+                    .ok_or_else(|| parse_err(loc(), "property without a type"))?;
                 let kind = if ty == "list" {
                     let c = words.next().unwrap_or("");
                     let i = words.next().unwrap_or("");
@@ -191,11 +222,21 @@ fn parse_header(data: &[u8]) -> Result<(Encoding, Vec<Element>, usize, usize), M
                         MeshErrorKind::Unsupported(format!("property type '{ty}' ({})", loc()))
                     })?)
                 };
-                let name = words.next().ok_or_else(|| parse_err(loc(), "property without a name"))?;
-                el.props.push(Property { name: name.to_string(), kind });
+                let name = words
+                    .next()
+                    .ok_or_else(|| parse_err(loc(), "property without a name"))?;
+                el.props.push(Property {
+                    name: name.to_string(),
+                    kind,
+                });
             }
             "end_header" => break,
-            other => return Err(parse_err(loc(), format!("unknown header keyword '{other}'"))),
+            other => {
+                return Err(parse_err(
+                    loc(),
+                    format!("unknown header keyword '{other}'"),
+                ))
+            }
         }
     }
     let encoding = encoding.ok_or_else(|| parse_err("header", "no 'format' line"))?;
@@ -207,18 +248,30 @@ fn role_of(e: &Element) -> Result<Role, MeshErrorKind> {
     match e.name.as_str() {
         "vertex" => {
             let get = |n: &str| {
-                let i = find(n).ok_or_else(|| parse_err("header", format!("vertex has no '{n}' property")))?;
+                let i = find(n)
+                    .ok_or_else(|| parse_err("header", format!("vertex has no '{n}' property")))?;
                 match e.props[i].kind {
                     PropKind::Scalar(_) => Ok(i),
-                    PropKind::List { .. } => Err(MeshErrorKind::Unsupported(format!("vertex '{n}' is a list"))),
+                    PropKind::List { .. } => Err(MeshErrorKind::Unsupported(format!(
+                        "vertex '{n}' is a list"
+                    ))),
                 }
             };
-            Ok(Role::Vertex { x: get("x")?, y: get("y")?, z: get("z")? })
+            Ok(Role::Vertex {
+                x: get("x")?,
+                y: get("y")?,
+                z: get("z")?,
+            })
         }
         "face" | "tristrips" => {
-            let list = find("vertex_indices").or_else(|| find("vertex_index")).ok_or_else(|| {
-                parse_err("header", format!("{} has no 'vertex_indices' property", e.name))
-            })?;
+            let list = find("vertex_indices")
+                .or_else(|| find("vertex_index"))
+                .ok_or_else(|| {
+                    parse_err(
+                        "header",
+                        format!("{} has no 'vertex_indices' property", e.name),
+                    )
+                })?;
             match e.props[list].kind {
                 PropKind::List { item, .. } if item.is_integer() => {}
                 PropKind::List { item, .. } => {
@@ -228,10 +281,17 @@ fn role_of(e: &Element) -> Result<Role, MeshErrorKind> {
                     )))
                 }
                 PropKind::Scalar(_) => {
-                    return Err(MeshErrorKind::Unsupported(format!("{} vertex_indices is not a list", e.name)))
+                    return Err(MeshErrorKind::Unsupported(format!(
+                        "{} vertex_indices is not a list",
+                        e.name
+                    )))
                 }
             }
-            Ok(if e.name == "face" { Role::Face { list } } else { Role::Strips { list } })
+            Ok(if e.name == "face" {
+                Role::Face { list }
+            } else {
+                Role::Strips { list }
+            })
         }
         _ => Ok(Role::Skip),
     }
@@ -249,7 +309,10 @@ impl Output {
         if v < 0 || v as u64 >= self.vertex_count {
             return Err(parse_err(
                 what(),
-                format!("vertex index {v} out of range (the header declares {} vertices)", self.vertex_count),
+                format!(
+                    "vertex index {v} out of range (the header declares {} vertices)",
+                    self.vertex_count
+                ),
             ));
         }
         Ok(v as u32)
@@ -258,7 +321,10 @@ impl Output {
     /// Fan-triangulates one polygon.
     fn face(&mut self, poly: &[i64], what: &dyn Fn() -> String) -> Result<(), MeshErrorKind> {
         if poly.len() < 3 {
-            return Err(parse_err(what(), format!("polygon with {} vertices (at least 3 needed)", poly.len())));
+            return Err(parse_err(
+                what(),
+                format!("polygon with {} vertices (at least 3 needed)", poly.len()),
+            ));
         }
         let a = self.index(poly[0], what)?;
         for w in poly[1..].windows(2) {
@@ -278,7 +344,11 @@ impl Output {
                 } else {
                     (strip[i - 1], strip[i - 2], strip[i])
                 };
-                let tri = [self.index(a, what)?, self.index(b, what)?, self.index(c, what)?];
+                let tri = [
+                    self.index(a, what)?,
+                    self.index(b, what)?,
+                    self.index(c, what)?,
+                ];
                 self.indices.extend_from_slice(&tri);
             }
         }
@@ -346,8 +416,9 @@ fn read_binary<const BE: bool>(
                                 let n = list_len(n, &what)?;
                                 if n.saturating_mul(item.size()) > r.remaining() {
                                     return Err(MeshErrorKind::Truncated(format!(
-                                        "{} declares {n} indices past the end of the file",
-                                        what()
+                                        "file ends inside {} ({n} indices announced, {} bytes left)",
+                                        what(),
+                                        r.remaining()
                                     )));
                                 }
                                 list.clear();
@@ -401,9 +472,15 @@ impl<const BE: bool> BinReader<'_, BE> {
     fn remaining(&self) -> usize {
         self.data.len() - self.pos
     }
-    fn take<const N: usize>(&mut self, what: &dyn Fn() -> String) -> Result<[u8; N], MeshErrorKind> {
+    fn take<const N: usize>(
+        &mut self,
+        what: &dyn Fn() -> String,
+    ) -> Result<[u8; N], MeshErrorKind> {
         let Some(bytes) = self.data.get(self.pos..self.pos + N) else {
-            return Err(MeshErrorKind::Truncated(format!("file ends inside {}", what())));
+            return Err(MeshErrorKind::Truncated(format!(
+                "file ends inside {}",
+                what()
+            )));
         };
         self.pos += N;
         let mut a: [u8; N] = bytes.try_into().expect("slice has length N");
@@ -414,13 +491,18 @@ impl<const BE: bool> BinReader<'_, BE> {
     }
     fn skip(&mut self, n: usize, what: &dyn Fn() -> String) -> Result<(), MeshErrorKind> {
         if n > self.remaining() {
-            return Err(MeshErrorKind::Truncated(format!("file ends inside {}", what())));
+            return Err(MeshErrorKind::Truncated(format!(
+                "file ends inside {}",
+                what()
+            )));
         }
         self.pos += n;
         Ok(())
     }
     fn skip_list(&mut self, p: &Property, what: &dyn Fn() -> String) -> Result<(), MeshErrorKind> {
-        let PropKind::List { count, item } = p.kind else { unreachable!("skip_list on a scalar") };
+        let PropKind::List { count, item } = p.kind else {
+            unreachable!("skip_list on a scalar")
+        };
         let n = list_len(self.scalar(count, what)?, what)?;
         self.skip(n.saturating_mul(item.size()), what)
     }
@@ -467,9 +549,17 @@ impl<'a> Tokens<'a> {
 
     fn value(&mut self, s: Scalar, what: &dyn Fn() -> String) -> Result<f64, MeshErrorKind> {
         let Some((tok, line)) = self.next() else {
-            return Err(MeshErrorKind::Truncated(format!("file ends inside {}", what())));
+            return Err(MeshErrorKind::Truncated(format!(
+                "file ends inside {}",
+                what()
+            )));
         };
-        let bad = || parse_err(format!("line {line} ({})", what()), format!("'{tok}' is not a valid {s:?} value"));
+        let bad = || {
+            parse_err(
+                format!("line {line} ({})", what()),
+                format!("'{tok}' is not a valid {s:?} value"),
+            )
+        };
         if s.is_integer() {
             tok.parse::<i64>().map(|v| v as f64).map_err(|_| bad())
         } else {
@@ -485,9 +575,17 @@ fn read_ascii(
     roles: &[Role],
     out: &mut Output,
 ) -> Result<(), MeshErrorKind> {
-    let text = std::str::from_utf8(body)
-        .map_err(|e| parse_err(format!("byte {} of the body", e.valid_up_to()), "ASCII PLY body is not valid text"))?;
-    let mut t = Tokens { text, pos: 0, line: header_lines + 1 };
+    let text = std::str::from_utf8(body).map_err(|e| {
+        parse_err(
+            format!("byte {} of the body", e.valid_up_to()),
+            "ASCII PLY body is not valid text",
+        )
+    })?;
+    let mut t = Tokens {
+        text,
+        pos: 0,
+        line: header_lines + 1,
+    };
     let mut list: Vec<i64> = Vec::new();
     for (e, role) in elements.iter().zip(roles) {
         // Every ASCII value takes at least two bytes (digit and separator): caps the reservation.
@@ -551,7 +649,11 @@ fn read_ascii(
 
 /// Writes a binary little-endian PLY (float x/y/z; `list uchar uint vertex_indices`), the format of
 /// the shared test meshes.
-pub fn write_binary(positions: &[[f32; 3]], indices: &[u32], mut w: impl Write) -> std::io::Result<()> {
+pub fn write_binary(
+    positions: &[[f32; 3]],
+    indices: &[u32],
+    mut w: impl Write,
+) -> std::io::Result<()> {
     write!(
         w,
         "ply\nformat binary_little_endian 1.0\ncomment written by meshletlab\n\
@@ -588,7 +690,8 @@ pub fn write_binary(positions: &[[f32; 3]], indices: &[u32], mut w: impl Write) 
 mod tests {
     use super::*;
 
-    const TRI_ASCII: &str = "ply\nformat ascii 1.0\ncomment x\nelement vertex 4\nproperty float x\nproperty float y\n\
+    const TRI_ASCII: &str =
+        "ply\nformat ascii 1.0\ncomment x\nelement vertex 4\nproperty float x\nproperty float y\n\
         property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
         0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
 
@@ -600,7 +703,11 @@ mod tests {
     }
 
     fn binary(be: bool, count_ty: &str, item_ty: &str, faces: &[&[i64]]) -> Vec<u8> {
-        let enc = if be { "binary_big_endian" } else { "binary_little_endian" };
+        let enc = if be {
+            "binary_big_endian"
+        } else {
+            "binary_little_endian"
+        };
         let mut d = format!(
             "ply\nformat {enc} 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\n\
              property uchar red\nelement face {}\nproperty list {count_ty} {item_ty} vertex_indices\n\
@@ -680,17 +787,29 @@ mod tests {
         let mut long = d.clone();
         long.push(0);
         assert!(matches!(parse(&long), Err(MeshErrorKind::CountMismatch(_))));
-        assert!(matches!(parse(&d[..d.len() - 1]), Err(MeshErrorKind::Truncated(_))));
+        assert!(matches!(
+            parse(&d[..d.len() - 1]),
+            Err(MeshErrorKind::Truncated(_))
+        ));
         let extra = format!("{TRI_ASCII}1 2 3\n");
-        assert!(matches!(parse(extra.as_bytes()), Err(MeshErrorKind::CountMismatch(_))));
+        assert!(matches!(
+            parse(extra.as_bytes()),
+            Err(MeshErrorKind::CountMismatch(_))
+        ));
     }
 
     #[test]
     fn absurd_counts_do_not_allocate() {
         let d = TRI_ASCII.replace("element vertex 4", "element vertex 999999999999");
-        assert!(matches!(parse(d.as_bytes()), Err(MeshErrorKind::TooLarge(_))));
+        assert!(matches!(
+            parse(d.as_bytes()),
+            Err(MeshErrorKind::TooLarge(_))
+        ));
         let d = TRI_ASCII.replace("element face 1", "element face 4000000000");
-        assert!(matches!(parse(d.as_bytes()), Err(MeshErrorKind::Truncated(_))));
+        assert!(matches!(
+            parse(d.as_bytes()),
+            Err(MeshErrorKind::Truncated(_))
+        ));
         let mut b = binary(false, "uint", "int", &[&[0, 1, 2]]);
         // Claim a 4-billion-entry polygon.
         let at = b.len() - 4 - 12 - 4;
@@ -701,9 +820,15 @@ mod tests {
     #[test]
     fn unsupported_types_and_bad_indices() {
         let d = TRI_ASCII.replace("property float z", "property float128 z");
-        assert!(matches!(parse(d.as_bytes()), Err(MeshErrorKind::Unsupported(_))));
+        assert!(matches!(
+            parse(d.as_bytes()),
+            Err(MeshErrorKind::Unsupported(_))
+        ));
         let d = TRI_ASCII.replace("uchar int vertex_indices", "uchar float vertex_indices");
-        assert!(matches!(parse(d.as_bytes()), Err(MeshErrorKind::Unsupported(_))));
+        assert!(matches!(
+            parse(d.as_bytes()),
+            Err(MeshErrorKind::Unsupported(_))
+        ));
         let d = TRI_ASCII.replace("4 0 1 2 3", "4 0 1 2 9");
         let e = parse(d.as_bytes()).unwrap_err().to_string();
         assert!(e.contains("face 0") && e.contains("9"), "{e}");

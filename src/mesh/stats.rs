@@ -69,7 +69,9 @@ impl MeshStats {
             boundary += (k == 1) as usize;
             non_manifold += (k > 2) as usize;
         }
-        let components = (0..n as u32).filter(|&v| referenced[v as usize] && uf.find(v) == v).count();
+        let components = (0..n as u32)
+            .filter(|&v| referenced[v as usize] && uf.find(v) == v)
+            .count();
         Self {
             vertices: n,
             triangles: t,
@@ -99,7 +101,9 @@ struct UnionFind {
 
 impl UnionFind {
     fn new(n: usize) -> Self {
-        Self { parent: (0..n as u32).collect() }
+        Self {
+            parent: (0..n as u32).collect(),
+        }
     }
     fn find(&mut self, mut v: u32) -> u32 {
         while self.parent[v as usize] != v {

@@ -17,7 +17,9 @@ pub fn subdivide(mesh: &Mesh, levels: u32) -> Result<Mesh, String> {
 fn subdivide_once(mesh: &Mesh) -> Result<Mesh, String> {
     let et = EdgeTable::new(mesh);
     let n = mesh.vertex_count();
-    if (n + et.edges.len()) as u64 > u32::MAX as u64 || mesh.indices.len() as u64 * 4 > u32::MAX as u64 * 3 {
+    if (n + et.edges.len()) as u64 > u32::MAX as u64
+        || mesh.indices.len() as u64 * 4 > u32::MAX as u64 * 3
+    {
         return Err(format!(
             "subdivision would exceed 32-bit indices ({} vertices, {} triangles)",
             n + et.edges.len(),
@@ -52,7 +54,12 @@ mod tests {
     #[test]
     fn shared_edges_share_midpoints() {
         let m = Mesh {
-            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]],
+            positions: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ],
             indices: vec![0, 1, 2, 0, 2, 3],
         };
         let s = subdivide(&m, 2).unwrap();
@@ -60,6 +67,9 @@ mod tests {
         // Level 1: 4 + 5 edges = 9 vertices; level 2: 9 + 16 edges = 25 vertices (a 5x5 grid).
         assert_eq!(s.vertex_count(), 25);
         let st = crate::mesh::MeshStats::of(&s);
-        assert_eq!((st.components, st.non_manifold_edges, st.boundary_edges), (1, 0, 16));
+        assert_eq!(
+            (st.components, st.non_manifold_edges, st.boundary_edges),
+            (1, 0, 16)
+        );
     }
 }

@@ -42,7 +42,11 @@ pub struct Cone {
 
 impl Cone {
     /// A cone that never culls.
-    pub const NEVER: Cone = Cone { apex: [0.0; 3], axis: [0.0, 0.0, 1.0], cutoff: 1.0 };
+    pub const NEVER: Cone = Cone {
+        apex: [0.0; 3],
+        axis: [0.0, 0.0, 1.0],
+        cutoff: 1.0,
+    };
 
     /// Whether the cone can cull from some viewpoint at all.
     pub fn can_cull(&self) -> bool {
@@ -76,14 +80,24 @@ const CUTOFF_MARGIN: f64 = 1e-5;
 
 /// Bounds of every meshlet (in parallel; the result is independent of thread count).
 pub fn compute_bounds(mesh: &Mesh, ml: &Meshlets) -> Vec<MeshletBounds> {
-    (0..ml.len()).into_par_iter().map(|i| meshlet_bounds(mesh, ml, i)).collect()
+    (0..ml.len())
+        .into_par_iter()
+        .map(|i| meshlet_bounds(mesh, ml, i))
+        .collect()
 }
 
 /// Bounds of meshlet `i`.
 pub fn meshlet_bounds(mesh: &Mesh, ml: &Meshlets, i: usize) -> MeshletBounds {
-    let pts: Vec<DVec3> = ml.meshlet_vertices(i).iter().map(|&v| dvec(mesh.positions[v as usize])).collect();
+    let pts: Vec<DVec3> = ml
+        .meshlet_vertices(i)
+        .iter()
+        .map(|&v| dvec(mesh.positions[v as usize]))
+        .collect();
     let sphere = bounding_sphere(&pts);
-    let tris: Vec<[DVec3; 3]> = ml.global_triangles(i).map(|t| t.map(|v| dvec(mesh.positions[v as usize]))).collect();
+    let tris: Vec<[DVec3; 3]> = ml
+        .global_triangles(i)
+        .map(|t| t.map(|v| dvec(mesh.positions[v as usize])))
+        .collect();
     let cone = normal_cone(&tris, sphere);
     MeshletBounds { sphere, cone }
 }
@@ -117,8 +131,14 @@ pub fn bounding_sphere(points: &[DVec3]) -> Sphere {
     let (c, _) = min_sphere(points);
     let center = fvec(c);
     let cd = dvec(center);
-    let r = points.iter().map(|p| (*p - cd).length()).fold(0.0, f64::max);
-    Sphere { center, radius: round_up(r) }
+    let r = points
+        .iter()
+        .map(|p| (*p - cd).length())
+        .fold(0.0, f64::max);
+    Sphere {
+        center,
+        radius: round_up(r),
+    }
 }
 
 /// Minimal enclosing sphere (centre, radius) by Welzl's move-to-front algorithm, in f64. Points are
@@ -175,7 +195,8 @@ fn sphere_from_support(s: &[DVec3]) -> (DVec3, f64) {
             let mut best: Option<(DVec3, f64)> = None;
             for skip in 0..4 {
                 let sub: Vec<DVec3> = (0..4).filter(|&k| k != skip).map(|k| s[k]).collect();
-                let (c, r2) = circumsphere3(sub[0], sub[1], sub[2]).unwrap_or_else(|| widest_pair(&sub));
+                let (c, r2) =
+                    circumsphere3(sub[0], sub[1], sub[2]).unwrap_or_else(|| widest_pair(&sub));
                 let holds = (s[skip] - c).length_squared() <= r2 * (1.0 + 1e-9);
                 if holds && best.is_none_or(|b| r2 < b.1) {
                     best = Some((c, r2));
@@ -219,7 +240,9 @@ fn circumsphere4(s: &[DVec3]) -> Option<(DVec3, f64)> {
     if det.abs() <= 1e-12 * scale || det == 0.0 {
         return None;
     }
-    let off = (v.cross(w) * u.length_squared() + w.cross(u) * v.length_squared() + u.cross(v) * w.length_squared())
+    let off = (v.cross(w) * u.length_squared()
+        + w.cross(u) * v.length_squared()
+        + u.cross(v) * w.length_squared())
         / (2.0 * det);
     Some((a + off, off.length_squared()))
 }
@@ -248,7 +271,10 @@ fn normal_cone(tris: &[[DVec3; 3]], sphere: Sphere) -> Cone {
     let axis = c.normalize();
     let axis_f = fvec(axis);
     let axis_d = dvec(axis_f); // test against the axis as stored
-    let mindp = normals.iter().map(|n| n.dot(axis_d)).fold(f64::INFINITY, f64::min);
+    let mindp = normals
+        .iter()
+        .map(|n| n.dot(axis_d))
+        .fold(f64::INFINITY, f64::min);
     if mindp <= 1e-3 {
         // Normals spread over (almost) a half-space: no viewpoint sees only back faces reliably.
         return Cone::NEVER;
@@ -269,8 +295,14 @@ fn normal_cone(tris: &[[DVec3; 3]], sphere: Sphere) -> Cone {
     for _ in 0..64 {
         let apex = fvec(center - axis_d * t);
         let ad = dvec(apex);
-        if planes.iter().all(|(p, n)| (*p - ad).dot(*n) >= 0.0) && apex.iter().all(|c| c.is_finite()) {
-            return Cone { apex, axis: axis_f, cutoff: cutoff as f32 };
+        if planes.iter().all(|(p, n)| (*p - ad).dot(*n) >= 0.0)
+            && apex.iter().all(|c| c.is_finite())
+        {
+            return Cone {
+                apex,
+                axis: axis_f,
+                cutoff: cutoff as f32,
+            };
         }
         t += scale * 1e-6 + t * 1e-6;
     }
@@ -283,7 +315,11 @@ mod tests {
 
     #[test]
     fn min_sphere_of_known_sets() {
-        let pts = [DVec3::new(-1.0, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.0), DVec3::new(0.0, 0.5, 0.0)];
+        let pts = [
+            DVec3::new(-1.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.5, 0.0),
+        ];
         let (c, r) = min_sphere(&pts);
         assert!((c - DVec3::ZERO).length() < 1e-12 && (r - 1.0).abs() < 1e-12);
         // Regular tetrahedron: circumsphere.
@@ -310,7 +346,10 @@ mod tests {
 
     #[test]
     fn cone_of_a_flat_patch_culls_from_behind_only() {
-        let tris = [[DVec3::ZERO, DVec3::X, DVec3::Y], [DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y]];
+        let tris = [
+            [DVec3::ZERO, DVec3::X, DVec3::Y],
+            [DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
+        ];
         let pts: Vec<DVec3> = tris.iter().flatten().copied().collect();
         let cone = normal_cone(&tris, bounding_sphere(&pts));
         assert!(cone.can_cull());
@@ -323,7 +362,10 @@ mod tests {
     #[test]
     fn degenerate_triangles_give_no_nan() {
         let p = DVec3::new(1.0, 2.0, 3.0);
-        let cone = normal_cone(&[[p, p, p], [p, p * 2.0, p * 3.0]], bounding_sphere(&[p, p * 2.0, p * 3.0]));
+        let cone = normal_cone(
+            &[[p, p, p], [p, p * 2.0, p * 3.0]],
+            bounding_sphere(&[p, p * 2.0, p * 3.0]),
+        );
         assert_eq!(cone, Cone::NEVER);
         let s = bounding_sphere(&[p]);
         assert_eq!(s.radius, 0.0);

@@ -19,7 +19,13 @@ pub struct MeshletBuilder {
 impl MeshletBuilder {
     /// A builder for a mesh with `vertex_count` vertices.
     pub fn new(vertex_count: usize, limits: Limits) -> Self {
-        Self { limits, out: Meshlets::default(), local: vec![UNSET; vertex_count], open_vertices: 0, open_triangles: 0 }
+        Self {
+            limits,
+            out: Meshlets::default(),
+            local: vec![UNSET; vertex_count],
+            open_vertices: 0,
+            open_triangles: 0,
+        }
     }
 
     /// Vertices of `tri` not yet in the open meshlet.

@@ -53,9 +53,16 @@ impl MeshletFile {
     /// Serialises to bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
         let ml = &self.meshlets;
-        let mut b = Vec::with_capacity(64 + ml.meshlets.len() * 16 + ml.vertices.len() * 4 + ml.triangles.len());
+        let mut b = Vec::with_capacity(
+            64 + ml.meshlets.len() * 16 + ml.vertices.len() * 4 + ml.triangles.len(),
+        );
         b.extend_from_slice(MAGIC);
-        for v in [self.limits.max_vertices, self.limits.max_triangles, self.source_vertices, self.source_triangles] {
+        for v in [
+            self.limits.max_vertices,
+            self.limits.max_triangles,
+            self.source_vertices,
+            self.source_triangles,
+        ] {
             b.extend_from_slice(&v.to_le_bytes());
         }
         b.extend_from_slice(&self.fingerprint.to_le_bytes());
@@ -65,7 +72,12 @@ impl MeshletFile {
             b.extend_from_slice(&(v as u32).to_le_bytes());
         }
         for m in &ml.meshlets {
-            for v in [m.vertex_offset, m.triangle_offset, m.vertex_count, m.triangle_count] {
+            for v in [
+                m.vertex_offset,
+                m.triangle_offset,
+                m.vertex_count,
+                m.triangle_count,
+            ] {
                 b.extend_from_slice(&v.to_le_bytes());
             }
         }
@@ -78,9 +90,15 @@ impl MeshletFile {
 
     /// Parses bytes; `path` labels errors.
     pub fn from_bytes(data: &[u8], path: &Path) -> Result<Self, MeshletFileError> {
-        let err = |m: String| MeshletFileError { path: path.to_path_buf(), message: m };
+        let err = |m: String| MeshletFileError {
+            path: path.to_path_buf(),
+            message: m,
+        };
         let mut r = Reader { data, pos: 0 };
-        if r.bytes(8).ok_or_else(|| err("file is too short to be a meshlet file".into()))? != MAGIC {
+        if r.bytes(8)
+            .ok_or_else(|| err("file is too short to be a meshlet file".into()))?
+            != MAGIC
+        {
             return Err(err("not a meshletlab meshlet file (bad magic)".into()));
         }
         let trunc = || err("file is truncated".into());
@@ -90,8 +108,13 @@ impl MeshletFile {
         let source_triangles = r.u32().ok_or_else(trunc)?;
         let fingerprint = r.u64().ok_or_else(trunc)?;
         let name_len = r.u32().ok_or_else(trunc)? as usize;
-        let name = r.bytes(name_len).ok_or_else(|| err(format!("strategy name of {name_len} bytes runs past the end")))?;
-        let strategy = String::from_utf8(name.to_vec()).map_err(|_| err("strategy name is not UTF-8".into()))?;
+        let name = r.bytes(name_len).ok_or_else(|| {
+            err(format!(
+                "strategy name of {name_len} bytes runs past the end"
+            ))
+        })?;
+        let strategy = String::from_utf8(name.to_vec())
+            .map_err(|_| err("strategy name is not UTF-8".into()))?;
         let m = r.u32().ok_or_else(trunc)? as usize;
         let v = r.u32().ok_or_else(trunc)? as usize;
         let t = r.u32().ok_or_else(trunc)? as usize;
@@ -105,7 +128,12 @@ impl MeshletFile {
         let meshlets = (0..m)
             .map(|_| {
                 let f = [r.u32(), r.u32(), r.u32(), r.u32()].map(|x| x.expect("length checked"));
-                Meshlet { vertex_offset: f[0], triangle_offset: f[1], vertex_count: f[2], triangle_count: f[3] }
+                Meshlet {
+                    vertex_offset: f[0],
+                    triangle_offset: f[1],
+                    vertex_count: f[2],
+                    triangle_count: f[3],
+                }
             })
             .collect();
         let vertices = (0..v).map(|_| r.u32().expect("length checked")).collect();
@@ -116,20 +144,28 @@ impl MeshletFile {
             source_triangles,
             fingerprint,
             strategy,
-            meshlets: Meshlets { meshlets, vertices, triangles },
+            meshlets: Meshlets {
+                meshlets,
+                vertices,
+                triangles,
+            },
         })
     }
 
     /// Writes to a file.
     pub fn save(&self, path: &Path) -> Result<(), MeshletFileError> {
-        std::fs::write(path, self.to_bytes())
-            .map_err(|e| MeshletFileError { path: path.to_path_buf(), message: format!("cannot write: {e}") })
+        std::fs::write(path, self.to_bytes()).map_err(|e| MeshletFileError {
+            path: path.to_path_buf(),
+            message: format!("cannot write: {e}"),
+        })
     }
 
     /// Reads from a file.
     pub fn load(path: &Path) -> Result<Self, MeshletFileError> {
-        let data = std::fs::read(path)
-            .map_err(|e| MeshletFileError { path: path.to_path_buf(), message: format!("cannot read: {e}") })?;
+        let data = std::fs::read(path).map_err(|e| MeshletFileError {
+            path: path.to_path_buf(),
+            message: format!("cannot read: {e}"),
+        })?;
         Self::from_bytes(&data, path)
     }
 }
@@ -165,7 +201,12 @@ mod tests {
             fingerprint: 0xdead_beef,
             strategy: "nvidia".into(),
             meshlets: Meshlets {
-                meshlets: vec![Meshlet { vertex_offset: 0, triangle_offset: 0, vertex_count: 4, triangle_count: 2 }],
+                meshlets: vec![Meshlet {
+                    vertex_offset: 0,
+                    triangle_offset: 0,
+                    vertex_count: 4,
+                    triangle_count: 2,
+                }],
                 vertices: vec![0, 1, 2, 3],
                 triangles: vec![0, 1, 2, 0, 2, 3],
             },
@@ -179,14 +220,20 @@ mod tests {
         let p = Path::new("x.mlt");
         assert_eq!(MeshletFile::from_bytes(&b, p).unwrap(), f);
         for cut in [0, 7, 20, b.len() - 1] {
-            assert!(MeshletFile::from_bytes(&b[..cut], p).is_err(), "cut at {cut}");
+            assert!(
+                MeshletFile::from_bytes(&b[..cut], p).is_err(),
+                "cut at {cut}"
+            );
         }
         let mut long = b.clone();
         long.push(0);
         assert!(MeshletFile::from_bytes(&long, p).is_err());
         let mut bad = b.clone();
         bad[0] = b'X';
-        assert!(MeshletFile::from_bytes(&bad, p).unwrap_err().to_string().starts_with("x.mlt: "));
+        assert!(MeshletFile::from_bytes(&bad, p)
+            .unwrap_err()
+            .to_string()
+            .starts_with("x.mlt: "));
         // An absurd meshlet count must not allocate: it fails the length check.
         let mut huge = b.clone();
         let at = 8 + 16 + 8 + 4 + 6;

@@ -61,7 +61,9 @@ impl Metrics {
         }
         let referenced = referenced.iter().filter(|&&r| r).count().max(1);
         let diag = mesh.bounding_box_diagonal().max(f32::MIN_POSITIVE) as f64;
-        let connected = (0..ml.len()).filter(|&i| is_edge_connected(ml.meshlet_triangles(i))).count();
+        let connected = (0..ml.len())
+            .filter(|&i| is_edge_connected(ml.meshlet_triangles(i)))
+            .count();
         Self {
             meshlets: ml.len(),
             mean_vertices: sv as f64 / n,

@@ -66,7 +66,8 @@ impl Meshlets {
     /// Local triangle corners of meshlet `i` (3 per triangle).
     pub fn meshlet_triangles(&self, i: usize) -> &[u8] {
         let m = &self.meshlets[i];
-        &self.triangles[m.triangle_offset as usize..(m.triangle_offset + 3 * m.triangle_count) as usize]
+        &self.triangles
+            [m.triangle_offset as usize..(m.triangle_offset + 3 * m.triangle_count) as usize]
     }
 
     /// Global vertex indices of every triangle of meshlet `i`.
@@ -79,7 +80,10 @@ impl Meshlets {
 
     /// Total triangles over all meshlets.
     pub fn triangle_count(&self) -> usize {
-        self.meshlets.iter().map(|m| m.triangle_count as usize).sum()
+        self.meshlets
+            .iter()
+            .map(|m| m.triangle_count as usize)
+            .sum()
     }
 }
 
@@ -94,23 +98,39 @@ pub struct Limits {
 
 impl Limits {
     /// The JCGT paper's (and NVIDIA's recommended) 64 vertices / 126 triangles.
-    pub const DEFAULT: Limits = Limits { max_vertices: 64, max_triangles: 126 };
+    pub const DEFAULT: Limits = Limits {
+        max_vertices: 64,
+        max_triangles: 126,
+    };
     /// The three presets the tests and benches cover: 64/126, 64/124 and 64/84.
     pub const PRESETS: [Limits; 3] = [
         Limits::DEFAULT,
-        Limits { max_vertices: 64, max_triangles: 124 },
-        Limits { max_vertices: 64, max_triangles: 84 },
+        Limits {
+            max_vertices: 64,
+            max_triangles: 124,
+        },
+        Limits {
+            max_vertices: 64,
+            max_triangles: 84,
+        },
     ];
 
     /// Checked constructor.
     pub fn new(max_vertices: u32, max_triangles: u32) -> Result<Self, String> {
         if !(3..=256).contains(&max_vertices) {
-            return Err(format!("max vertices must be in 3..=256, got {max_vertices}"));
+            return Err(format!(
+                "max vertices must be in 3..=256, got {max_vertices}"
+            ));
         }
         if !(1..=256).contains(&max_triangles) {
-            return Err(format!("max triangles must be in 1..=256, got {max_triangles}"));
+            return Err(format!(
+                "max triangles must be in 1..=256, got {max_triangles}"
+            ));
         }
-        Ok(Self { max_vertices, max_triangles })
+        Ok(Self {
+            max_vertices,
+            max_triangles,
+        })
     }
 }
 
@@ -130,9 +150,17 @@ impl FromStr for Limits {
     type Err = String;
     /// Parses `VERTICES/TRIANGLES`, e.g. `64/126`.
     fn from_str(s: &str) -> Result<Self, String> {
-        let (v, t) = s.split_once('/').ok_or_else(|| format!("limits '{s}' must look like 64/126"))?;
-        let v = v.trim().parse().map_err(|_| format!("'{v}' is not a vertex count"))?;
-        let t = t.trim().parse().map_err(|_| format!("'{t}' is not a triangle count"))?;
+        let (v, t) = s
+            .split_once('/')
+            .ok_or_else(|| format!("limits '{s}' must look like 64/126"))?;
+        let v = v
+            .trim()
+            .parse()
+            .map_err(|_| format!("'{v}' is not a vertex count"))?;
+        let t = t
+            .trim()
+            .parse()
+            .map_err(|_| format!("'{t}' is not a triangle count"))?;
         Self::new(v, t)
     }
 }

@@ -97,27 +97,56 @@ pub fn validate(mesh: &Mesh, ml: &Meshlets, limits: Limits) -> Result<(), Valida
     let mut seen = vec![usize::MAX; mesh.vertex_count()];
     let mut out_tris: Vec<[u32; 3]> = Vec::with_capacity(mesh.triangle_count());
     for (i, m) in ml.meshlets.iter().enumerate() {
-        let (vs, ve) = (m.vertex_offset as usize, m.vertex_offset as usize + m.vertex_count as usize);
-        let (ts, te) = (m.triangle_offset as usize, m.triangle_offset as usize + 3 * m.triangle_count as usize);
+        let (vs, ve) = (
+            m.vertex_offset as usize,
+            m.vertex_offset as usize + m.vertex_count as usize,
+        );
+        let (ts, te) = (
+            m.triangle_offset as usize,
+            m.triangle_offset as usize + 3 * m.triangle_count as usize,
+        );
         if ve > ml.vertices.len() {
-            return Err(ValidationError::OffsetOutOfRange { meshlet: i, what: "vertex", start: vs, end: ve, len: ml.vertices.len() });
+            return Err(ValidationError::OffsetOutOfRange {
+                meshlet: i,
+                what: "vertex",
+                start: vs,
+                end: ve,
+                len: ml.vertices.len(),
+            });
         }
         if te > ml.triangles.len() {
-            return Err(ValidationError::OffsetOutOfRange { meshlet: i, what: "triangle", start: ts, end: te, len: ml.triangles.len() });
+            return Err(ValidationError::OffsetOutOfRange {
+                meshlet: i,
+                what: "triangle",
+                start: ts,
+                end: te,
+                len: ml.triangles.len(),
+            });
         }
         if m.triangle_count == 0 {
             return Err(ValidationError::Empty(i));
         }
         if m.vertex_count > limits.max_vertices || m.triangle_count > limits.max_triangles {
-            return Err(ValidationError::OverLimit { meshlet: i, vertices: m.vertex_count, triangles: m.triangle_count, limits });
+            return Err(ValidationError::OverLimit {
+                meshlet: i,
+                vertices: m.vertex_count,
+                triangles: m.triangle_count,
+                limits,
+            });
         }
         let verts = &ml.vertices[vs..ve];
         for &v in verts {
             if v as usize >= mesh.vertex_count() {
-                return Err(ValidationError::GlobalIndexOutOfRange { meshlet: i, vertex: v });
+                return Err(ValidationError::GlobalIndexOutOfRange {
+                    meshlet: i,
+                    vertex: v,
+                });
             }
             if seen[v as usize] == i {
-                return Err(ValidationError::DuplicateVertex { meshlet: i, vertex: v });
+                return Err(ValidationError::DuplicateVertex {
+                    meshlet: i,
+                    vertex: v,
+                });
             }
             seen[v as usize] = i;
         }
@@ -125,17 +154,28 @@ pub fn validate(mesh: &Mesh, ml: &Meshlets, limits: Limits) -> Result<(), Valida
         for (k, t) in ml.triangles[ts..te].chunks_exact(3).enumerate() {
             for &c in t {
                 if c as u32 >= m.vertex_count {
-                    return Err(ValidationError::LocalIndexOutOfRange { meshlet: i, triangle: k, index: c, count: m.vertex_count });
+                    return Err(ValidationError::LocalIndexOutOfRange {
+                        meshlet: i,
+                        triangle: k,
+                        index: c,
+                        count: m.vertex_count,
+                    });
                 }
                 used[c as usize] = true;
             }
-            out_tris.push(canonical([verts[t[0] as usize], verts[t[1] as usize], verts[t[2] as usize]]));
+            out_tris.push(canonical([
+                verts[t[0] as usize],
+                verts[t[1] as usize],
+                verts[t[2] as usize],
+            ]));
         }
         if let Some(local) = used[..m.vertex_count as usize].iter().position(|&u| !u) {
             return Err(ValidationError::UnusedVertex { meshlet: i, local });
         }
     }
-    let mut in_tris: Vec<[u32; 3]> = (0..mesh.triangle_count()).map(|t| canonical(mesh.triangle(t))).collect();
+    let mut in_tris: Vec<[u32; 3]> = (0..mesh.triangle_count())
+        .map(|t| canonical(mesh.triangle(t)))
+        .collect();
     if in_tris.len() != out_tris.len() {
         return Err(ValidationError::TrianglesDiffer(format!(
             "mesh has {} triangles, meshlets have {}",
@@ -168,7 +208,10 @@ mod tests {
         (mesh, b.finish())
     }
 
-    const L: Limits = Limits { max_vertices: 8, max_triangles: 6 };
+    const L: Limits = Limits {
+        max_vertices: 8,
+        max_triangles: 6,
+    };
 
     #[test]
     fn builder_output_is_valid() {
@@ -186,29 +229,73 @@ mod tests {
             let e = validate(&mesh, &bad, L).unwrap_err();
             assert!(want(&e), "unexpected error {e}");
         };
-        check(&|m| m.meshlets[0].vertex_offset = 10_000, &|e| matches!(e, ValidationError::OffsetOutOfRange { what: "vertex", .. }));
-        check(&|m| m.meshlets[0].triangle_offset = 10_000, &|e| matches!(e, ValidationError::OffsetOutOfRange { what: "triangle", .. }));
-        check(&|m| m.meshlets[0].triangle_count = 0, &|e| matches!(e, ValidationError::Empty(0)));
-        check(&|m| m.meshlets[0].triangle_count = 7, &|e| matches!(e, ValidationError::OverLimit { .. }));
-        check(&|m| m.triangles[1] = 200, &|e| matches!(e, ValidationError::LocalIndexOutOfRange { .. }));
-        check(&|m| m.vertices[0] = 1_000_000, &|e| matches!(e, ValidationError::GlobalIndexOutOfRange { .. }));
-        check(&|m| m.vertices[1] = m.vertices[0], &|e| matches!(e, ValidationError::DuplicateVertex { .. }));
+        check(&|m| m.meshlets[0].vertex_offset = 10_000, &|e| {
+            matches!(e, ValidationError::OffsetOutOfRange { what: "vertex", .. })
+        });
+        check(&|m| m.meshlets[0].triangle_offset = 10_000, &|e| {
+            matches!(
+                e,
+                ValidationError::OffsetOutOfRange {
+                    what: "triangle",
+                    ..
+                }
+            )
+        });
+        check(&|m| m.meshlets[0].triangle_count = 0, &|e| {
+            matches!(e, ValidationError::Empty(0))
+        });
+        check(&|m| m.meshlets[0].triangle_count = 7, &|e| {
+            matches!(e, ValidationError::OverLimit { .. })
+        });
+        check(&|m| m.triangles[1] = 200, &|e| {
+            matches!(e, ValidationError::LocalIndexOutOfRange { .. })
+        });
+        check(&|m| m.vertices[0] = 1_000_000, &|e| {
+            matches!(e, ValidationError::GlobalIndexOutOfRange { .. })
+        });
+        check(&|m| m.vertices[1] = m.vertices[0], &|e| {
+            matches!(e, ValidationError::DuplicateVertex { .. })
+        });
         // Flip one triangle's winding: same vertex set, different orientation.
-        check(&|m| m.triangles.swap(0, 1), &|e| matches!(e, ValidationError::TrianglesDiffer(_)));
+        check(&|m| m.triangles.swap(0, 1), &|e| {
+            matches!(e, ValidationError::TrianglesDiffer(_))
+        });
         // Drop the last meshlet: triangles missing.
-        check(&|m| { m.meshlets.pop(); }, &|e| matches!(e, ValidationError::TrianglesDiffer(_)));
+        check(
+            &|m| {
+                m.meshlets.pop();
+            },
+            &|e| matches!(e, ValidationError::TrianglesDiffer(_)),
+        );
         // Duplicate a meshlet: triangles twice.
-        check(&|m| { let x = m.meshlets[0]; m.meshlets.push(x); }, &|e| matches!(e, ValidationError::TrianglesDiffer(_)));
+        check(
+            &|m| {
+                let x = m.meshlets[0];
+                m.meshlets.push(x);
+            },
+            &|e| matches!(e, ValidationError::TrianglesDiffer(_)),
+        );
         // An extra vertex that no triangle uses.
         check(
             &|m| {
                 let last = *m.meshlets.last().unwrap();
-                let unused = (0..mesh.vertex_count() as u32).find(|v| !m.meshlet_vertices(m.len() - 1).contains(v)).unwrap();
+                let unused = (0..mesh.vertex_count() as u32)
+                    .find(|v| !m.meshlet_vertices(m.len() - 1).contains(v))
+                    .unwrap();
                 m.vertices.push(unused);
-                *m.meshlets.last_mut().unwrap() = Meshlet { vertex_count: last.vertex_count + 1, ..last };
-                m.vertices.truncate((last.vertex_offset + last.vertex_count + 1) as usize);
+                *m.meshlets.last_mut().unwrap() = Meshlet {
+                    vertex_count: last.vertex_count + 1,
+                    ..last
+                };
+                m.vertices
+                    .truncate((last.vertex_offset + last.vertex_count + 1) as usize);
             },
-            &|e| matches!(e, ValidationError::UnusedVertex { .. } | ValidationError::OverLimit { .. }),
+            &|e| {
+                matches!(
+                    e,
+                    ValidationError::UnusedVertex { .. } | ValidationError::OverLimit { .. }
+                )
+            },
         );
     }
 

@@ -9,7 +9,8 @@ use crate::meshlet::{Limits, Meshlet, Meshlets};
 use meshopt::VertexDataAdapter;
 
 fn adapter(mesh: &Mesh) -> VertexDataAdapter<'_> {
-    VertexDataAdapter::new(mesh.position_bytes(), 12, 0).expect("stride 12 over f32x3 positions is valid")
+    VertexDataAdapter::new(mesh.position_bytes(), 12, 0)
+        .expect("stride 12 over f32x3 positions is valid")
 }
 
 fn convert(m: meshopt::Meshlets) -> Meshlets {

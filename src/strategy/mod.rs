@@ -39,12 +39,22 @@ pub struct Options {
 impl Default for Options {
     fn default() -> Self {
         // Cone weight 0 is the setting the JCGT comparison and our 720-meshlet bunny reference use.
-        Self { cone_weight: 0.0, cache_size: 16, fill_weight: 0.5 }
+        Self {
+            cone_weight: 0.0,
+            cache_size: 16,
+            fill_weight: 0.5,
+        }
     }
 }
 
 /// Names accepted by [`by_name`], in table order.
-pub const NAMES: &[&str] = &["nvidia", "nvidia+tipsify", "meshopt", "meshopt-scan", "meshopt-spatial"];
+pub const NAMES: &[&str] = &[
+    "nvidia",
+    "nvidia+tipsify",
+    "meshopt",
+    "meshopt-scan",
+    "meshopt-spatial",
+];
 
 /// A name that no strategy answers to.
 #[derive(Debug, Error)]
@@ -54,16 +64,27 @@ pub struct UnknownStrategy(pub String);
 /// Looks a strategy up by name.
 pub fn by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, UnknownStrategy> {
     Ok(match name {
-        "nvidia" => Box::new(Nvidia { tipsify_cache: None }),
-        "nvidia+tipsify" => Box::new(Nvidia { tipsify_cache: Some(opts.cache_size) }),
-        "meshopt" => Box::new(Meshopt { cone_weight: opts.cone_weight }),
+        "nvidia" => Box::new(Nvidia {
+            tipsify_cache: None,
+        }),
+        "nvidia+tipsify" => Box::new(Nvidia {
+            tipsify_cache: Some(opts.cache_size),
+        }),
+        "meshopt" => Box::new(Meshopt {
+            cone_weight: opts.cone_weight,
+        }),
         "meshopt-scan" => Box::new(MeshoptScan),
-        "meshopt-spatial" => Box::new(MeshoptSpatial { fill_weight: opts.fill_weight }),
+        "meshopt-spatial" => Box::new(MeshoptSpatial {
+            fill_weight: opts.fill_weight,
+        }),
         _ => return Err(UnknownStrategy(name.to_string())),
     })
 }
 
 /// All strategies with the given options, in table order.
 pub fn all(opts: &Options) -> Vec<Box<dyn Strategy>> {
-    NAMES.iter().map(|n| by_name(n, opts).expect("NAMES are known")).collect()
+    NAMES
+        .iter()
+        .map(|n| by_name(n, opts).expect("NAMES are known"))
+        .collect()
 }

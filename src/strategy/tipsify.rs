@@ -85,7 +85,8 @@ fn next_live(live: &[u32], cursor: &mut usize) -> Option<u32> {
 /// Average cache miss ratio (ACMR) of a triangle order under a FIFO cache of `k` entries: the
 /// measure tipsify optimises, used to test it.
 pub fn acmr_fifo(mesh: &Mesh, order: &[u32], k: usize) -> f64 {
-    let mut fifo: std::collections::VecDeque<u32> = std::collections::VecDeque::with_capacity(k + 1);
+    let mut fifo: std::collections::VecDeque<u32> =
+        std::collections::VecDeque::with_capacity(k + 1);
     let mut misses = 0usize;
     for &t in order {
         for v in mesh.triangle(t as usize) {
@@ -126,6 +127,9 @@ mod tests {
         let before = acmr_fifo(&m, &identity, 16);
         let after = acmr_fifo(&m, &o, 16);
         // A regular grid has ACMR 0.5 at best; tipsify lands well under 1.0 from a scrambled ~2.5.
-        assert!(after < 0.8 && before > 2.0, "before {before}, after {after}");
+        assert!(
+            after < 0.8 && before > 2.0,
+            "before {before}, after {after}"
+        );
     }
 }

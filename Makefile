@@ -1,0 +1,28 @@
+# meshletlab: two-command quick start is `make demo` and `make test`.
+CARGO ?= cargo
+
+.PHONY: setup demo test lint bench build
+
+# Idempotent: installs only what is missing (Debian 12, as root); silent when all is present.
+# Set SKIP_SETUP=1 on systems you provision by hand (see README, "Other systems").
+setup:
+	@if [ -z "$(SKIP_SETUP)" ]; then bash scripts/setup.sh; fi
+
+build: setup
+	$(CARGO) build --release
+
+# Compare every strategy on generated meshes (no input files needed).
+demo: setup
+	$(CARGO) run --release --quiet -- demo
+
+lint:
+	$(CARGO) fmt --check
+	$(CARGO) clippy --all-targets --quiet -- -D warnings
+
+# Unit, integration and property tests; the heavy ones run in the optimised test profile.
+test: setup lint
+	$(CARGO) test --all-targets
+
+# Regenerates results/build.md and results/build.csv from the shared real meshes.
+bench: setup
+	$(CARGO) run --release --quiet -- bench build

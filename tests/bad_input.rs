@@ -1,0 +1,171 @@
+//! Every kind of bad input gets a typed error naming the file, and the CLI exits non-zero with one
+//! readable line — never a panic, never a silently wrong mesh.
+
+mod common;
+
+use meshletlab::mesh::{self, MeshErrorKind};
+use std::process::Command;
+
+const HEADER: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                      element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+
+fn binary_ply() -> Vec<u8> {
+    let m = mesh::generate::terrain(4, 1);
+    let mut b = Vec::new();
+    mesh::ply::write_binary(&m.positions, &m.indices, &mut b).unwrap();
+    b
+}
+
+fn zst(data: &[u8]) -> Vec<u8> {
+    zstd::stream::encode_all(data, 3).unwrap()
+}
+
+/// One bad file: name, contents, and a predicate on the error kind it must give.
+type Case = (&'static str, Vec<u8>, fn(&MeshErrorKind) -> bool);
+
+fn cases() -> Vec<Case> {
+    let bin = binary_ply();
+    let mut long = bin.clone();
+    long.extend_from_slice(&[0u8; 13]);
+    vec![
+        ("nan.ply", format!("{HEADER}0 0 0\nnan 1 0\n0 1 0\n3 0 1 2\n").into_bytes(), |k| matches!(k, MeshErrorKind::NonFinite { vertex: 1, .. })),
+        ("inf.ply", format!("{HEADER}0 0 0\n1 1e39 0\n0 1 0\n3 0 1 2\n").into_bytes(), |k| matches!(k, MeshErrorKind::NonFinite { vertex: 1, .. })),
+        ("range.ply", format!("{HEADER}0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n").into_bytes(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("negative.ply", format!("{HEADER}0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n").into_bytes(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("empty.ply", HEADER.replace("element face 1", "element face 0").replace("3 0 1 2\n", "").into_bytes()
+            .into_iter().chain(b"0 0 0\n1 0 0\n0 1 0\n".iter().copied()).collect(), |k| matches!(k, MeshErrorKind::Empty(_))),
+        ("no_vertices.ply", b"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n".to_vec(), |k| matches!(k, MeshErrorKind::Empty(_))),
+        ("truncated.ply", bin[..bin.len() - 5].to_vec(), |k| matches!(k, MeshErrorKind::Truncated(_))),
+        ("truncated_header.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 3\n".to_vec(), |k| matches!(k, MeshErrorKind::Truncated(_))),
+        ("too_long.ply", long, |k| matches!(k, MeshErrorKind::CountMismatch(_))),
+        ("short_ascii.ply", format!("{HEADER}0 0 0\n1 0 0\n0 1 0\n").into_bytes(), |k| matches!(k, MeshErrorKind::Truncated(_))),
+        ("long_ascii.ply", format!("{HEADER}0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n").into_bytes(), |k| matches!(k, MeshErrorKind::CountMismatch(_))),
+        ("absurd.ply", HEADER.replace("element vertex 3", "element vertex 4000000000").into_bytes(), |k| matches!(k, MeshErrorKind::Truncated(_))),
+        ("absurd_face.ply", HEADER.replace("element face 1", "element face 18446744073709551615").into_bytes(), |k| matches!(k, MeshErrorKind::Truncated(_))),
+        ("huge.ply", HEADER.replace("element vertex 3", "element vertex 99999999999").into_bytes(), |k| matches!(k, MeshErrorKind::TooLarge(_))),
+        ("type.ply", HEADER.replace("property float z", "property half z").into_bytes(), |k| matches!(k, MeshErrorKind::Unsupported(_))),
+        ("list_type.ply", HEADER.replace("uchar int", "uchar double").into_bytes(), |k| matches!(k, MeshErrorKind::Unsupported(_))),
+        ("format.ply", HEADER.replace("ascii", "binary_middle_endian").into_bytes(), |k| matches!(k, MeshErrorKind::Unsupported(_))),
+        ("garbage.ply", b"\x00\x01\x02 not a ply".to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. } | MeshErrorKind::Truncated(_))),
+        ("text.ply", format!("{HEADER}0 0 0\n1 zero 0\n0 1 0\n3 0 1 2\n").into_bytes(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("line.ply", format!("{HEADER}0 0 0\n1 0 0\n0 1 0\n2 0 1\n").into_bytes(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("mesh.xyz", b"1 2 3\n".to_vec(), |k| matches!(k, MeshErrorKind::UnknownFormat)),
+        ("corrupt.ply.zst", b"\x28\xb5\x2f\xfd garbage".to_vec(), |k| matches!(k, MeshErrorKind::Decompress(_))),
+        ("cut.ply.zst", { let z = zst(&binary_ply()); z[..z.len() / 2].to_vec() }, |k| matches!(k, MeshErrorKind::Decompress(_))),
+        ("nan_in.ply.zst", zst(format!("{HEADER}0 0 0\n1 0 0\n0 inf 0\n3 0 1 2\n").as_bytes()), |k| matches!(k, MeshErrorKind::NonFinite { vertex: 2, .. })),
+        ("range.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n".to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("nan.obj", b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n".to_vec(), |k| matches!(k, MeshErrorKind::NonFinite { .. })),
+        ("empty.obj", b"# nothing\nv 0 0 0\n".to_vec(), |k| matches!(k, MeshErrorKind::Empty(_))),
+        ("bad.gltf", b"{ not json".to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("bad.glb", b"glTF\x02\x00\x00\x00\xff\xff\xff\xff".to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("empty.gltf", br#"{"asset":{"version":"2.0"}}"#.to_vec(), |k| matches!(k, MeshErrorKind::Empty(_))),
+    ]
+}
+
+#[test]
+fn library_errors_are_typed_and_name_the_file() {
+    let dir = common::scratch("bad-lib");
+    for (name, data, want) in cases() {
+        let path = dir.join(name);
+        std::fs::write(&path, &data).unwrap();
+        let err = match mesh::load(&path) {
+            Ok(m) => panic!(
+                "{name}: loaded a mesh with {} triangles",
+                m.triangle_count()
+            ),
+            Err(e) => e,
+        };
+        assert!(want(&err.kind), "{name}: unexpected error kind: {err}");
+        let msg = err.to_string();
+        assert!(
+            msg.starts_with(&path.display().to_string()),
+            "{name}: message does not name the file: {msg}"
+        );
+        assert!(!msg.contains('\n'), "{name}: multi-line message: {msg}");
+    }
+    assert!(matches!(
+        mesh::load(&dir.join("missing.ply")).unwrap_err().kind,
+        MeshErrorKind::Io(_)
+    ));
+}
+
+fn cli(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_meshletlab"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+#[test]
+fn cli_exits_nonzero_with_one_line_naming_the_file() {
+    let dir = common::scratch("bad-cli");
+    let mut all = cases();
+    all.push(("missing.ply", Vec::new(), |_| true));
+    for (name, data, _) in all {
+        let path = dir.join(name);
+        if name != "missing.ply" {
+            std::fs::write(&path, &data).unwrap();
+        }
+        for cmd in [
+            &["stats", "-q"][..],
+            &["build", "-q", "-s", "nvidia", "-o", "/dev/null"][..],
+        ] {
+            let mut args = cmd.to_vec();
+            let p = path.display().to_string();
+            args.insert(1, &p);
+            let out = cli(&args);
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert!(!out.status.success(), "{name}: exit status {}", out.status);
+            assert_eq!(
+                stderr.trim_end().lines().count(),
+                1,
+                "{name}: stderr is not one line:\n{stderr}"
+            );
+            assert!(
+                stderr.starts_with("error: ") && stderr.contains(&p),
+                "{name}: {stderr}"
+            );
+            assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+        }
+    }
+}
+
+#[test]
+fn degenerate_duplicate_and_non_manifold_input_is_legal_and_counted() {
+    // Two identical triangles, one reversed copy, a fin on edge 0-1, a repeated index and a
+    // zero-area sliver: all legal, all counted, all placed by every strategy.
+    let text = "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n\
+                element face 6\nproperty list uchar int vertex_indices\nend_header\n\
+                0 0 0\n1 0 0\n0 1 0\n0 0 1\n2 0 0\n0.5 0 0\n\
+                3 0 1 2\n3 0 1 2\n3 0 2 1\n3 0 1 3\n3 3 3 2\n3 0 5 1\n";
+    let dir = common::scratch("legal");
+    let path = dir.join("legal.ply");
+    std::fs::write(&path, text).unwrap();
+    let m = mesh::load(&path).unwrap();
+    let s = mesh::MeshStats::of(&m);
+    assert_eq!(
+        (
+            s.degenerate_triangles,
+            s.zero_area_triangles,
+            s.duplicate_triangles
+        ),
+        (1, 1, 2)
+    );
+    assert!(s.non_manifold_edges >= 1);
+    let out = cli(&["stats", "-q", &path.display().to_string()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("degenerate 1") && stdout.contains("duplicate 2"),
+        "{stdout}"
+    );
+    assert_eq!(
+        stdout.matches("| ok").count(),
+        meshletlab::strategy::NAMES.len(),
+        "{stdout}"
+    );
+}

@@ -1,0 +1,38 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use meshletlab::mesh::{self, Mesh};
+use std::path::PathBuf;
+
+/// The shared real meshes: $MESHLETLAB_MESHES or ../shared/meshes next to the repository.
+pub fn meshes_dir() -> PathBuf {
+    let dir = std::env::var_os("MESHLETLAB_MESHES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/meshes"));
+    assert!(
+        dir.join("SOURCES.md").is_file(),
+        "real test meshes not found in {} (set MESHLETLAB_MESHES); these tests must not silently pass without them",
+        dir.display()
+    );
+    dir
+}
+
+/// All shared mesh files, sorted by name.
+pub fn mesh_files() -> Vec<PathBuf> {
+    let files = meshletlab::bench::build::mesh_files(&meshes_dir()).expect("mesh folder lists");
+    assert_eq!(files.len(), 10, "expected the ten shared meshes");
+    files
+}
+
+/// Loads one shared mesh by stem, e.g. "stanford_bunny".
+pub fn load(stem: &str) -> Mesh {
+    mesh::load(&meshes_dir().join(format!("{stem}.ply.zst"))).expect("shared mesh loads")
+}
+
+/// A unique scratch folder for one test.
+pub fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("meshletlab-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}

@@ -1,0 +1,183 @@
+//! Every strategy on all ten shared real meshes x the three limit presets, each output validated;
+//! loader and topology counts checked against SOURCES.md; bounds checked against meshoptimizer.
+
+mod common;
+
+use meshletlab::bench::build::mesh_name;
+use meshletlab::mesh::{self, MeshStats};
+use meshletlab::meshlet::{bounds, validate, Limits, Metrics};
+use meshletlab::strategy::{self, Options};
+
+/// The SOURCES.md table: (stem, tris, verts, [comp, bnd, nm, unref]).
+fn sources_table() -> Vec<(String, usize, usize, [usize; 4])> {
+    let text = std::fs::read_to_string(common::meshes_dir().join("SOURCES.md")).unwrap();
+    let num = |s: &str| s.trim().replace(',', "").parse::<usize>().unwrap();
+    text.lines()
+        .filter(|l| l.starts_with("| ") && l.contains(".ply.zst"))
+        .map(|l| {
+            let c: Vec<&str> = l.split('|').map(str::trim).collect();
+            let topo: Vec<usize> = c[6].split('/').map(num).collect();
+            (
+                c[1].trim_end_matches(".ply.zst").to_string(),
+                num(c[2]),
+                num(c[3]),
+                [topo[0], topo[1], topo[2], topo[3]],
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn loader_and_topology_match_sources_md() {
+    let table = sources_table();
+    assert_eq!(table.len(), 10);
+    for (stem, tris, verts, [comp, bnd, nm, unref]) in table {
+        let m = common::load(&stem);
+        let s = MeshStats::of(&m);
+        assert_eq!((s.triangles, s.vertices), (tris, verts), "{stem}");
+        assert_eq!(
+            (
+                s.components,
+                s.boundary_edges,
+                s.non_manifold_edges,
+                s.unreferenced_vertices
+            ),
+            (comp, bnd, nm, unref),
+            "{stem}: comp/bnd/nm/unref"
+        );
+    }
+}
+
+#[test]
+fn every_strategy_validates_on_every_mesh_and_preset() {
+    let opts = Options::default();
+    let strategies = strategy::all(&opts);
+    for f in common::mesh_files() {
+        let m = mesh::load(&f).unwrap();
+        for limits in Limits::PRESETS {
+            for s in &strategies {
+                let ml = s.build(&m, limits);
+                validate(&m, &ml, limits)
+                    .unwrap_or_else(|e| panic!("{} {} {}: {e}", mesh_name(&f), s.name(), limits));
+                // Meshlet count can never be below the triangle bound.
+                assert!(ml.len() * limits.max_triangles as usize >= m.triangle_count());
+            }
+        }
+    }
+}
+
+#[test]
+fn bunny_meshopt_reference_count() {
+    // Measured with meshoptimizer 1.3 build_meshlets at 64/126, cone weight 0: 720 meshlets,
+    // 63.9 vertices and 96.5 triangles per meshlet.
+    let m = common::load("stanford_bunny");
+    let s = strategy::by_name("meshopt", &Options::default()).unwrap();
+    let ml = s.build(&m, Limits::DEFAULT);
+    validate(&m, &ml, Limits::DEFAULT).unwrap();
+    let met = Metrics::compute(
+        &m,
+        &ml,
+        Limits::DEFAULT,
+        &bounds::compute_bounds(&m, &ml),
+        None,
+    );
+    assert_eq!(met.meshlets, 720);
+    assert!(
+        (met.mean_vertices - 63.9).abs() < 0.05 && (met.mean_triangles - 96.5).abs() < 0.05,
+        "{met:?}"
+    );
+}
+
+#[test]
+fn results_do_not_depend_on_thread_count() {
+    let m = common::load("gmsh_aneurysm");
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let opts = Options::default();
+    for s in strategy::all(&opts) {
+        let a = one.install(|| (s.build(&m, Limits::DEFAULT), MeshStats::of(&m)));
+        let ml = s.build(&m, Limits::DEFAULT);
+        assert_eq!(a.0, ml, "{}", s.name());
+        assert_eq!(a.0, s.build(&m, Limits::DEFAULT), "{} run to run", s.name());
+        assert_eq!(a.1, MeshStats::of(&m));
+        let b1 = one.install(|| bounds::compute_bounds(&m, &ml));
+        assert_eq!(b1, bounds::compute_bounds(&m, &ml));
+    }
+}
+
+/// Our spheres contain every vertex and are never larger than meshoptimizer's; our cones never cull
+/// a front-facing triangle and can cull about as often as meshoptimizer's.
+#[test]
+fn bounds_are_conservative_and_at_least_as_tight_as_meshoptimizer() {
+    for stem in [
+        "stanford_bunny",
+        "fandisk",
+        "navis_neuron_722817260",
+        "openfoam_motorbike",
+    ] {
+        let m = common::load(stem);
+        let ml = strategy::by_name("meshopt", &Options::default())
+            .unwrap()
+            .build(&m, Limits::DEFAULT);
+        let b = bounds::compute_bounds(&m, &ml);
+        let adapter = meshopt::VertexDataAdapter::new(m.position_bytes(), 12, 0).unwrap();
+        let (lo, hi) = m.bounding_box();
+        let (mut ours_cull, mut theirs_cull, mut ours_r, mut theirs_r) = (0, 0, 0.0f64, 0.0f64);
+        for (i, mb) in b.iter().enumerate() {
+            let mo = meshopt::compute_meshlet_bounds(
+                meshopt::Meshlet {
+                    vertices: ml.meshlet_vertices(i),
+                    triangles: ml.meshlet_triangles(i),
+                },
+                &adapter,
+            );
+            ours_r += mb.sphere.radius as f64;
+            theirs_r += mo.radius as f64;
+            assert!(
+                mb.sphere.radius <= mo.radius * (1.0 + 1e-5) + 1e-7,
+                "{stem} meshlet {i}: {} > {}",
+                mb.sphere.radius,
+                mo.radius
+            );
+            ours_cull += mb.cone.can_cull() as usize;
+            theirs_cull += (mo.cone_cutoff < 1.0) as usize;
+            let c = glam::DVec3::from_array(mb.sphere.center.map(f64::from));
+            for &v in ml.meshlet_vertices(i) {
+                let p = glam::DVec3::from_array(m.positions[v as usize].map(f64::from));
+                assert!(
+                    (p - c).length() <= mb.sphere.radius as f64,
+                    "{stem} meshlet {i}: vertex {v} outside sphere"
+                );
+            }
+            // Cameras on a grid around the mesh, some close: every culled meshlet is all back faces.
+            for k in 0..64u32 {
+                let t =
+                    glam::Vec3::new((k % 4) as f32, ((k / 4) % 4) as f32, (k / 16) as f32) / 3.0;
+                let cam = (lo - (hi - lo) * 0.5) + (hi - lo) * 2.0 * t;
+                if mb.cone.culls(cam.to_array()) {
+                    for tri in ml.global_triangles(i) {
+                        let p = tri.map(|v| {
+                            glam::DVec3::from_array(m.positions[v as usize].map(f64::from))
+                        });
+                        let n = (p[1] - p[0]).cross(p[2] - p[0]);
+                        let camd = cam.as_dvec3();
+                        assert!(
+                            n.dot(p[0] - camd) >= 0.0,
+                            "{stem} meshlet {i}: front-facing triangle culled from {cam}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(
+            ours_r <= theirs_r,
+            "{stem}: mean radius {ours_r} vs meshoptimizer {theirs_r}"
+        );
+        assert!(
+            ours_cull as f64 >= theirs_cull as f64 * 0.98,
+            "{stem}: {ours_cull} cullable cones vs meshoptimizer {theirs_cull}"
+        );
+    }
+}
