@@ -198,6 +198,29 @@ fn gltf_with_external_buffer_and_glb() {
     std::fs::write(dir.join("scene.glb"), &glb).unwrap();
     check_gltf_mesh(&mesh::load(&dir.join("scene.glb")).unwrap());
 
+    // Buffer as a base64 data URI, and an external file whose name needs %-escaping.
+    use base64::Engine as _;
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
+    std::fs::write(dir.join("inline.gltf"), gltf_json(bin.len(), Some(&uri))).unwrap();
+    check_gltf_mesh(&mesh::load(&dir.join("inline.gltf")).unwrap());
+    std::fs::write(dir.join("my scene.bin"), &bin).unwrap();
+    std::fs::write(
+        dir.join("spaced.gltf"),
+        gltf_json(bin.len(), Some("my%20scene.bin")),
+    )
+    .unwrap();
+    check_gltf_mesh(&mesh::load(&dir.join("spaced.gltf")).unwrap());
+    // A buffer shorter than declared is an error, not a silent read of garbage.
+    std::fs::write(
+        dir.join("short.gltf"),
+        gltf_json(bin.len() + 100, Some("scene.bin")),
+    )
+    .unwrap();
+    assert!(mesh::load(&dir.join("short.gltf")).is_err());
+
     // A missing external buffer is an error naming the file.
     std::fs::remove_file(dir.join("scene.bin")).unwrap();
     let e = mesh::load(&dir.join("scene.gltf")).unwrap_err().to_string();

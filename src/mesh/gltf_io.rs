@@ -14,9 +14,11 @@ use std::path::Path;
 /// Parses a .gltf or .glb file; `base` resolves external buffer URIs.
 pub fn parse(data: &[u8], base: Option<&Path>) -> Result<(Vec<[f32; 3]>, Vec<u32>), MeshErrorKind> {
     let gltf = gltf::Gltf::from_slice(data).map_err(|e| parse_err("glTF", e.to_string()))?;
-    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone())
-        .map_err(|e| parse_err("glTF buffers", e.to_string()))?;
     let doc = &gltf.document;
+    let buffers = doc
+        .buffers()
+        .map(|b| load_buffer(&b, gltf.blob.as_deref(), base))
+        .collect::<Result<Vec<_>, _>>()?;
     let mut out = (Vec::new(), Vec::new());
     let mut instanced = vec![false; doc.meshes().len()];
 
@@ -47,10 +49,70 @@ pub fn parse(data: &[u8], base: Option<&Path>) -> Result<(Vec<[f32; 3]>, Vec<u32
     Ok(out)
 }
 
+/// Bytes of one buffer: the GLB binary chunk, a base64 `data:` URI, or a file next to the glTF.
+fn load_buffer(
+    b: &gltf::Buffer,
+    blob: Option<&[u8]>,
+    base: Option<&Path>,
+) -> Result<Vec<u8>, MeshErrorKind> {
+    use base64::Engine as _;
+    let loc = || format!("buffer {}", b.index());
+    let bytes = match b.source() {
+        gltf::buffer::Source::Bin => blob
+            .ok_or_else(|| parse_err(loc(), "refers to a GLB binary chunk that is missing"))?
+            .to_vec(),
+        gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+            let (_, payload) = uri
+                .split_once(";base64,")
+                .ok_or_else(|| parse_err(loc(), "data URI is not base64"))?;
+            base64::engine::general_purpose::STANDARD
+                .decode(payload)
+                .map_err(|e| parse_err(loc(), format!("bad base64: {e}")))?
+        }
+        gltf::buffer::Source::Uri(uri) => {
+            let rel = percent_decode(uri);
+            let path = base
+                .map(|d| d.join(&rel))
+                .unwrap_or_else(|| rel.clone().into());
+            std::fs::read(&path)
+                .map_err(|e| parse_err(loc(), format!("cannot read '{}': {e}", path.display())))?
+        }
+    };
+    if bytes.len() < b.length() {
+        return Err(MeshErrorKind::Truncated(format!(
+            "{} has {} bytes, {} declared",
+            loc(),
+            bytes.len(),
+            b.length()
+        )));
+    }
+    Ok(bytes)
+}
+
+/// Decodes %XX escapes in a relative URI (file names with spaces are written as %20).
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
 fn append_mesh(
     mesh: &gltf::Mesh,
     world: Mat4,
-    buffers: &[gltf::buffer::Data],
+    buffers: &[Vec<u8>],
     (positions, indices): &mut (Vec<[f32; 3]>, Vec<u32>),
 ) -> Result<(), MeshErrorKind> {
     let flip = world.determinant() < 0.0;
@@ -62,7 +124,7 @@ fn append_mesh(
         ) {
             continue;
         }
-        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
         let Some(pos) = reader.read_positions() else {
             return Err(parse_err(loc(), "triangle primitive without POSITION"));
         };
