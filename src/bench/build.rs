@@ -30,6 +30,18 @@ pub struct Config {
     pub quiet: bool,
 }
 
+/// Load time of one mesh file.
+pub struct LoadRow {
+    /// Mesh file stem.
+    pub mesh: String,
+    /// File size in bytes (compressed, as stored).
+    pub bytes: u64,
+    /// Triangles.
+    pub triangles: usize,
+    /// Load times in ms (decompress, parse, validate).
+    pub times_ms: Vec<f64>,
+}
+
 /// One row of the results.
 pub struct Row {
     /// Mesh file stem.
@@ -72,6 +84,7 @@ pub fn mesh_name(p: &Path) -> String {
 
 /// Runs the benchmark and writes the results.
 pub fn run(cfg: &Config) -> Result<Vec<Row>> {
+    let mut loads = Vec::new();
     let files = mesh_files(&cfg.meshes)?;
     let strategies = if cfg.strategies.is_empty() {
         strategy::all(&cfg.options)
@@ -95,7 +108,22 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
     for f in &files {
         let name = mesh_name(f);
         pb.set_message(format!("loading {name}"));
-        let m: Mesh = mesh::load(f)?;
+        let mut times_ms = Vec::with_capacity(cfg.runs);
+        let mut loaded = None;
+        for _ in 0..cfg.runs.max(1) {
+            let t0 = std::time::Instant::now();
+            let m: Mesh = mesh::load(f)?;
+            times_ms.push(t0.elapsed().as_secs_f64() * 1e3);
+            loaded = Some(m);
+        }
+        let m = loaded.expect("at least one load");
+        let bytes = std::fs::metadata(f).map(|md| md.len()).unwrap_or(0);
+        loads.push(LoadRow {
+            mesh: name.clone(),
+            bytes,
+            triangles: m.triangle_count(),
+            times_ms,
+        });
         for s in &strategies {
             pb.set_message(format!("{name} / {}", s.name()));
             let eval = evaluate(&m, s.as_ref(), cfg.limits, cfg.runs);
@@ -114,7 +142,7 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
     std::fs::write(&csv, to_csv(&rows))
         .with_context(|| format!("{}: cannot write", csv.display()))?;
     let md = cfg.out.join("build.md");
-    std::fs::write(&md, to_markdown(&rows, cfg))
+    std::fs::write(&md, to_markdown(&rows, &loads, cfg))
         .with_context(|| format!("{}: cannot write", md.display()))?;
     if let Some(bad) = rows.iter().find(|r| r.eval.invalid.is_some()) {
         bail!(
@@ -169,7 +197,7 @@ fn opt<T: std::fmt::Display>(x: Option<T>) -> String {
     x.map(|v| v.to_string()).unwrap_or_else(|| "—".into())
 }
 
-fn to_markdown(rows: &[Row], cfg: &Config) -> String {
+fn to_markdown(rows: &[Row], loads: &[LoadRow], cfg: &Config) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Meshlet build benchmark\n");
     let _ = writeln!(
@@ -266,6 +294,28 @@ fn to_markdown(rows: &[Row], cfg: &Config) -> String {
     }
     right_align_numbers(&mut t, 1..2);
     right_align_numbers(&mut t, 3..11);
+    let _ = writeln!(s, "{t}\n");
+
+    let _ = writeln!(s, "## Loading\n");
+    let _ = writeln!(
+        s,
+        "Median of {} loads: read, zstd-decompress in memory, parse and validate (finite positions, indices in range).\n",
+        cfg.runs
+    );
+    let mut t = comfy_table::Table::new();
+    t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+    t.set_header(["mesh", "file MB", "triangles", "load ms", "M triangles/s"]);
+    for l in loads {
+        let ms = median(&l.times_ms);
+        t.add_row([
+            l.mesh.clone(),
+            format!("{:.2}", l.bytes as f64 / 1e6),
+            l.triangles.to_string(),
+            format!("{ms:.1}"),
+            format!("{:.1}", l.triangles as f64 / ms / 1e3),
+        ]);
+    }
+    right_align_numbers(&mut t, 1..5);
     let _ = writeln!(s, "{t}");
     s
 }
