@@ -2,7 +2,10 @@
 //! several runs), validated and measured; writes results/build.md and results/build.csv with the
 //! paper's Bunny figures beside ours.
 
-use super::{evaluate, machine_note, median, paper, right_align_numbers, today, Evaluation};
+use super::{
+    evaluate, machine_note, median, paper, quality_cells, right_align_numbers, today, Evaluation,
+    QUALITY_HEADER,
+};
 use crate::mesh::{self, Mesh};
 use crate::meshlet::Limits;
 use crate::strategy::{self, Options};
@@ -258,39 +261,22 @@ fn to_markdown(rows: &[Row], loads: &[LoadRow], cfg: &Config) -> String {
         let _ = writeln!(s, "{t}\n");
     }
 
-    let mut meshes: Vec<&str> = rows.iter().map(|r| r.mesh.as_str()).collect();
-    meshes.dedup();
     let _ = writeln!(s, "## All meshes at {}\n", cfg.limits);
     let mut t = comfy_table::Table::new();
     t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
-    t.set_header([
-        "mesh",
-        "triangles",
-        "strategy",
-        "ms",
-        "meshlets",
-        "vfill",
-        "pfill",
-        "cullable",
-        "radius",
-        "dup",
-        "connected",
-    ]);
+    let mut header = vec!["mesh", "triangles", "strategy", "ms", "meshlets"];
+    header.extend(QUALITY_HEADER);
+    t.set_header(header);
     for r in rows {
-        let m = &r.eval.metrics;
-        t.add_row([
+        let mut row = vec![
             r.mesh.clone(),
             r.triangles.to_string(),
             r.eval.strategy.clone(),
             format!("{:.2}", median(&r.eval.times_ms)),
-            m.meshlets.to_string(),
-            format!("{:.3}", m.vertex_fill),
-            format!("{:.3}", m.primitive_fill),
-            format!("{:.3}", m.cone_cullable),
-            format!("{:.4}", m.mean_radius_rel),
-            format!("{:.3}", m.duplication),
-            format!("{:.3}", m.connected),
-        ]);
+            r.eval.metrics.meshlets.to_string(),
+        ];
+        row.extend(quality_cells(&r.eval.metrics));
+        t.add_row(row);
     }
     right_align_numbers(&mut t, 1..2);
     right_align_numbers(&mut t, 3..11);

@@ -138,42 +138,50 @@ pub fn today() -> String {
 pub fn metrics_table(rows: &[Evaluation]) -> comfy_table::Table {
     let mut t = comfy_table::Table::new();
     t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
-    t.set_header([
-        "strategy",
-        "meshlets",
-        "verts/ml",
-        "tris/ml",
-        "vfill",
-        "pfill",
-        "radius/diag",
-        "cullable",
-        "dup",
-        "connected",
-        "ms",
-        "valid",
-    ]);
+    let mut header = vec!["strategy", "meshlets", "verts/ml", "tris/ml"];
+    header.extend(QUALITY_HEADER);
+    header.extend(["ms", "valid"]);
+    t.set_header(header);
     for r in rows {
         let m = &r.metrics;
-        t.add_row([
+        let mut row = vec![
             r.strategy.clone(),
             m.meshlets.to_string(),
             format!("{:.1}", m.mean_vertices),
             format!("{:.1}", m.mean_triangles),
-            format!("{:.3}", m.vertex_fill),
-            format!("{:.3}", m.primitive_fill),
-            format!("{:.4}", m.mean_radius_rel),
-            format!("{:.3}", m.cone_cullable),
-            format!("{:.3}", m.duplication),
-            format!("{:.3}", m.connected),
-            format!("{:.2}", m.build_ms.unwrap_or(f64::NAN)),
-            match &r.invalid {
-                None => "ok".into(),
-                Some(e) => format!("INVALID: {e}"),
-            },
-        ]);
+        ];
+        row.extend(quality_cells(m));
+        row.push(format!("{:.2}", m.build_ms.unwrap_or(f64::NAN)));
+        row.push(match &r.invalid {
+            None => "ok".into(),
+            Some(e) => format!("INVALID: {e}"),
+        });
+        t.add_row(row);
     }
     right_align_numbers(&mut t, 1..11);
     t
+}
+
+/// Column names of [`quality_cells`].
+pub const QUALITY_HEADER: [&str; 6] = [
+    "vfill",
+    "pfill",
+    "radius/diag",
+    "cullable",
+    "dup",
+    "connected",
+];
+
+/// The quality columns every metrics table shows, formatted.
+pub fn quality_cells(m: &Metrics) -> [String; 6] {
+    [
+        format!("{:.3}", m.vertex_fill),
+        format!("{:.3}", m.primitive_fill),
+        format!("{:.4}", m.mean_radius_rel),
+        format!("{:.3}", m.cone_cullable),
+        format!("{:.3}", m.duplication),
+        format!("{:.3}", m.connected),
+    ]
 }
 
 /// Right-aligns the given columns.

@@ -375,18 +375,7 @@ fn read_binary<const BE: bool>(
             })
             .sum::<usize>()
             .max(1);
-        let plausible = (r.remaining() / min_record) as u64;
-        if e.count > plausible {
-            return Err(MeshErrorKind::Truncated(format!(
-                "header declares {} {} records, but only {} bytes remain (at least {min_record} per record)",
-                e.count,
-                e.name,
-                r.remaining()
-            )));
-        }
-        if let Role::Vertex { .. } = role {
-            out.positions.reserve(e.count as usize);
-        }
+        check_count(e, role, out, r.remaining(), min_record)?;
         for rec in 0..e.count {
             let what = || format!("{} {rec}", e.name);
             match *role {
@@ -452,6 +441,27 @@ fn read_binary<const BE: bool>(
             "{} bytes follow the last element the header declares",
             r.remaining()
         )));
+    }
+    Ok(())
+}
+
+/// Refuses a record count that the remaining bytes cannot hold (so a header can never make us
+/// allocate), then reserves room for vertices.
+fn check_count(
+    e: &Element,
+    role: &Role,
+    out: &mut Output,
+    bytes: usize,
+    min_record: usize,
+) -> Result<(), MeshErrorKind> {
+    if e.count > (bytes / min_record) as u64 {
+        return Err(MeshErrorKind::Truncated(format!(
+            "header declares {} {} records, but only {bytes} bytes remain (at least {min_record} per record)",
+            e.count, e.name
+        )));
+    }
+    if let Role::Vertex { .. } = role {
+        out.positions.reserve(e.count as usize);
     }
     Ok(())
 }
@@ -588,19 +598,8 @@ fn read_ascii(
     };
     let mut list: Vec<i64> = Vec::new();
     for (e, role) in elements.iter().zip(roles) {
-        // Every ASCII value takes at least two bytes (digit and separator): caps the reservation.
-        let plausible = (body.len() / (2 * e.props.len().max(1))) as u64;
-        if e.count > plausible {
-            return Err(MeshErrorKind::Truncated(format!(
-                "header declares {} {} records, but the body has only {} bytes",
-                e.count,
-                e.name,
-                body.len()
-            )));
-        }
-        if let Role::Vertex { .. } = role {
-            out.positions.reserve(e.count as usize);
-        }
+        // Every ASCII value takes at least two bytes (digit and separator).
+        check_count(e, role, out, body.len() - t.pos, 2 * e.props.len().max(1))?;
         for rec in 0..e.count {
             let what = || format!("{} {rec}", e.name);
             let mut xyz = [0f32; 3];
