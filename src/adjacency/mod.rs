@@ -5,7 +5,6 @@
 //! whatever the thread count. The GPU adjacency kernels mirror these arrays exactly.
 
 use crate::mesh::Mesh;
-use rayon::prelude::*;
 
 /// Compressed sparse rows: row `r` is `items[offsets[r]..offsets[r + 1]]`.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -81,35 +80,47 @@ pub struct EdgeTable {
 pub const NO_EDGE: u32 = u32::MAX;
 
 impl EdgeTable {
-    /// Builds the edge table by one parallel sort of (edge key, side) pairs.
+    /// Builds the edge table without a global sort: sides are grouped by their smaller vertex through
+    /// the vertex -> triangle CSR, and only each vertex's few sides are sorted. Edges therefore come
+    /// out sorted by (min, max) and each edge's triangles in ascending order.
     pub fn new(mesh: &Mesh) -> Self {
-        let sides = mesh.indices.len();
-        let mut keys: Vec<(u64, u32)> = (0..sides as u32)
-            .into_par_iter()
-            .filter_map(|s| {
-                let t = (s / 3) as usize;
-                let a = mesh.indices[s as usize];
-                let b = mesh.indices[3 * t + (s as usize % 3 + 1) % 3];
-                (a != b).then(|| (((a.min(b) as u64) << 32) | a.max(b) as u64, s))
-            })
-            .collect();
-        // (key, side) pairs are unique, so the unstable sort is deterministic.
-        keys.par_sort_unstable();
+        let vt = vertex_triangles(mesh);
+        let idx = &mesh.indices;
         let mut edges = Vec::new();
-        let mut side_edge = vec![NO_EDGE; sides];
-        let mut pairs = Vec::with_capacity(keys.len());
-        for (i, &(k, s)) in keys.iter().enumerate() {
-            if i == 0 || keys[i - 1].0 != k {
-                edges.push([(k >> 32) as u32, k as u32]);
+        let mut side_edge = vec![NO_EDGE; idx.len()];
+        let mut offsets = Vec::with_capacity(idx.len() / 2 + 1);
+        let mut items = Vec::with_capacity(idx.len());
+        offsets.push(0u32);
+        let mut local: Vec<(u32, u32)> = Vec::new();
+        for a in 0..mesh.vertex_count() as u32 {
+            local.clear();
+            for &t in vt.row(a as usize) {
+                for s in 0..3 {
+                    let side = 3 * t as usize + s;
+                    let (x, y) = (idx[side], idx[3 * t as usize + (s + 1) % 3]);
+                    if x != y && x.min(y) == a {
+                        local.push((x.max(y), side as u32));
+                    }
+                }
             }
-            let e = edges.len() as u32 - 1;
-            side_edge[s as usize] = e;
-            pairs.push((e, s / 3));
+            local.sort_unstable();
+            for (i, &(b, side)) in local.iter().enumerate() {
+                if i == 0 || local[i - 1].0 != b {
+                    if i > 0 {
+                        offsets.push(items.len() as u32);
+                    }
+                    edges.push([a, b]);
+                }
+                side_edge[side as usize] = edges.len() as u32 - 1;
+                items.push(side / 3);
+            }
+            if !local.is_empty() {
+                offsets.push(items.len() as u32);
+            }
         }
-        let faces = Csr::from_pairs(edges.len(), pairs.iter().copied());
         Self {
             edges,
-            faces,
+            faces: Csr { offsets, items },
             side_edge,
         }
     }
@@ -123,21 +134,37 @@ impl EdgeTable {
 /// The triangle dual graph: triangle -> edge-adjacent triangles, each row sorted, without duplicates
 /// or self-loops. Non-manifold edges connect all their triangles pairwise.
 pub fn dual_graph(mesh: &Mesh, edges: &EdgeTable) -> Csr {
-    let mut pairs: Vec<(u32, u32)> = Vec::new();
-    for e in 0..edges.edges.len() {
-        let row = edges.faces.row(e);
-        for (i, &a) in row.iter().enumerate() {
-            for &b in &row[i + 1..] {
-                if a != b {
-                    pairs.push((a, b));
-                    pairs.push((b, a));
-                }
+    let t_count = mesh.triangle_count();
+    let mut offsets = Vec::with_capacity(t_count + 1);
+    let mut items = Vec::with_capacity(3 * t_count);
+    offsets.push(0u32);
+    for t in 0..t_count {
+        let start = items.len();
+        for s in 0..3 {
+            let e = edges.side_edge[3 * t + s];
+            if e != NO_EDGE {
+                items.extend(
+                    edges
+                        .faces
+                        .row(e as usize)
+                        .iter()
+                        .filter(|&&f| f as usize != t),
+                );
             }
         }
+        items[start..].sort_unstable();
+        // In-place dedup of the row.
+        let mut w = start;
+        for r in start..items.len() {
+            if r == start || items[r] != items[w - 1] {
+                items[w] = items[r];
+                w += 1;
+            }
+        }
+        items.truncate(w);
+        offsets.push(items.len() as u32);
     }
-    pairs.par_sort_unstable();
-    pairs.dedup();
-    Csr::from_pairs(mesh.triangle_count(), pairs.iter().copied())
+    Csr { offsets, items }
 }
 
 #[cfg(test)]

@@ -50,6 +50,26 @@ impl MeshletBuilder {
         self.local[v as usize] != UNSET
     }
 
+    /// Global vertices of the open meshlet, in local order.
+    pub fn open_vertices(&self) -> &[u32] {
+        &self.out.vertices[self.out.vertices.len() - self.open_vertices..]
+    }
+
+    /// Whether the open meshlet has reached the triangle limit.
+    pub fn triangles_full(&self) -> bool {
+        self.open_triangles >= self.limits.max_triangles as usize
+    }
+
+    /// Whether the open meshlet has reached the vertex limit.
+    pub fn vertices_full(&self) -> bool {
+        self.open_vertices >= self.limits.max_vertices as usize
+    }
+
+    /// The limits this builder enforces.
+    pub fn limits(&self) -> Limits {
+        self.limits
+    }
+
     /// Triangles and vertices in the open meshlet.
     pub fn open_size(&self) -> (usize, usize) {
         (self.open_triangles, self.open_vertices)

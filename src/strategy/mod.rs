@@ -4,11 +4,15 @@
 //! Determinism: every strategy gives the same meshlets for the same input on every run and thread
 //! count.
 
+mod bsphere;
+mod greedy;
 mod meshopt;
 mod nvidia;
 pub mod tipsify;
 
 pub use self::meshopt::{Meshopt, MeshoptScan, MeshoptSpatial};
+pub use bsphere::BoundingSphere;
+pub use greedy::Greedy;
 pub use nvidia::Nvidia;
 
 use crate::mesh::Mesh;
@@ -51,10 +55,57 @@ impl Default for Options {
 pub const NAMES: &[&str] = &[
     "nvidia",
     "nvidia+tipsify",
+    "greedy",
+    "bsphere",
+    "bsphere-coherent",
     "meshopt",
     "meshopt-scan",
     "meshopt-spatial",
 ];
+
+/// Referenced vertices sorted along the mesh's longest bounding-box axis, low to high (ties by
+/// index): the paper's seed order for the greedy and bounding-sphere growers.
+pub(crate) fn sorted_vertices(mesh: &Mesh) -> Vec<u32> {
+    let (lo, hi) = mesh.bounding_box();
+    let ext = hi - lo;
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    let mut referenced = vec![false; mesh.vertex_count()];
+    for &i in &mesh.indices {
+        referenced[i as usize] = true;
+    }
+    let mut v: Vec<u32> = (0..mesh.vertex_count() as u32)
+        .filter(|&i| referenced[i as usize])
+        .collect();
+    v.sort_by(|&a, &b| {
+        mesh.positions[a as usize][axis]
+            .total_cmp(&mesh.positions[b as usize][axis])
+            .then(a.cmp(&b))
+    });
+    v
+}
+
+/// Unused-triangle counts per vertex (a degenerate triangle counts once per distinct vertex), kept in
+/// step with a `used` flag array by [`mark_used`].
+pub(crate) fn live_counts(adj: &crate::adjacency::Csr) -> Vec<u32> {
+    (0..adj.rows()).map(|v| adj.row(v).len() as u32).collect()
+}
+
+/// Marks triangle `t` used and decrements its distinct vertices' live counts.
+pub(crate) fn mark_used(mesh: &Mesh, t: u32, used: &mut [bool], live: &mut [u32]) {
+    used[t as usize] = true;
+    let tri = mesh.triangle(t as usize);
+    for (i, &v) in tri.iter().enumerate() {
+        if !tri[..i].contains(&v) {
+            live[v as usize] -= 1;
+        }
+    }
+}
 
 /// A name that no strategy answers to.
 #[derive(Debug, Error)]
@@ -70,6 +121,9 @@ pub fn by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, UnknownS
         "nvidia+tipsify" => Box::new(Nvidia {
             tipsify_cache: Some(opts.cache_size),
         }),
+        "greedy" => Box::new(Greedy),
+        "bsphere" => Box::new(BoundingSphere { coherent: false }),
+        "bsphere-coherent" => Box::new(BoundingSphere { coherent: true }),
         "meshopt" => Box::new(Meshopt {
             cone_weight: opts.cone_weight,
         }),
