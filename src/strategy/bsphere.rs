@@ -14,7 +14,7 @@
 //! it: the sphere is updated after every accepted triangle.
 
 use super::{live_counts, mark_used, sorted_vertices, Strategy};
-use crate::adjacency::{dual_graph, vertex_triangles, Csr, EdgeTable};
+use crate::adjacency::{dual_graph, vertex_triangles, Csr};
 use crate::mesh::Mesh;
 use crate::meshlet::{Limits, MeshletBuilder, Meshlets};
 use glam::DVec3;
@@ -44,7 +44,7 @@ impl Strategy for BoundingSphere {
 
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         let vt = vertex_triangles(mesh);
-        let dual = dual_graph(mesh, &EdgeTable::new(mesh));
+        let dual = dual_graph(mesh, &vt);
         Grower::new(mesh, &vt, &dual, limits).run(self.coherent)
     }
 }
@@ -75,6 +75,8 @@ struct Grower<'a> {
     /// `in_meshlet[t] == gen`: t belongs to the current meshlet.
     in_meshlet: Vec<u32>,
     border: Vec<u32>,
+    /// Scratch: candidates tied at the best score.
+    tied: Vec<u32>,
     gen: u32,
     center: DVec3,
     radius: f64,
@@ -94,6 +96,7 @@ impl<'a> Grower<'a> {
             inside_gen: vec![u32::MAX; t],
             in_meshlet: vec![u32::MAX; t],
             border: Vec::new(),
+            tied: Vec::new(),
             gen: 0,
             center: DVec3::ZERO,
             radius: -1.0,
@@ -154,8 +157,11 @@ impl<'a> Grower<'a> {
     /// The best border candidate (two or more vertices inside), or `Err(true)` if candidates exist
     /// but none fits (meshlet full), `Err(false)` if there is none.
     fn best(&mut self) -> Result<u32, bool> {
-        let mut best: Option<(u32, f64, u32)> = None; // (score, radius, triangle)
+        // Pass 1: scores (cheap). The radius only breaks ties, so it is computed in pass 2 for the
+        // top-scoring candidates alone.
+        let mut top_score = 0u32;
         let mut blocked = false;
+        self.tied.clear();
         let mut i = 0;
         while i < self.border.len() {
             let t = self.border[i];
@@ -164,29 +170,46 @@ impl<'a> Grower<'a> {
                 continue;
             }
             i += 1;
-            let tri = self.mesh.triangle(t as usize);
-            let inside = self.inside[t as usize] as u32;
-            if !self.b.fits(tri) {
+            let [a, b, c] = self.mesh.triangle(t as usize);
+            let distinct = 1 + (b != a) as usize + (c != a && c != b) as usize;
+            let inside = self.inside[t as usize] as usize;
+            let (tris, verts) = self.b.open_size();
+            let limits = self.b.limits();
+            if tris >= limits.max_triangles as usize
+                || verts + distinct - inside > limits.max_vertices as usize
+            {
                 blocked = true;
                 continue;
             }
-            // Island bonus: every edge neighbour is already in this meshlet.
-            let island = self
-                .dual
-                .row(t as usize)
-                .iter()
-                .all(|&n| self.in_meshlet[n as usize] == self.gen);
-            let score = inside + island as u32;
-            let r = self.radius_with(tri);
-            let better = match best {
-                None => true,
-                Some((s, br, bt)) => score > s || (score == s && (r < br || (r == br && t < bt))),
-            };
-            if better {
-                best = Some((score, r, t));
+            // Island bonus (+1): every edge neighbour is already in this meshlet. Skipped when even
+            // the bonus could not reach the current top score.
+            let mut score = inside as u32;
+            if score + 1 >= top_score
+                && self
+                    .dual
+                    .row(t as usize)
+                    .iter()
+                    .all(|&n| self.in_meshlet[n as usize] == self.gen)
+            {
+                score += 1;
+            }
+            if score > top_score {
+                top_score = score;
+                self.tied.clear();
+            }
+            if score == top_score {
+                self.tied.push(t);
             }
         }
-        best.map(|(_, _, t)| t).ok_or(blocked)
+        // Pass 2: smallest resulting sphere, then lowest triangle id.
+        let mut best: Option<(f64, u32)> = None;
+        for &t in &self.tied {
+            let r = self.radius_with(self.mesh.triangle(t as usize));
+            if best.is_none_or(|(br, bt)| r < br || (r == br && t < bt)) {
+                best = Some((r, t));
+            }
+        }
+        best.map(|(_, t)| t).ok_or(blocked)
     }
 
     /// The unused triangle of `v` that fits and gives the smallest sphere (lowest id on ties).
