@@ -50,8 +50,14 @@ fn loader_and_topology_match_sources_md() {
 
 #[test]
 fn every_strategy_validates_on_every_mesh_and_preset() {
-    let opts = Options::default();
-    let strategies = strategy::all(&opts);
+    // Paper-mode k-medoids gets a short budget here: it then finishes the fast way, and the test is
+    // about validity, not the paper's timing.
+    let mut opts = Options::default();
+    opts.kmedoids.paper_budget = std::time::Duration::from_millis(500);
+    let strategies: Vec<_> = strategy::NAMES
+        .iter()
+        .map(|n| strategy::by_name(n, &opts).unwrap())
+        .collect();
     for f in common::mesh_files() {
         let m = mesh::load(&f).unwrap();
         for limits in Limits::PRESETS {

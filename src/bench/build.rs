@@ -3,8 +3,8 @@
 //! paper's Bunny figures beside ours.
 
 use super::{
-    evaluate, machine_note, median, paper, quality_cells, right_align_numbers, today, Evaluation,
-    QUALITY_HEADER,
+    evaluate, machine_note, median, paper, plot, quality_cells, right_align_numbers, today,
+    Evaluation, QUALITY_HEADER,
 };
 use crate::mesh::{self, Mesh};
 use crate::meshlet::Limits;
@@ -147,6 +147,7 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
     let md = cfg.out.join("build.md");
     std::fs::write(&md, to_markdown(&rows, &loads, cfg))
         .with_context(|| format!("{}: cannot write", md.display()))?;
+    write_strategies(&rows, cfg)?;
     if let Some(bad) = rows.iter().find(|r| r.eval.invalid.is_some()) {
         bail!(
             "{} / {}: invalid meshlets: {}",
@@ -304,4 +305,147 @@ fn to_markdown(rows: &[Row], loads: &[LoadRow], cfg: &Config) -> String {
     right_align_numbers(&mut t, 1..5);
     let _ = writeln!(s, "{t}");
     s
+}
+
+/// results/strategies.md and the Figure-9 histogram plots.
+fn write_strategies(rows: &[Row], cfg: &Config) -> Result<()> {
+    let mut s = String::new();
+    let _ = writeln!(s, "# Strategies compared\n");
+    let _ = writeln!(
+        s,
+        "Written by `meshletlab bench build --runs {} --limits {}` on {} (same run as build.md). Do not edit.\n",
+        cfg.runs,
+        cfg.limits,
+        today()
+    );
+    let _ = writeln!(s, "Machine: {}.\n", machine_note());
+    let strategies: Vec<String> = {
+        let mut v: Vec<String> = rows.iter().map(|r| r.eval.strategy.clone()).collect();
+        let mut seen = std::collections::HashSet::new();
+        v.retain(|x| seen.insert(x.clone()));
+        v
+    };
+    if rows.iter().any(|r| r.mesh == "stanford_bunny") {
+        let _ = writeln!(s, "## Bunny: ours beside the paper (Tables 4, 7, 8)\n");
+        let _ = writeln!(
+            s,
+            "Paper: Jensen, Frisvad, Bærentzen, JCGT 12(2), 2023, their machine and bunny (69,666 triangles). \
+             `—` = the paper has no such row.\n"
+        );
+        let mut t = comfy_table::Table::new();
+        t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+        t.set_header([
+            "strategy",
+            "ms",
+            "paper ms",
+            "speed-up",
+            "meshlets",
+            "paper",
+            "pfill",
+            "paper pfill",
+            "vfill",
+            "cullable",
+            "radius/diag",
+        ]);
+        for name in &strategies {
+            let Some(r) = rows
+                .iter()
+                .find(|r| r.mesh == "stanford_bunny" && &r.eval.strategy == name)
+            else {
+                continue;
+            };
+            let p = paper::bunny_row(name);
+            let ms = median(&r.eval.times_ms);
+            let m = &r.eval.metrics;
+            t.add_row([
+                name.clone(),
+                format!("{ms:.2}"),
+                opt(p.and_then(|p| p.time_ms).map(|v| format!("{v:.2}"))),
+                opt(p.and_then(|p| p.time_ms).map(|v| format!("{:.1}x", v / ms))),
+                m.meshlets.to_string(),
+                opt(p.and_then(|p| p.meshlets)),
+                format!("{:.3}", m.primitive_fill),
+                opt(p.and_then(|p| p.primitive_fill).map(|v| format!("{v:.3}"))),
+                format!("{:.3}", m.vertex_fill),
+                format!("{:.3}", m.cone_cullable),
+                format!("{:.4}", m.mean_radius_rel),
+            ]);
+        }
+        right_align_numbers(&mut t, 1..11);
+        let _ = writeln!(s, "{t}\n");
+    }
+
+    let _ = writeln!(s, "## Meshlet count per mesh (fewer is better)\n");
+    let _ = writeln!(
+        s,
+        "The last column is the best non-meshoptimizer strategy's count over meshoptimizer's `build_meshlets` \
+         (below 1 = we beat it on that mesh).\n"
+    );
+    let mut t = comfy_table::Table::new();
+    t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+    let mut header: Vec<String> = vec!["mesh".into()];
+    header.extend(strategies.iter().cloned());
+    header.push("best ours / meshopt".into());
+    t.set_header(header);
+    let mut meshes: Vec<&str> = rows.iter().map(|r| r.mesh.as_str()).collect();
+    meshes.dedup();
+    for mesh in &meshes {
+        let count = |n: &str| {
+            rows.iter()
+                .find(|r| r.mesh == *mesh && r.eval.strategy == n)
+                .map(|r| r.eval.metrics.meshlets)
+        };
+        let mut row = vec![mesh.to_string()];
+        row.extend(strategies.iter().map(|n| opt(count(n))));
+        let ours = strategies
+            .iter()
+            .filter(|n| !n.starts_with("meshopt"))
+            .filter_map(|n| count(n))
+            .min();
+        row.push(opt(ours
+            .zip(count("meshopt"))
+            .map(|(o, m)| format!("{:.3}", o as f64 / m as f64))));
+        t.add_row(row);
+    }
+    right_align_numbers(&mut t, 1..strategies.len() + 2);
+    let _ = writeln!(s, "{t}\n");
+
+    if let Some(_bunny) = rows.iter().find(|r| r.mesh == "stanford_bunny") {
+        let _ = writeln!(
+            s,
+            "## Vertices and triangles per meshlet on the bunny (paper Figure 9)\n"
+        );
+        let _ = writeln!(s, "![vertices per meshlet](figure9_vertices.svg)\n\n![triangles per meshlet](figure9_triangles.svg)\n");
+        let hist = |f: &dyn Fn(&Row) -> &Vec<u32>| -> Vec<plot::Series> {
+            rows.iter()
+                .filter(|r| r.mesh == "stanford_bunny")
+                .map(|r| plot::Series {
+                    label: r.eval.strategy.clone(),
+                    points: f(r)
+                        .iter()
+                        .enumerate()
+                        .map(|(k, &n)| (k as f64, n as f64))
+                        .collect(),
+                })
+                .collect()
+        };
+        plot::line_chart(
+            &cfg.out.join("figure9_vertices.svg"),
+            &format!("Bunny: vertices per meshlet ({})", cfg.limits),
+            "vertices in the meshlet",
+            "meshlets",
+            &hist(&|r| &r.eval.metrics.vertex_histogram),
+            false,
+        )?;
+        plot::line_chart(
+            &cfg.out.join("figure9_triangles.svg"),
+            &format!("Bunny: triangles per meshlet ({})", cfg.limits),
+            "triangles in the meshlet",
+            "meshlets",
+            &hist(&|r| &r.eval.metrics.triangle_histogram),
+            false,
+        )?;
+    }
+    let path = cfg.out.join("strategies.md");
+    std::fs::write(&path, s).with_context(|| format!("{}: cannot write", path.display()))
 }

@@ -2,7 +2,9 @@
 //! the `bench` commands, plus machine notes and tables for results/.
 
 pub mod build;
+pub mod kmedoids;
 pub mod paper;
+pub mod plot;
 
 use crate::mesh::Mesh;
 use crate::meshlet::{bounds, validate, Limits, Meshlets, Metrics};

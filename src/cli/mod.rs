@@ -3,6 +3,7 @@
 
 use crate::bench::{self, evaluate, metrics_table, Evaluation};
 use crate::mesh::{self, generate, Mesh, MeshStats};
+use crate::meshlet::order::MeshletOrder;
 use crate::meshlet::{io::MeshletFile, validate, Limits};
 use crate::strategy::{self, Options, Strategy};
 use anyhow::{bail, Context, Result};
@@ -14,7 +15,8 @@ use std::time::Duration;
 /// Build, measure and compare meshlets (triangle clusters for GPU mesh shaders).
 ///
 /// Meshes: PLY (ASCII/binary), OBJ, glTF 2.0 (.gltf/.glb), each optionally zstd-compressed (.zst).
-/// Strategies: nvidia, nvidia+tipsify, meshopt, meshopt-scan, meshopt-spatial (or "all").
+/// Strategies: nvidia, nvidia+tipsify, greedy, bsphere, bsphere-coherent, kmedoids, kmedoids-paper,
+/// meshopt, meshopt-scan, meshopt-spatial (or "all").
 /// Limits are VERTICES/TRIANGLES per meshlet; default 64/126 (the JCGT paper's).
 #[derive(Parser, Debug)]
 #[command(name = "meshletlab", version, about, long_about)]
@@ -44,6 +46,21 @@ pub struct StrategyArgs {
     /// meshoptimizer spatial builder fill weight (>= 0).
     #[arg(long, default_value_t = 0.5)]
     pub fill_weight: f32,
+    /// k-medoids: most assign/update iterations per clustering.
+    #[arg(long, default_value_t = 16)]
+    pub kmedoids_iterations: u32,
+    /// k-medoids: stop when the mean medoid shift (in hops) is at most this.
+    #[arg(long, default_value_t = 0.0)]
+    pub kmedoids_threshold: f64,
+    /// kmedoids-paper: seconds before the remaining splits are done the fast way.
+    #[arg(long, default_value_t = 300.0)]
+    pub paper_budget: f64,
+    /// Reorder triangles inside each meshlet for vertex reuse, local vertices in first-use order.
+    #[arg(long)]
+    pub local_order: bool,
+    /// Order of meshlets in the collection: built, triangles (most first), vertices (most first).
+    #[arg(long, default_value = "built", value_parser = clap::value_parser!(MeshletOrder))]
+    pub meshlet_order: MeshletOrder,
 }
 
 impl StrategyArgs {
@@ -52,6 +69,14 @@ impl StrategyArgs {
             cone_weight: self.cone_weight,
             cache_size: self.cache_size,
             fill_weight: self.fill_weight.max(0.0),
+            kmedoids: strategy::kmedoids::Config {
+                max_iterations: self.kmedoids_iterations,
+                shift_threshold: self.kmedoids_threshold,
+                paper_budget: Duration::from_secs_f64(self.paper_budget),
+                ..Default::default()
+            },
+            local_order: self.local_order,
+            meshlet_order: self.meshlet_order,
         }
     }
 }
@@ -145,11 +170,32 @@ pub enum BenchCommand {
         /// Output folder.
         #[arg(long, default_value = "results")]
         out: PathBuf,
-        /// Only these strategies (repeatable; default all).
+        /// Only these strategies (repeatable; default all but the slow kmedoids-paper).
         #[arg(short, long)]
         strategy: Vec<String>,
         #[command(flatten)]
         args: StrategyArgs,
+    },
+    /// k-medoids at scale (fast and paper modes, every mesh) and a run-time-vs-error sweep -> kmedoids.md.
+    Kmedoids {
+        /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Meshlet limits.
+        #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
+        limits: Limits,
+        /// Seconds paper mode may spend per mesh before finishing the fast way.
+        #[arg(long, default_value_t = 60.0)]
+        paper_budget: f64,
+        /// Run only the fast mode.
+        #[arg(long)]
+        skip_paper: bool,
+        /// Mesh (file stem) for the iteration/threshold sweep.
+        #[arg(long, default_value = "stanford_bunny")]
+        sweep_mesh: String,
     },
 }
 
@@ -202,6 +248,27 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
             output,
             levels,
         } => subdivide(&mesh, &output, levels, q),
+        Command::Bench(BenchCommand::Kmedoids {
+            meshes,
+            out,
+            limits,
+            paper_budget,
+            skip_paper,
+            sweep_mesh,
+        }) => {
+            let cfg = bench::kmedoids::Config {
+                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                out,
+                limits,
+                paper_budget: Duration::from_secs_f64(paper_budget.max(0.0)),
+                skip_paper,
+                sweep_mesh,
+                quiet: q,
+            };
+            bench::kmedoids::run(&cfg)?;
+            println!("wrote {}", cfg.out.join("kmedoids.md").display());
+            Ok(())
+        }
         Command::Bench(BenchCommand::Build {
             meshes,
             runs,

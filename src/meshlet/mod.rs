@@ -10,6 +10,7 @@ pub mod bounds;
 mod builder;
 pub mod io;
 pub mod metrics;
+pub mod order;
 mod validate;
 
 pub use bounds::{Cone, MeshletBounds, Sphere};

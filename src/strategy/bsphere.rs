@@ -109,8 +109,10 @@ impl<'a> Grower<'a> {
 
     fn add(&mut self, t: u32) {
         let tri = self.mesh.triangle(t as usize);
-        for v in tri {
-            if !self.b.contains_vertex(v) {
+        for (k, &v) in tri.iter().enumerate() {
+            // Distinct vertices only: a degenerate triangle repeats one, and the builder records
+            // vertices only at the push below.
+            if !tri[..k].contains(&v) && !self.b.contains_vertex(v) {
                 let p = self.pos(v);
                 (self.center, self.radius) = if self.radius < 0.0 {
                     (p, 0.0)

@@ -6,6 +6,7 @@
 
 mod bsphere;
 mod greedy;
+pub mod kmedoids;
 mod meshopt;
 mod nvidia;
 pub mod tipsify;
@@ -13,9 +14,11 @@ pub mod tipsify;
 pub use self::meshopt::{Meshopt, MeshoptScan, MeshoptSpatial};
 pub use bsphere::BoundingSphere;
 pub use greedy::Greedy;
+pub use kmedoids::KMedoids;
 pub use nvidia::Nvidia;
 
 use crate::mesh::Mesh;
+use crate::meshlet::order::{optimize_triangle_order, order_meshlets, MeshletOrder};
 use crate::meshlet::{Limits, Meshlets};
 use thiserror::Error;
 
@@ -38,6 +41,12 @@ pub struct Options {
     pub cache_size: u32,
     /// meshoptimizer's spatial builder fill weight (>= 0): fuller clusters vs. SAH quality.
     pub fill_weight: f32,
+    /// k-medoids settings (the mode is set by the strategy name).
+    pub kmedoids: kmedoids::Config,
+    /// Reorder triangles inside each meshlet for vertex reuse (any strategy).
+    pub local_order: bool,
+    /// Order of the meshlets in the collection (any strategy).
+    pub meshlet_order: MeshletOrder,
 }
 
 impl Default for Options {
@@ -47,6 +56,9 @@ impl Default for Options {
             cone_weight: 0.0,
             cache_size: 16,
             fill_weight: 0.5,
+            kmedoids: kmedoids::Config::default(),
+            local_order: false,
+            meshlet_order: MeshletOrder::AsBuilt,
         }
     }
 }
@@ -58,6 +70,8 @@ pub const NAMES: &[&str] = &[
     "greedy",
     "bsphere",
     "bsphere-coherent",
+    "kmedoids",
+    "kmedoids-paper",
     "meshopt",
     "meshopt-scan",
     "meshopt-spatial",
@@ -112,8 +126,44 @@ pub(crate) fn mark_used(mesh: &Mesh, t: u32, used: &mut [bool], live: &mut [u32]
 #[error("unknown strategy '{0}' (known: {known})", known = NAMES.join(", "))]
 pub struct UnknownStrategy(pub String);
 
-/// Looks a strategy up by name.
+/// Looks a strategy up by name; the ordering options wrap it in a post-pass.
 pub fn by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, UnknownStrategy> {
+    let inner = base_by_name(name, opts)?;
+    if !opts.local_order && opts.meshlet_order == MeshletOrder::AsBuilt {
+        return Ok(inner);
+    }
+    Ok(Box::new(Ordered {
+        inner,
+        local_order: opts.local_order,
+        meshlet_order: opts.meshlet_order,
+    }))
+}
+
+/// A strategy followed by the ordering post-passes (which keep every meshlet's triangle set).
+struct Ordered {
+    inner: Box<dyn Strategy>,
+    local_order: bool,
+    meshlet_order: MeshletOrder,
+}
+
+impl Strategy for Ordered {
+    fn name(&self) -> &'static str {
+        self.inner.name()
+    }
+    fn summary(&self) -> &'static str {
+        self.inner.summary()
+    }
+    fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
+        let mut ml = self.inner.build(mesh, limits);
+        if self.local_order {
+            optimize_triangle_order(&mut ml);
+        }
+        order_meshlets(&mut ml, self.meshlet_order);
+        ml
+    }
+}
+
+fn base_by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, UnknownStrategy> {
     Ok(match name {
         "nvidia" => Box::new(Nvidia {
             tipsify_cache: None,
@@ -124,6 +174,18 @@ pub fn by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, UnknownS
         "greedy" => Box::new(Greedy),
         "bsphere" => Box::new(BoundingSphere { coherent: false }),
         "bsphere-coherent" => Box::new(BoundingSphere { coherent: true }),
+        "kmedoids" => Box::new(KMedoids {
+            config: kmedoids::Config {
+                mode: kmedoids::Mode::Fast,
+                ..opts.kmedoids
+            },
+        }),
+        "kmedoids-paper" => Box::new(KMedoids {
+            config: kmedoids::Config {
+                mode: kmedoids::Mode::Paper,
+                ..opts.kmedoids
+            },
+        }),
         "meshopt" => Box::new(Meshopt {
             cone_weight: opts.cone_weight,
         }),
@@ -135,10 +197,14 @@ pub fn by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, UnknownS
     })
 }
 
-/// All strategies with the given options, in table order.
+/// Strategies that are slow by design and only run when named (or by `bench kmedoids`).
+pub const SLOW: &[&str] = &["kmedoids-paper"];
+
+/// All strategies except the [`SLOW`] ones, in table order.
 pub fn all(opts: &Options) -> Vec<Box<dyn Strategy>> {
     NAMES
         .iter()
+        .filter(|n| !SLOW.contains(n))
         .map(|n| by_name(n, opts).expect("NAMES are known"))
         .collect()
 }

@@ -1,0 +1,334 @@
+//! `meshletlab bench kmedoids`: k-medoids at scale (both modes, every shared mesh) and a sweep of
+//! iteration limits and convergence thresholds (run time against error) -> results/kmedoids.md,
+//! results/kmedoids.csv, results/kmedoids_sweep.csv and two plots.
+
+use super::build::{mesh_files, mesh_name};
+use super::{machine_note, plot, right_align_numbers, today};
+use crate::mesh;
+use crate::meshlet::{bounds, validate, Limits, Metrics};
+use crate::strategy::kmedoids::{cluster, Clustering, Config as KConfig, Mode};
+use anyhow::{bail, Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// The paper's published k-medoids times (Table 4 and §5): (model, triangles, seconds).
+pub const PAPER_TIMES: &[(&str, u32, f64)] = &[
+    ("Bunny", 69_666, 50.769),
+    ("Happy Buddha", 1_090_000, 12_450.0),
+    ("Asian Dragon", 7_200_000, 455_300.0),
+];
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// Folder of meshes.
+    pub meshes: PathBuf,
+    /// Output folder.
+    pub out: PathBuf,
+    /// Limits.
+    pub limits: Limits,
+    /// Paper mode's time budget per mesh.
+    pub paper_budget: Duration,
+    /// Skip paper mode (only fast).
+    pub skip_paper: bool,
+    /// Mesh (file stem) for the sweep.
+    pub sweep_mesh: String,
+    /// No progress bar.
+    pub quiet: bool,
+}
+
+struct Run {
+    mesh: String,
+    triangles: usize,
+    mode: Mode,
+    seconds: f64,
+    c: Clustering,
+    metrics: Metrics,
+}
+
+fn run_one(
+    m: &mesh::Mesh,
+    limits: Limits,
+    cfg: KConfig,
+    name: &str,
+) -> Result<(f64, Clustering, Metrics)> {
+    let t0 = Instant::now();
+    let c = cluster(m, limits, &cfg);
+    let secs = t0.elapsed().as_secs_f64();
+    validate(m, &c.meshlets, limits)
+        .with_context(|| format!("{name}: k-medoids produced invalid meshlets"))?;
+    let b = bounds::compute_bounds(m, &c.meshlets);
+    let metrics = Metrics::compute(
+        m,
+        &c.meshlets,
+        limits,
+        &b,
+        Some(Duration::from_secs_f64(secs)),
+    );
+    Ok((secs, c, metrics))
+}
+
+/// Runs both parts and writes the results.
+pub fn run(cfg: &Config) -> Result<()> {
+    let files = mesh_files(&cfg.meshes)?;
+    let modes: Vec<Mode> = if cfg.skip_paper {
+        vec![Mode::Fast]
+    } else {
+        vec![Mode::Fast, Mode::Paper]
+    };
+    let pb = if cfg.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new((files.len() * modes.len()) as u64)
+    };
+    pb.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")?
+            .progress_chars("=> "),
+    );
+    let mut runs = Vec::new();
+    let mut loaded = Vec::new();
+    for f in &files {
+        let name = mesh_name(f);
+        let m = mesh::load(f)?;
+        for &mode in &modes {
+            pb.set_message(format!("{name} / {mode:?}"));
+            let kc = KConfig {
+                mode,
+                paper_budget: cfg.paper_budget,
+                ..KConfig::default()
+            };
+            let (seconds, c, metrics) = run_one(&m, cfg.limits, kc, &name)?;
+            runs.push(Run {
+                mesh: name.clone(),
+                triangles: m.triangle_count(),
+                mode,
+                seconds,
+                c,
+                metrics,
+            });
+            pb.inc(1);
+        }
+        loaded.push((name, m));
+    }
+    pb.finish_and_clear();
+    runs.sort_by_key(|r| (r.triangles, r.mesh.clone(), r.mode == Mode::Paper));
+
+    // The sweep.
+    let Some((_, sm)) = loaded.iter().find(|(n, _)| *n == cfg.sweep_mesh) else {
+        bail!(
+            "sweep mesh '{}' is not in {}",
+            cfg.sweep_mesh,
+            cfg.meshes.display()
+        );
+    };
+    let iterations = [0u32, 1, 2, 4, 8, 16, 32];
+    let thresholds = [0.0f64, 0.25, 1.0];
+    let mut sweep = Vec::new();
+    for &th in &thresholds {
+        for &it in &iterations {
+            let kc = KConfig {
+                max_iterations: it,
+                shift_threshold: th,
+                ..KConfig::default()
+            };
+            let (secs, c, met) = run_one(sm, cfg.limits, kc, &cfg.sweep_mesh)?;
+            sweep.push((th, it, secs, c, met));
+        }
+    }
+
+    std::fs::create_dir_all(&cfg.out)?;
+    let mut csv = String::from("mesh,triangles,mode,seconds,meshlets,iterations,splits,budget_exhausted,mean_hops,primitive_fill,vertex_fill\n");
+    for r in &runs {
+        let _ = writeln!(
+            csv,
+            "{},{},{:?},{:.4},{},{},{},{},{:.4},{:.5},{:.5}",
+            r.mesh,
+            r.triangles,
+            r.mode,
+            r.seconds,
+            r.c.meshlets.len(),
+            r.c.iterations,
+            r.c.splits,
+            r.c.budget_exhausted,
+            r.c.mean_distance(),
+            r.metrics.primitive_fill,
+            r.metrics.vertex_fill
+        );
+    }
+    std::fs::write(cfg.out.join("kmedoids.csv"), csv)?;
+    let mut scsv = String::from("mesh,threshold,max_iterations,seconds,iterations_run,mean_hops,meshlets,primitive_fill,vertex_fill\n");
+    for (th, it, secs, c, met) in &sweep {
+        let _ = writeln!(
+            scsv,
+            "{},{th},{it},{secs:.4},{},{:.4},{},{:.5},{:.5}",
+            cfg.sweep_mesh,
+            c.iterations,
+            c.mean_distance(),
+            c.meshlets.len(),
+            met.primitive_fill,
+            met.vertex_fill
+        );
+    }
+    std::fs::write(cfg.out.join("kmedoids_sweep.csv"), scsv)?;
+    let series = |y: &dyn Fn(&Clustering) -> f64| -> Vec<plot::Series> {
+        thresholds
+            .iter()
+            .map(|&th| plot::Series {
+                label: format!("shift threshold {th}"),
+                points: sweep
+                    .iter()
+                    .filter(|s| s.0 == th)
+                    .map(|s| (s.2, y(&s.3)))
+                    .collect(),
+            })
+            .collect()
+    };
+    plot::line_chart(
+        &cfg.out.join("kmedoids_sweep_hops.svg"),
+        &format!(
+            "k-medoids on {}: run time against mean hop distance",
+            cfg.sweep_mesh
+        ),
+        "seconds (log scale)",
+        "mean hops to the medoid",
+        &series(&|c| c.mean_distance()),
+        true,
+    )?;
+    plot::line_chart(
+        &cfg.out.join("kmedoids_sweep_meshlets.svg"),
+        &format!(
+            "k-medoids on {}: run time against meshlet count",
+            cfg.sweep_mesh
+        ),
+        "seconds (log scale)",
+        "meshlets",
+        &series(&|c| c.meshlets.len() as f64),
+        true,
+    )?;
+
+    let mut s = String::new();
+    let _ = writeln!(s, "# k-medoids at scale, and run time against error\n");
+    let _ = writeln!(
+        s,
+        "Written by `meshletlab bench kmedoids --limits {} --paper-budget {}` on {}. Do not edit: rerun the command.\n",
+        cfg.limits,
+        cfg.paper_budget.as_secs_f64(),
+        today()
+    );
+    let _ = writeln!(s, "Machine: {}.\n", machine_note());
+    let _ = writeln!(
+        s,
+        "One run per row (these take seconds to minutes). `fast`: the largest quarter of overflowing clusters \
+         split per round, a few iterations after each; `paper`: one cluster added and everything re-run per \
+         overflow, as the paper does; when its budget of {} s runs out it finishes the fast way (marked). \
+         Every output passed the validator.\n",
+        cfg.paper_budget.as_secs_f64()
+    );
+    let mut t = comfy_table::Table::new();
+    t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+    t.set_header([
+        "mesh",
+        "triangles",
+        "mode",
+        "seconds",
+        "meshlets",
+        "iterations",
+        "splits",
+        "mean hops",
+        "pfill",
+        "note",
+    ]);
+    for r in &runs {
+        t.add_row([
+            r.mesh.clone(),
+            r.triangles.to_string(),
+            format!("{:?}", r.mode).to_lowercase(),
+            format!("{:.2}", r.seconds),
+            r.c.meshlets.len().to_string(),
+            r.c.iterations.to_string(),
+            r.c.splits.to_string(),
+            format!("{:.2}", r.c.mean_distance()),
+            format!("{:.3}", r.metrics.primitive_fill),
+            if r.c.budget_exhausted {
+                "budget ran out: finished fast".into()
+            } else {
+                String::new()
+            },
+        ]);
+    }
+    right_align_numbers(&mut t, 1..2);
+    right_align_numbers(&mut t, 3..9);
+    let _ = writeln!(s, "{t}\n");
+    let _ = writeln!(s, "## The paper's k-medoids times (their machine)\n");
+    let _ = writeln!(
+        s,
+        "| model | triangles | paper seconds | ours, nearest shared mesh |\n|---|---:|---:|---|"
+    );
+    for &(model, tris, secs) in PAPER_TIMES {
+        let near = runs
+            .iter()
+            .filter(|r| r.mode == Mode::Fast)
+            .min_by_key(|r| (r.triangles as i64 - tris as i64).unsigned_abs())
+            .map(|r| {
+                format!(
+                    "{} ({} triangles): fast {:.2} s",
+                    r.mesh, r.triangles, r.seconds
+                )
+            })
+            .unwrap_or_default();
+        let paper_run = runs
+            .iter()
+            .filter(|r| r.mode == Mode::Paper && model == "Bunny" && r.mesh == "stanford_bunny")
+            .map(|r| {
+                format!(
+                    "; paper mode {:.2} s, {} meshlets (paper: 921)",
+                    r.seconds,
+                    r.c.meshlets.len()
+                )
+            })
+            .next()
+            .unwrap_or_default();
+        let _ = writeln!(s, "| {model} | {tris} | {secs} | {near}{paper_run} |");
+    }
+    let _ = writeln!(
+        s,
+        "\n## Run time against error ({}, fast mode)\n",
+        cfg.sweep_mesh
+    );
+    let _ = writeln!(
+        s,
+        "Iteration limit and convergence threshold (mean medoid shift in hops) swept; error = mean hop distance of a \
+         triangle to its medoid (the k-medoids objective). Data: kmedoids_sweep.csv.\n\n\
+         ![hops](kmedoids_sweep_hops.svg)\n\n![meshlets](kmedoids_sweep_meshlets.svg)\n"
+    );
+    let mut t = comfy_table::Table::new();
+    t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+    t.set_header([
+        "threshold",
+        "max iterations",
+        "iterations run",
+        "seconds",
+        "mean hops",
+        "meshlets",
+        "pfill",
+        "vfill",
+    ]);
+    for (th, it, secs, c, met) in &sweep {
+        t.add_row([
+            th.to_string(),
+            it.to_string(),
+            c.iterations.to_string(),
+            format!("{secs:.3}"),
+            format!("{:.3}", c.mean_distance()),
+            c.meshlets.len().to_string(),
+            format!("{:.3}", met.primitive_fill),
+            format!("{:.3}", met.vertex_fill),
+        ]);
+    }
+    right_align_numbers(&mut t, 0..8);
+    let _ = writeln!(s, "{t}");
+    std::fs::write(cfg.out.join("kmedoids.md"), s)?;
+    Ok(())
+}
