@@ -45,8 +45,26 @@ impl Strategy for BoundingSphere {
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         let vt = vertex_triangles(mesh);
         let dual = dual_graph(mesh, &vt);
-        Grower::new(mesh, &vt, &dual, limits).run(self.coherent)
+        Grower::new(mesh, &vt, &dual, limits, Scoring::Paper).run(self.coherent)
     }
+}
+
+/// How the grower ranks border candidates.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Scoring {
+    /// The paper's: vertices inside + island bonus, then the smallest sphere.
+    Paper,
+    /// `compact`'s: fewest new vertices (a vertex's last triangle ranks next), then distance to the
+    /// meshlet's centroid; an empty border continues at the nearest unused triangle; the next
+    /// meshlet starts in a corner.
+    Compact,
+}
+
+/// Builds with the shared grower (for the `compact` strategy).
+pub(crate) fn grow(mesh: &Mesh, limits: Limits, scoring: Scoring, coherent: bool) -> Meshlets {
+    let vt = vertex_triangles(mesh);
+    let dual = dual_graph(mesh, &vt);
+    Grower::new(mesh, &vt, &dual, limits, scoring).run(coherent)
 }
 
 /// Ritter's incremental sphere: the smallest sphere containing the old one and `p`.
@@ -80,10 +98,15 @@ struct Grower<'a> {
     gen: u32,
     center: DVec3,
     radius: f64,
+    scoring: Scoring,
+    /// `compact`: triangle centroids in a uniform grid, for the nearest-unused jump.
+    grid: Option<TriangleGrid>,
+    /// Sum of the open meshlet's vertex positions (its centroid times the count).
+    sum: DVec3,
 }
 
 impl<'a> Grower<'a> {
-    fn new(mesh: &'a Mesh, vt: &'a Csr, dual: &'a Csr, limits: Limits) -> Self {
+    fn new(mesh: &'a Mesh, vt: &'a Csr, dual: &'a Csr, limits: Limits, scoring: Scoring) -> Self {
         let t = mesh.triangle_count();
         Self {
             mesh,
@@ -100,6 +123,9 @@ impl<'a> Grower<'a> {
             gen: 0,
             center: DVec3::ZERO,
             radius: -1.0,
+            scoring,
+            grid: (scoring == Scoring::Compact).then(|| TriangleGrid::new(mesh)),
+            sum: DVec3::ZERO,
         }
     }
 
@@ -114,6 +140,7 @@ impl<'a> Grower<'a> {
             // vertices only at the push below.
             if !tri[..k].contains(&v) && !self.b.contains_vertex(v) {
                 let p = self.pos(v);
+                self.sum += p;
                 (self.center, self.radius) = if self.radius < 0.0 {
                     (p, 0.0)
                 } else {
@@ -129,8 +156,13 @@ impl<'a> Grower<'a> {
                         self.inside[n] = 0;
                     }
                     self.inside[n] += 1;
-                    // Two vertices inside: it becomes a candidate (once).
-                    if self.inside[n] == 2 {
+                    // It becomes a candidate (once) with two vertices inside (compact: one).
+                    let threshold = if self.scoring == Scoring::Compact {
+                        1
+                    } else {
+                        2
+                    };
+                    if self.inside[n] == threshold {
                         self.border.push(n as u32);
                     }
                 }
@@ -159,6 +191,9 @@ impl<'a> Grower<'a> {
     /// The best border candidate (two or more vertices inside), or `Err(true)` if candidates exist
     /// but none fits (meshlet full), `Err(false)` if there is none.
     fn best(&mut self) -> Result<u32, bool> {
+        if self.scoring == Scoring::Compact {
+            return self.best_compact();
+        }
         // Pass 1: scores (cheap). The radius only breaks ties, so it is computed in pass 2 for the
         // top-scoring candidates alone.
         let mut top_score = 0u32;
@@ -214,6 +249,70 @@ impl<'a> Grower<'a> {
         best.map(|(_, t)| t).ok_or(blocked)
     }
 
+    /// `compact`'s choice: lexicographic (rank, distance to the centroid, id) with rank 0 for no new
+    /// vertex, 1 for a triangle that is the last unused one of one of its vertices (left behind, it
+    /// would cost a meshlet of its own later), else 1 + new vertices. An island bonus was tried and
+    /// changed nothing: an island-closing triangle adds no vertex, so it already ranks first.
+    fn best_compact(&mut self) -> Result<u32, bool> {
+        let mut best: Option<(u32, f64, u32)> = None;
+        let mut overflow = false;
+        let (tris, verts) = self.b.open_size();
+        let limits = self.b.limits();
+        let centroid = self.sum / verts.max(1) as f64;
+        let mut i = 0;
+        while i < self.border.len() {
+            let t = self.border[i];
+            if self.used[t as usize] {
+                self.border.swap_remove(i);
+                continue;
+            }
+            i += 1;
+            let tri = self.mesh.triangle(t as usize);
+            let [a, b, c] = tri;
+            let distinct = 1 + (b != a) as usize + (c != a && c != b) as usize;
+            let new = distinct - self.inside[t as usize] as usize;
+            let fits =
+                tris < limits.max_triangles as usize && verts + new <= limits.max_vertices as usize;
+            let dangling = tri.iter().any(|&v| self.live[v as usize] == 1);
+            // 0: no new vertex; 1: some vertex's last triangle; else 1 + new vertices.
+            let extra = if new == 0 {
+                0
+            } else if dangling {
+                1
+            } else {
+                1 + new as u32
+            };
+            if best.is_some_and(|bst| extra > bst.0) {
+                continue;
+            }
+            let tc = (self.pos(a) + self.pos(b) + self.pos(c)) / 3.0;
+            let d = (tc - centroid).length_squared();
+            let key = (extra, d, t);
+            let better = |bst: &(u32, f64, u32)| {
+                key.0 < bst.0
+                    || (key.0 == bst.0 && (key.1 < bst.1 || (key.1 == bst.1 && key.2 < bst.2)))
+            };
+            if fits {
+                if best.as_ref().is_none_or(better) {
+                    best = Some(key);
+                }
+            } else {
+                overflow = true;
+            }
+        }
+        best.map(|b| b.2).ok_or(overflow)
+    }
+
+    /// Corner-first seed for the next meshlet: the just-closed meshlet's vertex with the fewest
+    /// unused triangles left (lowest id on ties), so pockets get filled before they are trapped.
+    fn corner_seed(&self, closed: &[u32]) -> Option<u32> {
+        closed
+            .iter()
+            .copied()
+            .filter(|&v| self.live[v as usize] > 0)
+            .min_by_key(|&v| (self.live[v as usize], v))
+    }
+
     /// The unused triangle of `v` that fits and gives the smallest sphere (lowest id on ties).
     fn seed_triangle(&self, v: u32) -> Option<u32> {
         let mut best: Option<(f64, u32)> = None;
@@ -230,40 +329,173 @@ impl<'a> Grower<'a> {
         best.map(|(_, t)| t)
     }
 
-    fn close(&mut self) {
+    /// Closes the open meshlet; returns its vertices (for corner seeding).
+    fn close(&mut self) -> Vec<u32> {
+        let closed = self.b.open_vertices().to_vec();
         self.b.flush();
         self.border.clear();
         self.gen += 1;
         self.radius = -1.0;
+        self.sum = DVec3::ZERO;
+        closed
     }
 
     fn run(mut self, coherent: bool) -> Meshlets {
         let order = sorted_vertices(self.mesh);
         let mut cursor = 0usize;
+        let mut corner: Option<u32> = None;
         loop {
-            match self.best() {
-                Ok(t) => self.add(t),
+            let closed = match self.best() {
+                Ok(t) => {
+                    self.add(t);
+                    continue;
+                }
                 Err(true) => self.close(),
                 Err(false) => {
                     let open = self.b.open_size().0 > 0;
                     if coherent && open {
-                        self.close();
-                        continue;
+                        self.close()
+                    } else {
+                        // compact: continue at the unused triangle nearest to the open meshlet.
+                        if open && self.scoring == Scoring::Compact {
+                            let centroid = self.sum / self.b.open_size().1.max(1) as f64;
+                            let used = &self.used;
+                            let near = self.grid.as_mut().and_then(|g| g.nearest(centroid, used));
+                            if let Some(t) =
+                                near.filter(|&t| self.b.fits(self.mesh.triangle(t as usize)))
+                            {
+                                self.add(t);
+                                continue;
+                            }
+                        }
+                        let seed = corner
+                            .take()
+                            .filter(|&v| self.live[v as usize] > 0)
+                            .or_else(|| {
+                                while cursor < order.len() && self.live[order[cursor] as usize] == 0
+                                {
+                                    cursor += 1;
+                                }
+                                order.get(cursor).copied()
+                            });
+                        let Some(seed) = seed else { break };
+                        match self.seed_triangle(seed) {
+                            Some(t) => {
+                                self.add(t);
+                                continue;
+                            }
+                            None => self.close(), // the jump does not fit: start the next meshlet there
+                        }
                     }
-                    while cursor < order.len() && self.live[order[cursor] as usize] == 0 {
-                        cursor += 1;
-                    }
-                    let Some(&seed) = order.get(cursor) else {
-                        break;
-                    };
-                    match self.seed_triangle(seed) {
-                        Some(t) => self.add(t),
-                        None => self.close(), // the jump does not fit: start the next meshlet there
+                }
+            };
+            if self.scoring == Scoring::Compact {
+                corner = self.corner_seed(&closed);
+            }
+        }
+        self.b.finish()
+    }
+}
+
+/// Triangle centroids bucketed in a uniform grid (about two triangles per cell) for nearest-unused
+/// queries; used triangles are skipped, and each cell drops its used entries lazily.
+struct TriangleGrid {
+    lo: DVec3,
+    cell: f64,
+    dims: [usize; 3],
+    cells: Vec<Vec<u32>>,
+    centroids: Vec<DVec3>,
+}
+
+impl TriangleGrid {
+    fn new(mesh: &Mesh) -> Self {
+        let t = mesh.triangle_count();
+        let centroids: Vec<DVec3> = (0..t)
+            .map(|i| {
+                mesh.triangle(i)
+                    .iter()
+                    .map(|&v| DVec3::from_array(mesh.positions[v as usize].map(f64::from)))
+                    .sum::<DVec3>()
+                    / 3.0
+            })
+            .collect();
+        let (lo, hi) = centroids.iter().fold(
+            (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
+            |(a, b), c| (a.min(*c), b.max(*c)),
+        );
+        let ext = (hi - lo).max(DVec3::splat(1e-30));
+        let cell = (ext.x * ext.y * ext.z / (t as f64 / 2.0).max(1.0))
+            .cbrt()
+            .max(ext.max_element() / 1024.0);
+        let dims = [0, 1, 2].map(|k| ((ext[k] / cell) as usize + 1).min(1024));
+        let mut cells = vec![Vec::new(); dims[0] * dims[1] * dims[2]];
+        let g = Self {
+            lo,
+            cell,
+            dims,
+            cells: Vec::new(),
+            centroids,
+        };
+        for (i, c) in g.centroids.iter().enumerate() {
+            cells[g.index(g.coords(*c))].push(i as u32);
+        }
+        Self { cells, ..g }
+    }
+    fn coords(&self, p: DVec3) -> [usize; 3] {
+        [0, 1, 2]
+            .map(|k| (((p[k] - self.lo[k]) / self.cell).max(0.0) as usize).min(self.dims[k] - 1))
+    }
+    fn index(&self, c: [usize; 3]) -> usize {
+        (c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]
+    }
+    /// Nearest unused triangle to `p` (ties to the lower id): rings of cells outward until the best
+    /// found is closer than any unvisited ring can be.
+    fn nearest(&mut self, p: DVec3, used: &[bool]) -> Option<u32> {
+        let c = self.coords(p);
+        let mut best: Option<(f64, u32)> = None;
+        let max_r = self.dims.iter().copied().max().unwrap_or(1);
+        for r in 0..=max_r {
+            if let Some((d2, _)) = best {
+                // Every cell in ring r is at least (r - 1) cells away.
+                let reach = (r as f64 - 1.0).max(0.0) * self.cell;
+                if reach * reach > d2 {
+                    break;
+                }
+            }
+            let lo = c.map(|x| x as i64 - r as i64);
+            let hi = c.map(|x| x as i64 + r as i64);
+            for z in lo[2]..=hi[2] {
+                for y in lo[1]..=hi[1] {
+                    for x in lo[0]..=hi[0] {
+                        let on_ring = [
+                            x - lo[0],
+                            hi[0] - x,
+                            y - lo[1],
+                            hi[1] - y,
+                            z - lo[2],
+                            hi[2] - z,
+                        ]
+                        .contains(&0);
+                        if !on_ring || x < 0 || y < 0 || z < 0 {
+                            continue;
+                        }
+                        let q = [x as usize, y as usize, z as usize];
+                        if (0..3).any(|k| q[k] >= self.dims[k]) {
+                            continue;
+                        }
+                        let idx = self.index(q);
+                        self.cells[idx].retain(|&t| !used[t as usize]);
+                        for &t in &self.cells[idx] {
+                            let d2 = (self.centroids[t as usize] - p).length_squared();
+                            if best.is_none_or(|(bd, bt)| d2 < bd || (d2 == bd && t < bt)) {
+                                best = Some((d2, t));
+                            }
+                        }
                     }
                 }
             }
         }
-        self.b.finish()
+        best.map(|b| b.1)
     }
 }
 

@@ -5,6 +5,7 @@
 //! count.
 
 mod bsphere;
+mod compact;
 mod greedy;
 pub mod kmedoids;
 mod meshopt;
@@ -13,6 +14,7 @@ pub mod tipsify;
 
 pub use self::meshopt::{Meshopt, MeshoptScan, MeshoptSpatial};
 pub use bsphere::BoundingSphere;
+pub use compact::Compact;
 pub use greedy::Greedy;
 pub use kmedoids::KMedoids;
 pub use nvidia::Nvidia;
@@ -72,6 +74,7 @@ pub const NAMES: &[&str] = &[
     "bsphere-coherent",
     "kmedoids",
     "kmedoids-paper",
+    "compact",
     "meshopt",
     "meshopt-scan",
     "meshopt-spatial",
@@ -174,6 +177,7 @@ fn base_by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, Unknown
         "greedy" => Box::new(Greedy),
         "bsphere" => Box::new(BoundingSphere { coherent: false }),
         "bsphere-coherent" => Box::new(BoundingSphere { coherent: true }),
+        "compact" => Box::new(Compact),
         "kmedoids" => Box::new(KMedoids {
             config: kmedoids::Config {
                 mode: kmedoids::Mode::Fast,
