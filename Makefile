@@ -23,6 +23,7 @@ lint:
 test: setup lint
 	$(CARGO) test --all-targets
 
-# Regenerates results/build.md and results/build.csv from the shared real meshes.
+# Regenerates every table and plot in results/ from the shared real meshes.
 bench: setup
 	$(CARGO) run --release --quiet -- bench build
+	$(CARGO) run --release --quiet -- bench kmedoids

@@ -43,9 +43,7 @@ impl Strategy for BoundingSphere {
     }
 
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
-        let vt = vertex_triangles(mesh);
-        let dual = dual_graph(mesh, &vt);
-        Grower::new(mesh, &vt, &dual, limits, Scoring::Paper).run(self.coherent)
+        grow(mesh, limits, Scoring::Paper, self.coherent)
     }
 }
 
@@ -60,11 +58,18 @@ pub(crate) enum Scoring {
     Compact,
 }
 
-/// Builds with the shared grower (for the `compact` strategy).
+/// Runs the shared grower (bsphere, bsphere-coherent and compact).
 pub(crate) fn grow(mesh: &Mesh, limits: Limits, scoring: Scoring, coherent: bool) -> Meshlets {
-    let vt = vertex_triangles(mesh);
-    let dual = dual_graph(mesh, &vt);
-    Grower::new(mesh, &vt, &dual, limits, scoring).run(coherent)
+    // The seed order does not depend on the adjacency: build both at once.
+    let ((vt, dual), order) = rayon::join(
+        || {
+            let vt = vertex_triangles(mesh);
+            let dual = dual_graph(mesh, &vt);
+            (vt, dual)
+        },
+        || sorted_vertices(mesh),
+    );
+    Grower::new(mesh, &vt, &dual, limits, scoring).run(&order, coherent)
 }
 
 /// Ritter's incremental sphere: the smallest sphere containing the old one and `p`.
@@ -340,8 +345,7 @@ impl<'a> Grower<'a> {
         closed
     }
 
-    fn run(mut self, coherent: bool) -> Meshlets {
-        let order = sorted_vertices(self.mesh);
+    fn run(mut self, order: &[u32], coherent: bool) -> Meshlets {
         let mut cursor = 0usize;
         let mut corner: Option<u32> = None;
         loop {
