@@ -435,7 +435,10 @@ fn write_strategies(rows: &[Row], cfg: &Config) -> Result<()> {
             "vertices in the meshlet",
             "meshlets",
             &hist(&|r| &r.eval.metrics.vertex_histogram),
-            false,
+            plot::Axes {
+                log_x: false,
+                zero_y: true,
+            },
         )?;
         plot::line_chart(
             &cfg.out.join("figure9_triangles.svg"),
@@ -443,7 +446,10 @@ fn write_strategies(rows: &[Row], cfg: &Config) -> Result<()> {
             "triangles in the meshlet",
             "meshlets",
             &hist(&|r| &r.eval.metrics.triangle_histogram),
-            false,
+            plot::Axes {
+                log_x: false,
+                zero_y: true,
+            },
         )?;
     }
     let path = cfg.out.join("strategies.md");

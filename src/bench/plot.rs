@@ -12,15 +12,25 @@ pub struct Series {
     pub points: Vec<(f64, f64)>,
 }
 
-/// Draws `series` as lines with markers; `log_x` puts x on a log10 scale (must be > 0).
+/// Axis options.
+#[derive(Clone, Copy, Default)]
+pub struct Axes {
+    /// x on a log10 scale (values must be > 0).
+    pub log_x: bool,
+    /// Start y at zero (counts); otherwise fit y to the data.
+    pub zero_y: bool,
+}
+
+/// Draws `series` as lines with markers.
 pub fn line_chart(
     path: &Path,
     title: &str,
     x_label: &str,
     y_label: &str,
     series: &[Series],
-    log_x: bool,
+    axes: Axes,
 ) -> Result<()> {
+    let log_x = axes.log_x;
     let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
     root.fill(&WHITE)?;
     let pts = series.iter().flat_map(|s| s.points.iter());
@@ -47,7 +57,10 @@ pub fn line_chart(
         .margin(16)
         .x_label_area_size(48)
         .y_label_area_size(64)
-        .build_cartesian_2d((x0 - px)..(x1 + px), (y0.min(0.0) - py * 0.2)..(y1 + py))?;
+        .build_cartesian_2d(
+            (x0 - px)..(x1 + px),
+            (if axes.zero_y { y0.min(0.0) } else { y0 - py })..(y1 + py),
+        )?;
     let xfmt = move |x: &f64| {
         if log_x {
             format!("{:.3}", 10f64.powf(*x))
