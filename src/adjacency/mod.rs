@@ -158,28 +158,65 @@ impl EdgeTable {
 
 /// The triangle dual graph: triangle -> edge-adjacent triangles, each row sorted, without duplicates
 /// or self-loops. Non-manifold edges connect all their triangles pairwise. `vt` must be
-/// [`vertex_triangles`] of the same mesh. (Intersecting the two vertex rows of each edge instead of
-/// building the edge table was tried and measured slower.)
+/// [`vertex_triangles`] of the same mesh.
+///
+/// Sides are grouped by their smaller vertex (as in [`EdgeTable`]); a manifold edge's two sides
+/// write each other's triangle into a fixed slot per side, so no edge table is materialised and rows
+/// need no merging. Only non-manifold runs go through a side list. (Intersecting the two vertex rows
+/// of each edge was measured slower: 8.5 against 7.0 ms on the bunny.)
 pub fn dual_graph(mesh: &Mesh, vt: &Csr) -> Csr {
-    let edges = EdgeTable::with_vertex_triangles(mesh, vt);
+    const NONE: u32 = u32::MAX;
+    let idx = &mesh.indices;
     let t_count = mesh.triangle_count();
+    let mut slot = vec![NONE; idx.len()];
+    let mut extra: Vec<(u32, u32)> = Vec::new();
+    let mut local: Vec<(u32, u32)> = Vec::new();
+    for a in 0..mesh.vertex_count() as u32 {
+        local.clear();
+        for &t in vt.row(a as usize) {
+            for s in 0..3 {
+                let side = 3 * t as usize + s;
+                let (x, y) = (idx[side], idx[3 * t as usize + (s + 1) % 3]);
+                if x != y && x.min(y) == a {
+                    local.push((x.max(y), side as u32));
+                }
+            }
+        }
+        local.sort_unstable();
+        let mut i = 0;
+        while i < local.len() {
+            let mut j = i + 1;
+            while j < local.len() && local[j].0 == local[i].0 {
+                j += 1;
+            }
+            if j - i == 2 {
+                let (s0, s1) = (local[i].1, local[i + 1].1);
+                if s0 / 3 != s1 / 3 {
+                    slot[s0 as usize] = s1 / 3;
+                    slot[s1 as usize] = s0 / 3;
+                }
+            } else if j - i > 2 {
+                for p in i..j {
+                    for q in i..j {
+                        let (tp, tq) = (local[p].1 / 3, local[q].1 / 3);
+                        if tp != tq {
+                            extra.push((tp, tq));
+                        }
+                    }
+                }
+            }
+            i = j;
+        }
+    }
+    // Counting sort by triangle (linear; non-manifold meshes can have millions of pairs).
+    let extra = Csr::from_pairs(t_count, extra.iter().copied());
     let mut offsets = Vec::with_capacity(t_count + 1);
-    let mut items = Vec::with_capacity(3 * t_count);
+    let mut items = Vec::with_capacity(idx.len());
     offsets.push(0u32);
     for t in 0..t_count {
         let start = items.len();
-        for s in 0..3 {
-            let e = edges.side_edge[3 * t + s];
-            if e != NO_EDGE {
-                items.extend(
-                    edges
-                        .faces
-                        .row(e as usize)
-                        .iter()
-                        .filter(|&&f| f as usize != t),
-                );
-            }
-        }
+        items.extend(slot[3 * t..3 * t + 3].iter().filter(|&&n| n != NONE));
+        items.extend_from_slice(extra.row(t));
         items[start..].sort_unstable();
         let mut w = start;
         for r in start..items.len() {

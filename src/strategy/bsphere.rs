@@ -104,6 +104,8 @@ struct Grower<'a> {
     center: DVec3,
     radius: f64,
     scoring: Scoring,
+    /// Triangles placed so far.
+    placed: usize,
     /// `compact`: triangle centroids in a uniform grid, for the nearest-unused jump.
     grid: Option<TriangleGrid>,
     /// Sum of the open meshlet's vertex positions (its centroid times the count).
@@ -129,6 +131,7 @@ impl<'a> Grower<'a> {
             center: DVec3::ZERO,
             radius: -1.0,
             scoring,
+            placed: 0,
             grid: (scoring == Scoring::Compact).then(|| TriangleGrid::new(mesh)),
             sum: DVec3::ZERO,
         }
@@ -175,6 +178,7 @@ impl<'a> Grower<'a> {
         }
         self.b.push(tri);
         self.in_meshlet[t as usize] = self.gen;
+        self.placed += 1;
         mark_used(self.mesh, t, &mut self.used, &mut self.live);
     }
 
@@ -361,7 +365,8 @@ impl<'a> Grower<'a> {
                         self.close()
                     } else {
                         // compact: continue at the unused triangle nearest to the open meshlet.
-                        if open && self.scoring == Scoring::Compact {
+                        if open && self.scoring == Scoring::Compact && self.placed < self.used.len()
+                        {
                             let centroid = self.sum / self.b.open_size().1.max(1) as f64;
                             let used = &self.used;
                             let near = self.grid.as_mut().and_then(|g| g.nearest(centroid, used));
@@ -401,8 +406,11 @@ impl<'a> Grower<'a> {
     }
 }
 
-/// Triangle centroids bucketed in a uniform grid (about two triangles per cell) for nearest-unused
-/// queries; used triangles are skipped, and each cell drops its used entries lazily.
+/// Triangle centroids bucketed in a uniform grid for nearest-unused queries; used triangles are
+/// skipped, and each cell drops its used entries lazily.
+///
+/// Cells are sized from the largest extent so that the grid has at most about T/2 cells even for
+/// flat or degenerate inputs (sizing from the volume made flat meshes explode into 1024^3 cells).
 struct TriangleGrid {
     lo: DVec3,
     cell: f64,
@@ -427,11 +435,10 @@ impl TriangleGrid {
             (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
             |(a, b), c| (a.min(*c), b.max(*c)),
         );
-        let ext = (hi - lo).max(DVec3::splat(1e-30));
-        let cell = (ext.x * ext.y * ext.z / (t as f64 / 2.0).max(1.0))
-            .cbrt()
-            .max(ext.max_element() / 1024.0);
-        let dims = [0, 1, 2].map(|k| ((ext[k] / cell) as usize + 1).min(1024));
+        let per_axis = ((t as f64 / 2.0).max(1.0)).cbrt().ceil();
+        let cell = ((hi - lo).max_element() / per_axis).max(f64::MIN_POSITIVE);
+        let dims =
+            [0, 1, 2].map(|k| (((hi[k] - lo[k]) / cell) as usize + 1).min(per_axis as usize + 1));
         let mut cells = vec![Vec::new(); dims[0] * dims[1] * dims[2]];
         let g = Self {
             lo,
@@ -445,55 +452,55 @@ impl TriangleGrid {
         }
         Self { cells, ..g }
     }
+
     fn coords(&self, p: DVec3) -> [usize; 3] {
         [0, 1, 2]
             .map(|k| (((p[k] - self.lo[k]) / self.cell).max(0.0) as usize).min(self.dims[k] - 1))
     }
+
     fn index(&self, c: [usize; 3]) -> usize {
         (c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]
     }
-    /// Nearest unused triangle to `p` (ties to the lower id): rings of cells outward until the best
-    /// found is closer than any unvisited ring can be.
+
+    /// Scans one cell for the nearest unused triangle.
+    fn scan(&mut self, q: [i64; 3], p: DVec3, used: &[bool], best: &mut Option<(f64, u32)>) {
+        if (0..3).any(|k| q[k] < 0 || q[k] as usize >= self.dims[k]) {
+            return;
+        }
+        let idx = self.index(q.map(|x| x as usize));
+        self.cells[idx].retain(|&t| !used[t as usize]);
+        for &t in &self.cells[idx] {
+            let d2 = (self.centroids[t as usize] - p).length_squared();
+            if best.is_none_or(|(bd, bt)| d2 < bd || (d2 == bd && t < bt)) {
+                *best = Some((d2, t));
+            }
+        }
+    }
+
+    /// Nearest unused triangle to `p` (ties to the lower id): the surfaces of growing cubes of cells
+    /// around p's cell, until the best found is closer than any unvisited ring can be.
     fn nearest(&mut self, p: DVec3, used: &[bool]) -> Option<u32> {
-        let c = self.coords(p);
+        let c = self.coords(p).map(|x| x as i64);
         let mut best: Option<(f64, u32)> = None;
-        let max_r = self.dims.iter().copied().max().unwrap_or(1);
+        let max_r = *self.dims.iter().max().expect("three axes") as i64;
         for r in 0..=max_r {
             if let Some((d2, _)) = best {
-                // Every cell in ring r is at least (r - 1) cells away.
+                // Every cell in ring r is at least (r - 1) cells away from p.
                 let reach = (r as f64 - 1.0).max(0.0) * self.cell;
                 if reach * reach > d2 {
                     break;
                 }
             }
-            let lo = c.map(|x| x as i64 - r as i64);
-            let hi = c.map(|x| x as i64 + r as i64);
-            for z in lo[2]..=hi[2] {
-                for y in lo[1]..=hi[1] {
-                    for x in lo[0]..=hi[0] {
-                        let on_ring = [
-                            x - lo[0],
-                            hi[0] - x,
-                            y - lo[1],
-                            hi[1] - y,
-                            z - lo[2],
-                            hi[2] - z,
-                        ]
-                        .contains(&0);
-                        if !on_ring || x < 0 || y < 0 || z < 0 {
-                            continue;
+            for z in c[2] - r..=c[2] + r {
+                for y in c[1] - r..=c[1] + r {
+                    if (z - c[2]).abs() == r || (y - c[1]).abs() == r {
+                        for x in c[0] - r..=c[0] + r {
+                            self.scan([x, y, z], p, used, &mut best);
                         }
-                        let q = [x as usize, y as usize, z as usize];
-                        if (0..3).any(|k| q[k] >= self.dims[k]) {
-                            continue;
-                        }
-                        let idx = self.index(q);
-                        self.cells[idx].retain(|&t| !used[t as usize]);
-                        for &t in &self.cells[idx] {
-                            let d2 = (self.centroids[t as usize] - p).length_squared();
-                            if best.is_none_or(|(bd, bt)| d2 < bd || (d2 == bd && t < bt)) {
-                                best = Some((d2, t));
-                            }
+                    } else {
+                        self.scan([c[0] - r, y, z], p, used, &mut best);
+                        if r > 0 {
+                            self.scan([c[0] + r, y, z], p, used, &mut best);
                         }
                     }
                 }
@@ -506,6 +513,19 @@ impl TriangleGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn compact_on_flat_and_scattered_input_finishes() {
+        // Two far-apart triangles on a line: zero volume. Sizing the nearest-triangle grid from the
+        // volume once made this take ~10^12 steps (found by the property tests).
+        let mesh = Mesh {
+            positions: (0..14).map(|i| [i as f32 * 0.25 - 2.0, 0.0, 0.0]).collect(),
+            indices: vec![0, 1, 2, 11, 12, 13],
+        };
+        let limits = Limits::new(21, 34).unwrap();
+        let ml = grow(&mesh, limits, Scoring::Compact, false);
+        crate::meshlet::validate(&mesh, &ml, limits).unwrap();
+    }
 
     #[test]
     fn ritter_update_contains_both() {
