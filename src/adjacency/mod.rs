@@ -94,6 +94,29 @@ pub struct EdgeTable {
     pub side_edge: Vec<u32>,
 }
 
+/// Calls `f(a, sides)` for every vertex `a` with the triangle sides whose smaller vertex is `a`, as
+/// `(other vertex, side)` pairs sorted ascending (side = 3 * triangle + corner; collapsed sides
+/// skipped). Runs of equal other vertex are the sides on one edge. Shared by the edge table and the
+/// dual graph so both see edges in the same deterministic order.
+fn for_each_vertex_sides(mesh: &Mesh, vt: &Csr, mut f: impl FnMut(u32, &[(u32, u32)])) {
+    let idx = &mesh.indices;
+    let mut local: Vec<(u32, u32)> = Vec::new();
+    for a in 0..mesh.vertex_count() as u32 {
+        local.clear();
+        for &t in vt.row(a as usize) {
+            for s in 0..3 {
+                let side = 3 * t as usize + s;
+                let (x, y) = (idx[side], idx[3 * t as usize + (s + 1) % 3]);
+                if x != y && x.min(y) == a {
+                    local.push((x.max(y), side as u32));
+                }
+            }
+        }
+        local.sort_unstable();
+        f(a, &local);
+    }
+}
+
 /// Sentinel in [`EdgeTable::side_edge`] for a side with two equal vertices.
 pub const NO_EDGE: u32 = u32::MAX;
 
@@ -116,19 +139,7 @@ impl EdgeTable {
         let mut offsets = Vec::with_capacity(idx.len() / 2 + 1);
         let mut items = Vec::with_capacity(idx.len());
         offsets.push(0u32);
-        let mut local: Vec<(u32, u32)> = Vec::new();
-        for a in 0..mesh.vertex_count() as u32 {
-            local.clear();
-            for &t in vt.row(a as usize) {
-                for s in 0..3 {
-                    let side = 3 * t as usize + s;
-                    let (x, y) = (idx[side], idx[3 * t as usize + (s + 1) % 3]);
-                    if x != y && x.min(y) == a {
-                        local.push((x.max(y), side as u32));
-                    }
-                }
-            }
-            local.sort_unstable();
+        for_each_vertex_sides(mesh, vt, |a, local| {
             for (i, &(b, side)) in local.iter().enumerate() {
                 if i == 0 || local[i - 1].0 != b {
                     if i > 0 {
@@ -142,7 +153,7 @@ impl EdgeTable {
             if !local.is_empty() {
                 offsets.push(items.len() as u32);
             }
-        }
+        });
         Self {
             edges,
             faces: Csr { offsets, items },
@@ -170,19 +181,7 @@ pub fn dual_graph(mesh: &Mesh, vt: &Csr) -> Csr {
     let t_count = mesh.triangle_count();
     let mut slot = vec![NONE; idx.len()];
     let mut extra: Vec<(u32, u32)> = Vec::new();
-    let mut local: Vec<(u32, u32)> = Vec::new();
-    for a in 0..mesh.vertex_count() as u32 {
-        local.clear();
-        for &t in vt.row(a as usize) {
-            for s in 0..3 {
-                let side = 3 * t as usize + s;
-                let (x, y) = (idx[side], idx[3 * t as usize + (s + 1) % 3]);
-                if x != y && x.min(y) == a {
-                    local.push((x.max(y), side as u32));
-                }
-            }
-        }
-        local.sort_unstable();
+    for_each_vertex_sides(mesh, vt, |_, local| {
         let mut i = 0;
         while i < local.len() {
             let mut j = i + 1;
@@ -207,7 +206,7 @@ pub fn dual_graph(mesh: &Mesh, vt: &Csr) -> Csr {
             }
             i = j;
         }
-    }
+    });
     // Counting sort by triangle (linear; non-manifold meshes can have millions of pairs).
     let extra = Csr::from_pairs(t_count, extra.iter().copied());
     let mut offsets = Vec::with_capacity(t_count + 1);

@@ -16,7 +16,7 @@ use std::time::Duration;
 ///
 /// Meshes: PLY (ASCII/binary), OBJ, glTF 2.0 (.gltf/.glb), each optionally zstd-compressed (.zst).
 /// Strategies: nvidia, nvidia+tipsify, greedy, bsphere, bsphere-coherent, kmedoids, kmedoids-paper,
-/// meshopt, meshopt-scan, meshopt-spatial (or "all").
+/// compact, meshopt, meshopt-scan, meshopt-spatial ("all" = all but the slow kmedoids-paper).
 /// Limits are VERTICES/TRIANGLES per meshlet; default 64/126 (the JCGT paper's).
 #[derive(Parser, Debug)]
 #[command(name = "meshletlab", version, about, long_about)]

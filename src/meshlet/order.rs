@@ -113,20 +113,27 @@ pub fn order_meshlets(ml: &mut Meshlets, order: MeshletOrder) {
 /// Mean number of new vertices per triangle when each meshlet's triangles are drawn in order through
 /// a FIFO cache of `cache` local vertices: lower means better locality. 1/3 per corner is a miss.
 pub fn local_miss_rate(ml: &Meshlets, cache: usize) -> f64 {
-    let mut misses = 0usize;
-    for i in 0..ml.len() {
-        let mut fifo: std::collections::VecDeque<u8> = std::collections::VecDeque::new();
-        for &c in ml.meshlet_triangles(i) {
-            if !fifo.contains(&c) {
-                misses += 1;
-                fifo.push_back(c);
-                if fifo.len() > cache {
-                    fifo.pop_front();
-                }
+    let misses: usize = (0..ml.len())
+        .map(|i| fifo_misses(ml.meshlet_triangles(i).iter().copied(), cache))
+        .sum();
+    misses as f64 / ml.triangle_count().max(1) as f64
+}
+
+/// Misses of a FIFO cache of `k` entries over a stream of vertex references (post-transform cache
+/// model; shared by tipsify's ACMR and the in-meshlet locality measure).
+pub fn fifo_misses<T: PartialEq + Copy>(refs: impl IntoIterator<Item = T>, k: usize) -> usize {
+    let mut fifo = std::collections::VecDeque::with_capacity(k + 1);
+    let mut misses = 0;
+    for v in refs {
+        if !fifo.contains(&v) {
+            misses += 1;
+            fifo.push_back(v);
+            if fifo.len() > k {
+                fifo.pop_front();
             }
         }
     }
-    misses as f64 / ml.triangle_count().max(1) as f64
+    misses
 }
 
 #[cfg(test)]

@@ -208,14 +208,9 @@ impl<'a> Grower<'a> {
         let mut top_score = 0u32;
         let mut blocked = false;
         self.tied.clear();
-        let mut i = 0;
-        while i < self.border.len() {
+        self.prune_border();
+        for i in 0..self.border.len() {
             let t = self.border[i];
-            if self.used[t as usize] {
-                self.border.swap_remove(i);
-                continue;
-            }
-            i += 1;
             let [a, b, c] = self.mesh.triangle(t as usize);
             let distinct = 1 + (b != a) as usize + (c != a && c != b) as usize;
             let inside = self.inside[t as usize] as usize;
@@ -268,14 +263,9 @@ impl<'a> Grower<'a> {
         let (tris, verts) = self.b.open_size();
         let limits = self.b.limits();
         let centroid = self.sum / verts.max(1) as f64;
-        let mut i = 0;
-        while i < self.border.len() {
+        self.prune_border();
+        for i in 0..self.border.len() {
             let t = self.border[i];
-            if self.used[t as usize] {
-                self.border.swap_remove(i);
-                continue;
-            }
-            i += 1;
             let tri = self.mesh.triangle(t as usize);
             let [a, b, c] = tri;
             let distinct = 1 + (b != a) as usize + (c != a && c != b) as usize;
@@ -310,6 +300,13 @@ impl<'a> Grower<'a> {
             }
         }
         best.map(|b| b.2).ok_or(overflow)
+    }
+
+    /// Drops border triangles that another step has used. (Order does not matter: both rankings
+    /// break ties by triangle id.)
+    fn prune_border(&mut self) {
+        let used = &self.used;
+        self.border.retain(|&t| !used[t as usize]);
     }
 
     /// Corner-first seed for the next meshlet: the just-closed meshlet's vertex with the fewest

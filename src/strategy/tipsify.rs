@@ -85,21 +85,8 @@ fn next_live(live: &[u32], cursor: &mut usize) -> Option<u32> {
 /// Average cache miss ratio (ACMR) of a triangle order under a FIFO cache of `k` entries: the
 /// measure tipsify optimises, used to test it.
 pub fn acmr_fifo(mesh: &Mesh, order: &[u32], k: usize) -> f64 {
-    let mut fifo: std::collections::VecDeque<u32> =
-        std::collections::VecDeque::with_capacity(k + 1);
-    let mut misses = 0usize;
-    for &t in order {
-        for v in mesh.triangle(t as usize) {
-            if !fifo.contains(&v) {
-                misses += 1;
-                fifo.push_back(v);
-                if fifo.len() > k {
-                    fifo.pop_front();
-                }
-            }
-        }
-    }
-    misses as f64 / order.len().max(1) as f64
+    let refs = order.iter().flat_map(|&t| mesh.triangle(t as usize));
+    crate::meshlet::order::fifo_misses(refs, k) as f64 / order.len().max(1) as f64
 }
 
 #[cfg(test)]
