@@ -197,7 +197,7 @@ pub fn validate(mesh: &Mesh, ml: &Meshlets, limits: Limits) -> Result<(), Valida
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::meshlet::{Meshlet, MeshletBuilder};
+    use crate::meshlet::MeshletBuilder;
 
     fn fixture() -> (Mesh, Meshlets) {
         let mesh = crate::mesh::generate::terrain(6, 1);
@@ -275,27 +275,24 @@ mod tests {
             },
             &|e| matches!(e, ValidationError::TrianglesDiffer(_)),
         );
-        // An extra vertex that no triangle uses.
-        check(
-            &|m| {
-                let last = *m.meshlets.last().unwrap();
-                let unused = (0..mesh.vertex_count() as u32)
-                    .find(|v| !m.meshlet_vertices(m.len() - 1).contains(v))
-                    .unwrap();
-                m.vertices.push(unused);
-                *m.meshlets.last_mut().unwrap() = Meshlet {
-                    vertex_count: last.vertex_count + 1,
-                    ..last
-                };
-                m.vertices
-                    .truncate((last.vertex_offset + last.vertex_count + 1) as usize);
-            },
-            &|e| {
-                matches!(
-                    e,
-                    ValidationError::UnusedVertex { .. } | ValidationError::OverLimit { .. }
-                )
-            },
+        // An extra vertex that no triangle uses, under limits with room for it: only the
+        // unused-vertex rule can fire.
+        let mut bad = ml.clone();
+        let last = *bad.meshlets.last().unwrap();
+        let spare = (0..mesh.vertex_count() as u32)
+            .find(|v| !bad.meshlet_vertices(bad.len() - 1).contains(v))
+            .unwrap();
+        bad.vertices
+            .truncate((last.vertex_offset + last.vertex_count) as usize);
+        bad.vertices.push(spare);
+        bad.meshlets.last_mut().unwrap().vertex_count += 1;
+        let roomy = Limits::new(L.max_vertices + 1, L.max_triangles).unwrap();
+        assert_eq!(
+            validate(&mesh, &bad, roomy),
+            Err(ValidationError::UnusedVertex {
+                meshlet: bad.len() - 1,
+                local: last.vertex_count as usize
+            })
         );
     }
 

@@ -95,7 +95,7 @@ impl Strategy for Greedy {
 }
 
 /// Adds unused triangles whose vertices are all in the open meshlet, while the triangle limit allows.
-pub(crate) fn add_enclosed_triangles(
+fn add_enclosed_triangles(
     mesh: &Mesh,
     vt: &crate::adjacency::Csr,
     b: &mut MeshletBuilder,
