@@ -7,6 +7,7 @@
 pub mod adjacency;
 pub mod bench;
 pub mod cli;
+pub mod gpu;
 pub mod mesh;
 pub mod meshlet;
 pub mod strategy;

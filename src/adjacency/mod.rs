@@ -230,6 +230,24 @@ pub fn dual_graph(mesh: &Mesh, vt: &Csr) -> Csr {
     Csr { offsets, items }
 }
 
+/// Per-triangle side flags from the edge table: bit `i` marks side `i` (vertices `i`, `i + 1`) as a
+/// boundary edge (valence 1), bit `3 + i` as non-manifold (valence above 2), bit `6 + i` as
+/// collapsed (both vertices equal). CPU reference of the GPU `dual_count` kernel's flags.
+pub fn side_flags(mesh: &Mesh, edges: &EdgeTable) -> Vec<u32> {
+    (0..mesh.triangle_count())
+        .map(|t| {
+            (0..3).fold(0u32, |f, i| match edges.side_edge[3 * t + i] {
+                NO_EDGE => f | 1 << (6 + i),
+                e => match edges.valence(e as usize) {
+                    1 => f | 1 << i,
+                    v if v > 2 => f | 1 << (3 + i),
+                    _ => f,
+                },
+            })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,0 +1,55 @@
+//! Exclusive prefix sum on the GPU (`wgsl/scan.wgsl`), the building block of every CSR.
+
+use super::{Batch, Gpu, Kernels, Params};
+
+/// Block size of the scan kernels (64 threads x 16 items).
+const BLOCK: usize = 1024;
+
+/// The scan kernels and their block-sum scratch.
+pub struct Scan {
+    kernels: Kernels,
+}
+
+impl Scan {
+    /// Compiles the kernels.
+    pub fn new(gpu: &Gpu) -> Self {
+        Self {
+            kernels: Kernels::new(
+                gpu,
+                "scan",
+                include_str!("../../wgsl/scan.wgsl"),
+                2,
+                &["block_sums", "scan_sums", "scan_blocks"],
+            ),
+        }
+    }
+
+    /// Records an in-place exclusive scan of the first `n` u32 of `data` into `batch`. The caller
+    /// keeps the returned bind group alive until the batch has run.
+    pub fn bind(&self, gpu: &Gpu, data: &wgpu::Buffer, n: usize) -> ScanJob {
+        let sums = gpu.zeros("scan sums", n.div_ceil(BLOCK));
+        ScanJob {
+            bind: self.kernels.bind(gpu, &[data, &sums]),
+            _sums: sums,
+            n,
+        }
+    }
+
+    /// Adds the three passes of `job` to `batch`.
+    pub fn record<'a>(&'a self, batch: &mut Batch<'a>, job: &'a ScanJob) {
+        let p = Params {
+            w: [job.n as u32, 0, 0, 0, 0, 0, 0, 0],
+        };
+        let blocks = job.n.div_ceil(BLOCK) as u32;
+        batch.groups(&self.kernels, "block_sums", &job.bind, p, blocks);
+        batch.groups(&self.kernels, "scan_sums", &job.bind, p, 1);
+        batch.groups(&self.kernels, "scan_blocks", &job.bind, p, blocks);
+    }
+}
+
+/// A bound scan over one buffer.
+pub struct ScanJob {
+    bind: wgpu::BindGroup,
+    _sums: wgpu::Buffer,
+    n: usize,
+}
