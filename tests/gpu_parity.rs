@@ -44,3 +44,28 @@ fn scratch_dragon() {
     eprintln!("cpu {tc} {td}");
     assert_eq!(host.dual, d);
 }
+
+fn check_kmedoids(gpu: &Gpu, name: &str, mesh: &Mesh, limits: meshletlab::meshlet::Limits) {
+    use meshletlab::strategy::kmedoids::{cluster, Config};
+    let cfg = Config::default();
+    let cpu = cluster(mesh, limits, &cfg);
+    let g = meshletlab::gpu::kmedoids::cluster(gpu, mesh, limits, &cfg).unwrap();
+    let gc = &g.clustering;
+    eprintln!("{name}: cpu {:.3}s gpu {:.3}s ({:?}) large {} rounds {}", cpu.initial_seconds, g.seconds, g.timing, g.large_updates, g.bfs_rounds);
+    assert_eq!(gc.medoids, cpu.medoids, "{name}: medoids");
+    assert_eq!(gc.labels, cpu.labels, "{name}: labels");
+    assert_eq!(gc.distances, cpu.distances, "{name}: distances");
+    assert_eq!((gc.iterations, gc.splits, gc.initial_iterations), (cpu.iterations, cpu.splits, cpu.initial_iterations), "{name}: counts");
+    assert_eq!(gc.initial_mean_distance, cpu.initial_mean_distance, "{name}: objective");
+    assert_eq!(gc.meshlets, cpu.meshlets, "{name}: meshlets");
+    meshletlab::meshlet::validate(mesh, &gc.meshlets, limits).unwrap();
+}
+
+#[test]
+fn kmedoids_matches_cpu() {
+    let gpu = gpu();
+    for g in generate::demo_set(3) {
+        check_kmedoids(&gpu, g.name, &g.mesh, meshletlab::meshlet::Limits::DEFAULT);
+    }
+    check_kmedoids(&gpu, "bunny", &common::load("stanford_bunny"), meshletlab::meshlet::Limits::DEFAULT);
+}

@@ -14,7 +14,7 @@
 pub mod adjacency;
 //pub mod bounds;
 //pub mod grow;
-//pub mod kmedoids;
+pub mod kmedoids;
 mod scan;
 
 use bytemuck::Pod;
@@ -50,6 +50,9 @@ pub enum GpuError {
         /// The most the split buffers hold.
         max: usize,
     },
+    /// The GPU path does not offer this.
+    #[error("{0}")]
+    Unsupported(&'static str),
     /// A readback failed.
     #[error("GPU readback failed: {0}")]
     Readback(String),

@@ -143,12 +143,9 @@ impl Clustering {
     }
 }
 
-/// Runs the whole pipeline.
-pub fn cluster(mesh: &Mesh, limits: Limits, cfg: &Config) -> Clustering {
-    let t0 = Instant::now();
-    let vt = vertex_triangles(mesh);
-    let dual = dual_graph(mesh, &vt);
-    let per_cluster = match cfg.mode {
+/// Triangles per initial cluster.
+pub fn cluster_size(limits: Limits, mode: Mode) -> usize {
+    match mode {
         // The paper: k = ceil(T / max_triangles).
         Mode::Paper => limits.max_triangles as usize,
         // A closed 64-vertex patch holds about 1.5 x 64 triangles (Euler: T ~ 2V minus the
@@ -156,7 +153,23 @@ pub fn cluster(mesh: &Mesh, limits: Limits, cfg: &Config) -> Clustering {
         Mode::Fast => (limits.max_triangles as usize)
             .min(3 * limits.max_vertices as usize / 2)
             .max(1),
-    };
+    }
+}
+
+/// Fast mode's split choice: the largest overflows first (ties to the lower cluster), a fraction
+/// per round; returns the clusters to split.
+pub fn split_choice(mut over: Vec<(u32, u32)>, fraction: f64) -> Vec<u32> {
+    over.sort_unstable_by_key(|&(c, size)| (std::cmp::Reverse(size), c));
+    let take = ((over.len() as f64 * fraction).ceil() as usize).clamp(1, over.len());
+    over[..take].iter().map(|&(c, _)| c).collect()
+}
+
+/// Runs the whole pipeline.
+pub fn cluster(mesh: &Mesh, limits: Limits, cfg: &Config) -> Clustering {
+    let t0 = Instant::now();
+    let vt = vertex_triangles(mesh);
+    let dual = dual_graph(mesh, &vt);
+    let per_cluster = cluster_size(limits, cfg.mode);
     let mut medoids = initial_medoids(mesh, per_cluster);
     let mut iterations = 0;
     cover_components(&dual, &mut medoids);
@@ -207,11 +220,11 @@ pub fn cluster(mesh: &Mesh, limits: Limits, cfg: &Config) -> Clustering {
         } else {
             // The largest overflows first, a fraction per round: neighbours re-balance between
             // rounds, so fewer clusters end up split than when all are split at once.
-            let mut over = over;
-            over.sort_unstable_by_key(|&(c, size)| (std::cmp::Reverse(size), c));
-            let take =
-                ((over.len() as f64 * cfg.split_fraction).ceil() as usize).clamp(1, over.len());
-            medoids.extend(over[..take].iter().map(|&(c, _)| far[c as usize]));
+            medoids.extend(
+                split_choice(over, cfg.split_fraction)
+                    .into_iter()
+                    .map(|c| far[c as usize]),
+            );
             medoids = sorted(medoids);
             (labels, distances) = converge(&mut medoids, cfg.split_iterations, &mut iterations);
         }
@@ -281,30 +294,39 @@ fn morton3(x: u32, y: u32, z: u32) -> u64 {
 fn cover_components(dual: &Csr, medoids: &mut Vec<u32>) {
     loop {
         let (labels, _) = assign(dual, medoids);
-        let Some(first) = labels.iter().position(|&l| l == UNREACHED) else {
+        if !add_component_medoids(dual, &labels, medoids) {
             return;
-        };
-        // Flood the unreached triangles component by component, one new medoid each.
-        let mut seen = vec![false; labels.len()];
-        let mut stack = Vec::new();
-        for t in first..labels.len() {
-            if labels[t] != UNREACHED || seen[t] {
-                continue;
-            }
-            medoids.push(t as u32);
-            seen[t] = true;
-            stack.push(t as u32);
-            while let Some(u) = stack.pop() {
-                for &n in dual.row(u as usize) {
-                    if !seen[n as usize] {
-                        seen[n as usize] = true;
-                        stack.push(n);
-                    }
+        }
+    }
+}
+
+/// One medoid (its lowest triangle) for each component of unreached triangles; returns whether any
+/// was added. `medoids` stays sorted.
+pub fn add_component_medoids(dual: &Csr, labels: &[u32], medoids: &mut Vec<u32>) -> bool {
+    let Some(first) = labels.iter().position(|&l| l == UNREACHED) else {
+        return false;
+    };
+    // Flood the unreached triangles component by component, one new medoid each.
+    let mut seen = vec![false; labels.len()];
+    let mut stack = Vec::new();
+    for t in first..labels.len() {
+        if labels[t] != UNREACHED || seen[t] {
+            continue;
+        }
+        medoids.push(t as u32);
+        seen[t] = true;
+        stack.push(t as u32);
+        while let Some(u) = stack.pop() {
+            for &n in dual.row(u as usize) {
+                if !seen[n as usize] {
+                    seen[n as usize] = true;
+                    stack.push(n);
                 }
             }
         }
-        *medoids = sorted(std::mem::take(medoids));
     }
+    *medoids = sorted(std::mem::take(medoids));
+    true
 }
 
 /// Multi-source BFS from all medoids at once: (labels, distances). Level-synchronous; each
@@ -493,6 +515,17 @@ pub fn overflowing(mesh: &Mesh, labels: &[u32], k: usize, limits: Limits) -> Vec
             v.dedup();
             (v.len() > limits.max_vertices as usize).then_some((c as u32, m.len() as u32))
         })
+        .collect()
+}
+
+/// [`overflowing`] from per-cluster triangle and distinct-vertex counts (the GPU `stats` kernel's
+/// output; a vertex count is only read for clusters within the triangle limit).
+pub fn overflowing_from_counts(triangles: &[u32], vertices: &[u32], limits: Limits) -> Vec<(u32, u32)> {
+    (0..triangles.len())
+        .filter(|&c| {
+            triangles[c] > limits.max_triangles || vertices[c] > limits.max_vertices
+        })
+        .map(|c| (c as u32, triangles[c]))
         .collect()
 }
 
