@@ -51,12 +51,22 @@ fn check_kmedoids(gpu: &Gpu, name: &str, mesh: &Mesh, limits: meshletlab::meshle
     let cpu = cluster(mesh, limits, &cfg);
     let g = meshletlab::gpu::kmedoids::cluster(gpu, mesh, limits, &cfg).unwrap();
     let gc = &g.clustering;
-    eprintln!("{name}: cpu {:.3}s gpu {:.3}s ({:?}) large {} rounds {}", cpu.initial_seconds, g.seconds, g.timing, g.large_updates, g.bfs_rounds);
+    eprintln!(
+        "{name}: cpu {:.3}s gpu {:.3}s ({:?}) large {} rounds {}",
+        cpu.initial_seconds, g.seconds, g.timing, g.large_updates, g.bfs_rounds
+    );
     assert_eq!(gc.medoids, cpu.medoids, "{name}: medoids");
     assert_eq!(gc.labels, cpu.labels, "{name}: labels");
     assert_eq!(gc.distances, cpu.distances, "{name}: distances");
-    assert_eq!((gc.iterations, gc.splits, gc.initial_iterations), (cpu.iterations, cpu.splits, cpu.initial_iterations), "{name}: counts");
-    assert_eq!(gc.initial_mean_distance, cpu.initial_mean_distance, "{name}: objective");
+    assert_eq!(
+        (gc.iterations, gc.splits, gc.initial_iterations),
+        (cpu.iterations, cpu.splits, cpu.initial_iterations),
+        "{name}: counts"
+    );
+    assert_eq!(
+        gc.initial_mean_distance, cpu.initial_mean_distance,
+        "{name}: objective"
+    );
     assert_eq!(gc.meshlets, cpu.meshlets, "{name}: meshlets");
     meshletlab::meshlet::validate(mesh, &gc.meshlets, limits).unwrap();
 }
@@ -67,5 +77,24 @@ fn kmedoids_matches_cpu() {
     for g in generate::demo_set(3) {
         check_kmedoids(&gpu, g.name, &g.mesh, meshletlab::meshlet::Limits::DEFAULT);
     }
-    check_kmedoids(&gpu, "bunny", &common::load("stanford_bunny"), meshletlab::meshlet::Limits::DEFAULT);
+    check_kmedoids(
+        &gpu,
+        "bunny",
+        &common::load("stanford_bunny"),
+        meshletlab::meshlet::Limits::DEFAULT,
+    );
+}
+
+#[test]
+fn scratch_bunny_km() {
+    let gpu = gpu();
+    let m = common::load("stanford_bunny");
+    let g = meshletlab::gpu::kmedoids::cluster(
+        &gpu,
+        &m,
+        meshletlab::meshlet::Limits::DEFAULT,
+        &Default::default(),
+    )
+    .unwrap();
+    eprintln!("{:.3}", g.seconds);
 }

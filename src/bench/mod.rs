@@ -2,6 +2,7 @@
 //! the `bench` commands, plus machine notes and tables for results/.
 
 pub mod build;
+pub mod gpu;
 pub mod kmedoids;
 pub mod paper;
 pub mod plot;

@@ -151,6 +151,15 @@ pub enum Command {
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=8))]
         levels: u32,
     },
+    /// Runs every GPU kernel and its CPU reference on MESH and compares the outputs (exit 1 on any
+    /// difference). Uses the default Vulkan adapter: lavapipe on a machine without a GPU.
+    Parity {
+        /// Mesh file (PLY, OBJ, glTF/GLB, optionally .zst).
+        mesh: PathBuf,
+        /// Meshlet limits for k-medoids.
+        #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
+        limits: Limits,
+    },
     /// Benchmarks that write results/.
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -175,6 +184,24 @@ pub enum BenchCommand {
         strategy: Vec<String>,
         #[command(flatten)]
         args: StrategyArgs,
+    },
+    /// GPU kernels against their CPU references (bunny, igea, dragon, dragon x4 and x16) -> gpu.md.
+    Gpu {
+        /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Meshlet limits.
+        #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
+        limits: Limits,
+        /// Above this many triangles, skip the GPU and one-thread k-medoids (rayon still runs).
+        #[arg(long, default_value_t = 4_000_000)]
+        kmedoids_gpu_max: usize,
+        /// Leave out the subdivided dragons (3.5 M and 14 M triangles).
+        #[arg(long)]
+        quick: bool,
     },
     /// k-medoids at scale (fast and paper modes, every mesh) and a run-time-vs-error sweep -> kmedoids.md.
     Kmedoids {
@@ -248,6 +275,26 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
             output,
             levels,
         } => subdivide(&mesh, &output, levels, q),
+        Command::Parity { mesh, limits } => parity(&mesh, limits, q),
+        Command::Bench(BenchCommand::Gpu {
+            meshes,
+            out,
+            limits,
+            kmedoids_gpu_max,
+            quick,
+        }) => {
+            let cfg = bench::gpu::Config {
+                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                out,
+                limits,
+                kmedoids_gpu_max,
+                quick,
+                quiet: q,
+            };
+            bench::gpu::run(&cfg)?;
+            println!("wrote {}", cfg.out.join("gpu.md").display());
+            Ok(())
+        }
         Command::Bench(BenchCommand::Kmedoids {
             meshes,
             out,
@@ -532,6 +579,43 @@ fn demo(files: &[PathBuf], seed: u64, args: &StrategyArgs, quiet: bool) -> Resul
         println!("  {n:<16} {c:>8}  {:>6.3}", *c as f64 / reference as f64);
     }
     println!("\nAll outputs validated: every triangle exactly once, limits respected.");
+    Ok(())
+}
+
+fn parity(path: &Path, limits: Limits, quiet: bool) -> Result<()> {
+    let m = load(path, quiet)?;
+    let gpu = crate::gpu::Gpu::new()?;
+    println!(
+        "{}: {} triangles; GPU: {}",
+        path.display(),
+        m.triangle_count(),
+        gpu.describe()
+    );
+    let pb = spinner(quiet, "running every kernel on the GPU and the CPU".into());
+    let checks = crate::gpu::parity::run(&gpu, &m, limits)
+        .with_context(|| format!("{}: GPU run failed", path.display()))?;
+    pb.finish_and_clear();
+    let mut failed = 0;
+    for c in &checks {
+        let verdict = match &c.mismatch {
+            None => "identical".to_string(),
+            Some(d) => {
+                failed += 1;
+                format!("DIFFERS: {d}")
+            }
+        };
+        println!(
+            "{:<70} CPU {:>8.3} s  GPU {:>8.3} s  {verdict}",
+            c.name, c.cpu_seconds, c.gpu_seconds
+        );
+    }
+    if failed > 0 {
+        bail!(
+            "{}: {failed} of {} GPU kernels differ from their CPU references",
+            path.display(),
+            checks.len()
+        );
+    }
     Ok(())
 }
 

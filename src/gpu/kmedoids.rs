@@ -61,7 +61,12 @@ struct Run<'a> {
 }
 
 /// Runs fast-mode k-medoids on the GPU.
-pub fn cluster(gpu: &Gpu, mesh: &Mesh, limits: Limits, cfg: &Config) -> Result<GpuClustering, GpuError> {
+pub fn cluster(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    limits: Limits,
+    cfg: &Config,
+) -> Result<GpuClustering, GpuError> {
     if cfg.mode != Mode::Fast {
         return Err(GpuError::Unsupported(
             "the GPU runs fast-mode k-medoids; paper mode is CPU-only",
@@ -120,7 +125,12 @@ pub fn cluster(gpu: &Gpu, mesh: &Mesh, limits: Limits, cfg: &Config) -> Result<G
         add_component_medoids(host_dual.as_ref().expect("read"), &labels, &mut medoids);
     }
     let mut iterations = 0;
-    medoids = run.converge(medoids, cfg.max_iterations, cfg.shift_threshold, &mut iterations)?;
+    medoids = run.converge(
+        medoids,
+        cfg.max_iterations,
+        cfg.shift_threshold,
+        &mut iterations,
+    )?;
     let initial_iterations = iterations;
     let initial_seconds = start.elapsed().as_secs_f64();
     let initial_mean_distance = run.distance_sum()? as f64 / t.max(1) as f64;
@@ -142,7 +152,12 @@ pub fn cluster(gpu: &Gpu, mesh: &Mesh, limits: Limits, cfg: &Config) -> Result<G
         medoids.dedup();
         run.upload_medoids(&medoids)?;
         run.assign(medoids.len())?;
-        medoids = run.converge(medoids, cfg.split_iterations, cfg.shift_threshold, &mut iterations)?;
+        medoids = run.converge(
+            medoids,
+            cfg.split_iterations,
+            cfg.shift_threshold,
+            &mut iterations,
+        )?;
         splits += 1;
     }
     let labels = run.read(&run.labels, 0, t)?;
@@ -173,24 +188,31 @@ pub fn cluster(gpu: &Gpu, mesh: &Mesh, limits: Limits, cfg: &Config) -> Result<G
 }
 
 impl<'a> Run<'a> {
-    fn new(gpu: &'a Gpu, kernels: &'a Kernels, scan: &'a Scan, adj: &DeviceAdjacency, limits: Limits) -> Result<Self, GpuError> {
+    fn new(
+        gpu: &'a Gpu,
+        kernels: &'a Kernels,
+        scan: &'a Scan,
+        adj: &DeviceAdjacency,
+        limits: Limits,
+    ) -> Result<Self, GpuError> {
         let t = adj.triangles;
         // Cluster capacity: every triangle could be a cluster, but the result buffer holds 4 words
         // per cluster in one binding.
         let k_cap = t.clamp(1, PART / 4);
-        let ((labels, dist, medoids, counters, mem_off, cursor, result, flags, scratch), up) = timed(|| {
-            (
-                gpu.zeros("labels", t),
-                gpu.zeros("dist", t),
-                gpu.zeros("medoids", k_cap),
-                gpu.zeros("counters", COUNTERS),
-                gpu.zeros("member offsets", k_cap + 1),
-                gpu.zeros("member cursor", k_cap),
-                gpu.zeros("result", 4 * k_cap),
-                gpu.zeros("flags", t + 1),
-                gpu.zeros("scratch", 2 * t),
-            )
-        });
+        let ((labels, dist, medoids, counters, mem_off, cursor, result, flags, scratch), up) =
+            timed(|| {
+                (
+                    gpu.zeros("labels", t),
+                    gpu.zeros("dist", t),
+                    gpu.zeros("medoids", k_cap),
+                    gpu.zeros("counters", COUNTERS),
+                    gpu.zeros("member offsets", k_cap + 1),
+                    gpu.zeros("member cursor", k_cap),
+                    gpu.zeros("result", 4 * k_cap),
+                    gpu.zeros("flags", t + 1),
+                    gpu.zeros("scratch", 2 * t),
+                )
+            });
         let mem_items = gpu.zeros("members", t);
         let bind = kernels.bind(
             gpu,
@@ -289,7 +311,13 @@ impl<'a> Run<'a> {
             let mut b = Batch::new(self.gpu);
             b.threads(kern, "clear_counters", bind, self.params(k, 0, 0), COUNTERS);
             for r in 0..ROUNDS {
-                b.threads(kern, "bfs_round", bind, self.params(k, d + r as u32, 8 + r as u32), t);
+                b.threads(
+                    kern,
+                    "bfs_round",
+                    bind,
+                    self.params(k, d + r as u32, 8 + r as u32),
+                    t,
+                );
             }
             self.timing.kernel += b.run()?;
             let c = self.read(&self.counters, 8, ROUNDS)?;
@@ -337,7 +365,13 @@ impl<'a> Run<'a> {
 
     /// The CPU's `converge` after its first assign (already run): update, sort, assign, until no
     /// medoid moves, the mean shift is at most `threshold`, or `max_iter`.
-    fn converge(&mut self, medoids: Vec<u32>, max_iter: u32, threshold: f64, iterations: &mut u32) -> Result<Vec<u32>, GpuError> {
+    fn converge(
+        &mut self,
+        medoids: Vec<u32>,
+        max_iter: u32,
+        threshold: f64,
+        iterations: &mut u32,
+    ) -> Result<Vec<u32>, GpuError> {
         let k = medoids.len();
         let mut moved = false;
         for _ in 0..max_iter {
@@ -360,7 +394,13 @@ impl<'a> Run<'a> {
     fn distance_sum(&mut self) -> Result<u64, GpuError> {
         let groups = self.t.div_ceil(super::WG as usize);
         let mut b = Batch::new(self.gpu);
-        b.threads(self.kernels, "dist_partial", &self.bind, self.params(0, 0, 0), self.t);
+        b.threads(
+            self.kernels,
+            "dist_partial",
+            &self.bind,
+            self.params(0, 0, 0),
+            self.t,
+        );
         self.timing.kernel += b.run()?;
         let parts = self.read(&self.scratch, 0, groups)?;
         Ok(parts.iter().map(|&x| x as u64).sum())
@@ -372,7 +412,13 @@ impl<'a> Run<'a> {
         let time = {
             let mut b = Batch::new(self.gpu);
             self.record_members(&mut b, k, &mem_scan);
-            b.groups(self.kernels, "stats", &self.bind, self.params(k, 0, 0), k as u32);
+            b.groups(
+                self.kernels,
+                "stats",
+                &self.bind,
+                self.params(k, 0, 0),
+                k as u32,
+            );
             b.run()?
         };
         self.timing.kernel += time;

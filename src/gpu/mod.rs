@@ -12,9 +12,10 @@
 //! up to about 21 M triangles.
 
 pub mod adjacency;
-//pub mod bounds;
+pub mod bounds;
 //pub mod grow;
 pub mod kmedoids;
+pub mod parity;
 mod scan;
 
 use bytemuck::Pod;
@@ -342,7 +343,12 @@ impl Kernels {
                     layout: Some(&pl),
                     module: &module,
                     entry_point: Some(e),
-                    compilation_options: Default::default(),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        // Every kernel writes its workgroup memory before reading it; zeroing
+                        // 25 KiB per workgroup cost more than the medoid update itself on lavapipe.
+                        zero_initialize_workgroup_memory: false,
+                        ..Default::default()
+                    },
                     cache: None,
                 });
                 (e, p)

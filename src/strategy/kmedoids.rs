@@ -520,11 +520,13 @@ pub fn overflowing(mesh: &Mesh, labels: &[u32], k: usize, limits: Limits) -> Vec
 
 /// [`overflowing`] from per-cluster triangle and distinct-vertex counts (the GPU `stats` kernel's
 /// output; a vertex count is only read for clusters within the triangle limit).
-pub fn overflowing_from_counts(triangles: &[u32], vertices: &[u32], limits: Limits) -> Vec<(u32, u32)> {
+pub fn overflowing_from_counts(
+    triangles: &[u32],
+    vertices: &[u32],
+    limits: Limits,
+) -> Vec<(u32, u32)> {
     (0..triangles.len())
-        .filter(|&c| {
-            triangles[c] > limits.max_triangles || vertices[c] > limits.max_vertices
-        })
+        .filter(|&c| triangles[c] > limits.max_triangles || vertices[c] > limits.max_vertices)
         .map(|c| (c as u32, triangles[c]))
         .collect()
 }

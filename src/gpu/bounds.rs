@@ -1,0 +1,106 @@
+//! Meshlet bounding spheres on the GPU (`wgsl/bounds.wgsl`) and their f32 CPU mirror.
+//!
+//! Parity tolerance: the centre is min/max/add/halve, all exact in IEEE f32, so it must match
+//! bit for bit. The radius goes through a dot product that a shader compiler may fuse into FMAs
+//! and a sqrt that WGSL only bounds as loosely as `1 / inverseSqrt` (lavapipe differed from the CPU
+//! by about 18 ulps, 1.1e-6 relative): the check allows a relative 2^-16 (1.5e-5), which is also
+//! the padding that keeps the sphere conservative on both sides. For a 1 m meshlet that is 15 um.
+
+use super::{Batch, Gpu, GpuError, Kernels, Params};
+use crate::mesh::Mesh;
+use crate::meshlet::Meshlets;
+use glam::Vec3;
+
+/// Relative radius tolerance between GPU and CPU (and the conservative padding).
+pub const RADIUS_TOLERANCE: f32 = 1.0 / 65_536.0;
+
+/// The CPU mirror of the `sphere` kernel for meshlet `i`: (centre, radius).
+pub fn sphere_f32(mesh: &Mesh, ml: &Meshlets, i: usize) -> ([f32; 3], f32) {
+    let m = ml.meshlets[i];
+    let verts = &ml.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize];
+    let pos = |v: u32| Vec3::from_array(mesh.positions[v as usize]);
+    let p0 = pos(verts[0]);
+    let (mut lo, mut hi) = (Vec3::ZERO, Vec3::ZERO);
+    for &v in verts {
+        let d = pos(v) - p0;
+        lo = lo.min(d);
+        hi = hi.max(d);
+    }
+    let c = p0 + (lo + hi) * 0.5;
+    let cl = c - p0;
+    let r2 = verts.iter().fold(0.0f32, |r2, &v| {
+        let d = (pos(v) - p0) - cl;
+        r2.max(d.x * d.x + d.y * d.y + d.z * d.z)
+    });
+    (c.to_array(), r2.sqrt() * (1.0 + RADIUS_TOLERANCE))
+}
+
+/// Spheres of all meshlets on the GPU: (centre, radius) per meshlet, and the kernel time.
+pub fn spheres(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    ml: &Meshlets,
+) -> Result<(Vec<([f32; 3], f32)>, f64), GpuError> {
+    let k = Kernels::new(
+        gpu,
+        "bounds",
+        include_str!("../../wgsl/bounds.wgsl"),
+        4,
+        &["sphere"],
+    );
+    let positions = gpu.upload("positions", &mesh.positions);
+    let meshlets = gpu.upload("meshlets", &ml.meshlets);
+    let vertices = gpu.upload("meshlet vertices", &ml.vertices);
+    let out = gpu.zeros("spheres", 4 * ml.len());
+    let bind = k.bind(gpu, &[&positions, &meshlets, &vertices, &out]);
+    let mut b = Batch::new(gpu);
+    let n = ml.len();
+    b.threads(
+        &k,
+        "sphere",
+        &bind,
+        Params {
+            w: [n as u32, 0, 0, 0, 0, 0, 0, 0],
+        },
+        n,
+    );
+    let time = b.run()?;
+    let raw = gpu.read(&out, 0, 4 * n)?;
+    let s = raw
+        .chunks_exact(4)
+        .map(|c| {
+            let f = |x: u32| f32::from_bits(x);
+            ([f(c[0]), f(c[1]), f(c[2])], f(c[3]))
+        })
+        .collect();
+    Ok((s, time))
+}
+
+/// Compares GPU spheres with the CPU mirror: `None` if centres are identical and radii within
+/// [`RADIUS_TOLERANCE`], else the first difference.
+pub fn compare(mesh: &Mesh, ml: &Meshlets, gpu: &[([f32; 3], f32)]) -> Option<String> {
+    (0..ml.len()).find_map(|i| {
+        let (c, r) = sphere_f32(mesh, ml, i);
+        let (gc, gr) = gpu[i];
+        let ok = c == gc && ((gr - r).abs() <= r * RADIUS_TOLERANCE || gr == r);
+        (!ok).then(|| format!("sphere {i}: GPU {gc:?} r {gr}, CPU {c:?} r {r}"))
+    })
+}
+
+/// Vertices outside their meshlet's sphere, measured in f64 (0 for a conservative sphere set).
+pub fn outside(mesh: &Mesh, ml: &Meshlets, spheres: &[([f32; 3], f32)]) -> usize {
+    (0..ml.len())
+        .map(|i| {
+            let m = ml.meshlets[i];
+            let (c, r) = spheres[i];
+            ml.vertices[m.vertex_offset as usize..(m.vertex_offset + m.vertex_count) as usize]
+                .iter()
+                .filter(|&&v| {
+                    let p = mesh.positions[v as usize];
+                    let d2: f64 = (0..3).map(|a| (p[a] as f64 - c[a] as f64).powi(2)).sum();
+                    d2.sqrt() > r as f64
+                })
+                .count()
+        })
+        .sum()
+}

@@ -1,0 +1,152 @@
+//! CPU/GPU parity checks for one mesh, shared by `meshletlab parity` and the test suite: every
+//! kernel family runs on both sides and the outputs are compared (integers exactly, floats within
+//! the tolerance stated where they are compared).
+
+use super::{timed, Gpu, GpuError};
+use crate::adjacency::{dual_graph, side_flags, vertex_triangles, EdgeTable};
+use crate::mesh::Mesh;
+use crate::meshlet::{validate, Limits};
+use crate::strategy::kmedoids::{self, Config};
+
+/// One comparison.
+#[derive(Clone, Debug)]
+pub struct Check {
+    /// What was compared.
+    pub name: &'static str,
+    /// `None` when identical (or within tolerance), else what differs.
+    pub mismatch: Option<String>,
+    /// CPU reference time in seconds.
+    pub cpu_seconds: f64,
+    /// GPU time in seconds (wall, uploads and readbacks included).
+    pub gpu_seconds: f64,
+}
+
+fn first_difference<T: PartialEq + std::fmt::Debug>(
+    what: &str,
+    gpu: &[T],
+    cpu: &[T],
+) -> Option<String> {
+    if gpu.len() != cpu.len() {
+        return Some(format!(
+            "{what}: GPU has {} entries, CPU {}",
+            gpu.len(),
+            cpu.len()
+        ));
+    }
+    gpu.iter()
+        .zip(cpu)
+        .position(|(a, b)| a != b)
+        .map(|i| format!("{what}[{i}]: GPU {:?}, CPU {:?}", gpu[i], cpu[i]))
+}
+
+fn check(
+    name: &'static str,
+    cpu_seconds: f64,
+    gpu_seconds: f64,
+    diffs: Vec<Option<String>>,
+) -> Check {
+    Check {
+        name,
+        mismatch: diffs.into_iter().flatten().next(),
+        cpu_seconds,
+        gpu_seconds,
+    }
+}
+
+/// Runs every kernel family on `mesh` on both sides and compares.
+pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Vec<Check>, GpuError> {
+    let mut out = Vec::new();
+    // Adjacency.
+    let ((vt, dual, flags), cpu_s) = timed(|| {
+        let vt = vertex_triangles(mesh);
+        let dual = dual_graph(mesh, &vt);
+        let et = EdgeTable::with_vertex_triangles(mesh, &vt);
+        let f = side_flags(mesh, &et);
+        (vt, dual, f)
+    });
+    let (gpu_adj, gpu_s) = timed(|| super::adjacency::adjacency(gpu, mesh));
+    let (host, _) = gpu_adj?;
+    out.push(check(
+        "adjacency: vertex -> triangles, dual graph, side flags",
+        cpu_s,
+        gpu_s,
+        vec![
+            first_difference(
+                "vertex-triangle offsets",
+                &host.vertex_triangles.offsets,
+                &vt.offsets,
+            ),
+            first_difference(
+                "vertex-triangle items",
+                &host.vertex_triangles.items,
+                &vt.items,
+            ),
+            first_difference("dual offsets", &host.dual.offsets, &dual.offsets),
+            first_difference("dual items", &host.dual.items, &dual.items),
+            first_difference("side flags", &host.side_flags, &flags),
+        ],
+    ));
+    // k-medoids.
+    let cfg = Config::default();
+    let (cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, &cfg));
+    let (g, gpu_s) = timed(|| super::kmedoids::cluster(gpu, mesh, limits, &cfg));
+    let g = g?.clustering;
+    let counts = |c: &kmedoids::Clustering| [c.iterations, c.splits, c.initial_iterations];
+    out.push(check(
+        "k-medoids: medoids, labels, distances, counts, objective, meshlets",
+        cpu_s,
+        gpu_s,
+        vec![
+            first_difference("medoids", &g.medoids, &cpu.medoids),
+            first_difference("labels", &g.labels, &cpu.labels),
+            first_difference("distances", &g.distances, &cpu.distances),
+            first_difference(
+                "iterations/splits/initial iterations",
+                &counts(&g),
+                &counts(&cpu),
+            ),
+            (g.initial_mean_distance != cpu.initial_mean_distance).then(|| {
+                format!(
+                    "objective: GPU {}, CPU {}",
+                    g.initial_mean_distance, cpu.initial_mean_distance
+                )
+            }),
+            first_difference("meshlets", &g.meshlets.meshlets, &cpu.meshlets.meshlets),
+            first_difference(
+                "meshlet vertices",
+                &g.meshlets.vertices,
+                &cpu.meshlets.vertices,
+            ),
+            first_difference(
+                "meshlet triangles",
+                &g.meshlets.triangles,
+                &cpu.meshlets.triangles,
+            ),
+            validate(mesh, &g.meshlets, limits)
+                .err()
+                .map(|e| format!("GPU meshlets invalid: {e}")),
+        ],
+    ));
+    // Bounding spheres of the k-medoids meshlets.
+    let ml = &cpu.meshlets;
+    let (cpu_spheres, cpu_s) = timed(|| {
+        (0..ml.len())
+            .map(|i| super::bounds::sphere_f32(mesh, ml, i))
+            .collect::<Vec<_>>()
+    });
+    let (gs, gpu_s) = timed(|| super::bounds::spheres(gpu, mesh, ml));
+    let (gs, _) = gs?;
+    let outside = super::bounds::outside(mesh, ml, &gs);
+    out.push(check(
+        "bounds: meshlet spheres (centre exact, radius within 2^-16), conservative",
+        cpu_s,
+        gpu_s,
+        vec![
+            super::bounds::compare(mesh, ml, &gs),
+            (outside > 0).then(|| format!("{outside} vertices outside their GPU sphere")),
+            (super::bounds::outside(mesh, ml, &cpu_spheres) > 0)
+                .then(|| "vertices outside their CPU sphere".to_string()),
+        ],
+    ));
+    Ok(out)
+}
