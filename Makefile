@@ -27,3 +27,5 @@ test: setup lint
 bench: setup
 	$(CARGO) run --release --quiet -- bench build
 	$(CARGO) run --release --quiet -- bench kmedoids
+	$(CARGO) run --release --quiet -- bench gpu
+	$(CARGO) run --release --quiet -- bench stability

@@ -38,5 +38,9 @@ fn sphere(@builtin(global_invocation_id) gid: vec3<u32>) {
         let d = (pos(vertices[m.vertex_offset + k]) - p0) - cl;
         r2 = max(r2, dot(d, d));
     }
-    spheres[i] = vec4<f32>(c, sqrt(r2) * (1.0 + 1.0 / 65536.0));
+    // Shader compilers may fold (p0 + h) - p0 back into h (NIR does inexact algebra unless told
+    // otherwise, and WGSL cannot tell it), which measures from the unrounded centre: one ulp of
+    // the centre's largest coordinate covers its rounding.
+    let ac = abs(c);
+    spheres[i] = vec4<f32>(c, sqrt(r2) * (1.0 + 1.0 / 65536.0) + max(ac.x, max(ac.y, ac.z)) / 4194304.0);
 }

@@ -6,6 +6,7 @@ pub mod gpu;
 pub mod kmedoids;
 pub mod paper;
 pub mod plot;
+pub mod stability;
 
 use crate::mesh::Mesh;
 use crate::meshlet::{bounds, validate, Limits, Meshlets, Metrics};

@@ -203,6 +203,22 @@ pub enum BenchCommand {
         #[arg(long)]
         quick: bool,
     },
+    /// GPU/CPU agreement and conservative bounds on a mesh translated, scaled, flattened, with
+    /// duplicate vertices and a huge coordinate range -> stability.md.
+    Stability {
+        /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Base mesh (file stem in the folder).
+        #[arg(long, default_value = "stanford_bunny")]
+        mesh: String,
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Meshlet limits.
+        #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
+        limits: Limits,
+    },
     /// k-medoids at scale (fast and paper modes, every mesh) and a run-time-vs-error sweep -> kmedoids.md.
     Kmedoids {
         /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
@@ -276,6 +292,26 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
             levels,
         } => subdivide(&mesh, &output, levels, q),
         Command::Parity { mesh, limits } => parity(&mesh, limits, q),
+        Command::Bench(BenchCommand::Stability {
+            meshes,
+            mesh,
+            out,
+            limits,
+        }) => {
+            let path = meshes
+                .unwrap_or_else(default_meshes_dir)
+                .join(format!("{mesh}.ply.zst"));
+            let m = load(&path, q)?;
+            let pb = spinner(q, format!("stress variants of {mesh}"));
+            let reports = bench::stability::run(&mesh, &m, limits, &out)?;
+            pb.finish_and_clear();
+            let bad: Vec<_> = reports.iter().filter(|r| !r.ok()).map(|r| r.name).collect();
+            println!("wrote {}", out.join("stability.md").display());
+            if !bad.is_empty() {
+                bail!("stability checks failed for: {}", bad.join(", "));
+            }
+            Ok(())
+        }
         Command::Bench(BenchCommand::Gpu {
             meshes,
             out,

@@ -38,6 +38,9 @@ pub struct GpuClustering {
     pub seconds: f64,
 }
 
+/// Per cluster: triangles, distinct vertices, farthest member.
+type ClusterStats = (Vec<u32>, Vec<u32>, Vec<u32>);
+
 struct Run<'a> {
     gpu: &'a Gpu,
     kernels: &'a Kernels,
@@ -407,7 +410,7 @@ impl<'a> Run<'a> {
     }
 
     /// Per cluster: triangles, distinct vertices (within the triangle limit), farthest member.
-    fn stats(&mut self, k: usize) -> Result<(Vec<u32>, Vec<u32>, Vec<u32>), GpuError> {
+    fn stats(&mut self, k: usize) -> Result<ClusterStats, GpuError> {
         let mem_scan = self.scan.bind(self.gpu, &self.mem_off, k + 1);
         let time = {
             let mut b = Batch::new(self.gpu);

@@ -13,7 +13,6 @@
 
 pub mod adjacency;
 pub mod bounds;
-//pub mod grow;
 pub mod kmedoids;
 pub mod parity;
 mod scan;
@@ -551,3 +550,6 @@ pub fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
     let r = f();
     (r, t.elapsed().as_secs_f64())
 }
+
+#[cfg(test)]
+mod shaders_test;

@@ -138,7 +138,7 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Vec<Check>, GpuErro
     let (gs, _) = gs?;
     let outside = super::bounds::outside(mesh, ml, &gs);
     out.push(check(
-        "bounds: meshlet spheres (centre exact, radius within 2^-16), conservative",
+        "bounds: meshlet spheres (centre within 2 ulps, radius within 2^-16 + 2 ulps of the centre), conservative",
         cpu_s,
         gpu_s,
         vec![
