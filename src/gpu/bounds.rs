@@ -48,11 +48,7 @@ pub fn sphere_f32(mesh: &Mesh, ml: &Meshlets, i: usize) -> ([f32; 3], f32) {
 }
 
 /// Spheres of all meshlets on the GPU: (centre, radius) per meshlet, and the kernel time.
-pub fn spheres(
-    gpu: &Gpu,
-    mesh: &Mesh,
-    ml: &Meshlets,
-) -> Result<(Vec<SphereF32>, f64), GpuError> {
+pub fn spheres(gpu: &Gpu, mesh: &Mesh, ml: &Meshlets) -> Result<(Vec<SphereF32>, f64), GpuError> {
     let k = Kernels::new(
         gpu,
         "bounds",
