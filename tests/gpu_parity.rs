@@ -14,7 +14,7 @@ fn gpu() -> Gpu {
 }
 
 fn assert_parity(gpu: &Gpu, name: &str, mesh: &Mesh, limits: Limits) {
-    for c in parity::run(gpu, mesh, limits).unwrap() {
+    for c in parity::run(gpu, mesh, limits).unwrap().checks {
         assert!(
             c.mismatch.is_none(),
             "{name}: {}: {}",

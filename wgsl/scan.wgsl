@@ -30,15 +30,19 @@ fn scan_part(lid: u32) -> u32 {
     return part[lid];
 }
 
-@compute @workgroup_size(64)
-fn block_sums(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let g = group_id(wid);
-    let base = g * BLOCK + lid * ITEMS;
+// Sum of the thread's ITEMS elements from base (those below n).
+fn thread_sum(base: u32) -> u32 {
     var s = 0u;
     for (var i = 0u; i < ITEMS; i++) {
         if (base + i < p.n) { s += data[base + i]; }
     }
-    part[lid] = s;
+    return s;
+}
+
+@compute @workgroup_size(64)
+fn block_sums(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let g = group_id(wid);
+    part[lid] = thread_sum(g * BLOCK + lid * ITEMS);
     workgroupBarrier();
     if (lid == 0u) {
         var t = 0u;
@@ -68,11 +72,7 @@ fn scan_sums(@builtin(local_invocation_index) lid: u32) {
 fn scan_blocks(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let g = group_id(wid);
     let base = g * BLOCK + lid * ITEMS;
-    var s = 0u;
-    for (var i = 0u; i < ITEMS; i++) {
-        if (base + i < p.n) { s += data[base + i]; }
-    }
-    part[lid] = s;
+    part[lid] = thread_sum(base);
     var acc = scan_part(lid) + sums[g];
     for (var i = 0u; i < ITEMS; i++) {
         if (base + i < p.n) {

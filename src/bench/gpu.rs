@@ -10,7 +10,7 @@ use super::kmedoids::PAPER_TIMES;
 use super::plot::{line_chart, Axes, Series};
 use super::{machine_note, today};
 use crate::adjacency::{dual_graph, vertex_triangles};
-use crate::gpu::{self, Gpu};
+use crate::gpu::{self, timed as secs, Gpu};
 use crate::mesh::{self, subdivide::subdivide, Mesh};
 use crate::meshlet::Limits;
 use crate::strategy::kmedoids::{cluster, Config as KConfig};
@@ -18,7 +18,6 @@ use anyhow::{bail, Context, Result};
 use indicatif::ProgressBar;
 use std::fmt::Write as _;
 use std::path::PathBuf;
-use std::time::Instant;
 
 /// What to run.
 #[derive(Clone, Debug)]
@@ -47,12 +46,6 @@ struct Row {
     km_gpu: Option<(f64, gpu::adjacency::Timing, u32)>,
     meshlets: usize,
     iterations: u32,
-}
-
-fn secs<T>(f: impl FnOnce() -> T) -> (T, f64) {
-    let t = Instant::now();
-    let r = f();
-    (r, t.elapsed().as_secs_f64())
 }
 
 /// Runs the benchmark and writes the results.

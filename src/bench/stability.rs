@@ -15,7 +15,6 @@ use crate::gpu::{self, Gpu, GpuError};
 use crate::mesh::Mesh;
 use crate::meshlet::bounds::compute_bounds;
 use crate::meshlet::Limits;
-use crate::strategy::kmedoids::{cluster, Config};
 use glam::DVec3;
 use std::fmt::Write as _;
 
@@ -89,30 +88,34 @@ impl Report {
 
 /// Checks one variant.
 pub fn check(g: &Gpu, name: &'static str, mesh: &Mesh, limits: Limits) -> Result<Report, GpuError> {
-    let mismatches: Vec<String> = gpu::parity::run(g, mesh, limits)?
-        .into_iter()
-        .filter_map(|c| c.mismatch.map(|m| format!("{}: {m}", c.name)))
+    // One parity run: its meshlets and both sphere sets are reused below, not recomputed.
+    let par = gpu::parity::run(g, mesh, limits)?;
+    let mismatches: Vec<String> = par
+        .checks
+        .iter()
+        .filter_map(|c| c.mismatch.as_ref().map(|m| format!("{}: {m}", c.name)))
         .collect();
-    let ml = cluster(mesh, limits, &Config::default()).meshlets;
-    let (gs, _) = gpu::bounds::spheres(g, mesh, &ml)?;
-    let max_radius_rel = (0..ml.len())
-        .map(|i| {
-            let (_, r) = gpu::bounds::sphere_f32(mesh, &ml, i);
+    let (ml, gs) = (&par.meshlets, &par.gpu_spheres);
+    let max_radius_rel = gs
+        .iter()
+        .zip(&par.cpu_spheres)
+        .map(|(g, &(_, r))| {
             if r > 0.0 {
-                ((gs[i].1 - r).abs() / r) as f64
+                ((g.1 - r).abs() / r) as f64
             } else {
                 0.0
             }
         })
         .fold(0.0, f64::max);
-    let bounds = compute_bounds(mesh, &ml);
-    let cpu_spheres: Vec<([f32; 3], f32)> = bounds
+    // The CPU's own bounds (Welzl spheres, cones), as the renderer will use them.
+    let bounds = compute_bounds(mesh, ml);
+    let welzl: Vec<([f32; 3], f32)> = bounds
         .iter()
         .map(|b| (b.sphere.center, b.sphere.radius))
         .collect();
     let mut non_finite = gs
         .iter()
-        .chain(&cpu_spheres)
+        .chain(&welzl)
         .filter(|(c, r)| !r.is_finite() || c.iter().any(|x| !x.is_finite()))
         .count();
     non_finite += bounds
@@ -153,8 +156,8 @@ pub fn check(g: &Gpu, name: &'static str, mesh: &Mesh, limits: Limits) -> Result
         name,
         triangles: mesh.triangle_count(),
         mismatches,
-        gpu_outside: gpu::bounds::outside(mesh, &ml, &gs),
-        cpu_outside: gpu::bounds::outside(mesh, &ml, &cpu_spheres),
+        gpu_outside: gpu::bounds::outside(mesh, ml, gs),
+        cpu_outside: gpu::bounds::outside(mesh, ml, &welzl),
         cone_violations,
         cone_culls,
         non_finite,

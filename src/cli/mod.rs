@@ -629,7 +629,8 @@ fn parity(path: &Path, limits: Limits, quiet: bool) -> Result<()> {
     );
     let pb = spinner(quiet, "running every kernel on the GPU and the CPU".into());
     let checks = crate::gpu::parity::run(&gpu, &m, limits)
-        .with_context(|| format!("{}: GPU run failed", path.display()))?;
+        .with_context(|| format!("{}: GPU run failed", path.display()))?
+        .checks;
     pb.finish_and_clear();
     let mut failed = 0;
     for c in &checks {

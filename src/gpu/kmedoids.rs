@@ -8,6 +8,7 @@
 //! once, at the end, to pack meshlets.
 
 use super::adjacency::{AdjacencyKernels, DeviceAdjacency, Timing};
+use super::scan::ScanJob;
 use super::{timed, Batch, Gpu, GpuError, Kernels, Params, Scan, PART};
 use crate::adjacency::Csr;
 use crate::mesh::Mesh;
@@ -52,13 +53,16 @@ struct Run<'a> {
     counters: wgpu::Buffer,
     mem_off: wgpu::Buffer,
     result: wgpu::Buffer,
-    flags: wgpu::Buffer,
     scratch: wgpu::Buffer,
     t: usize,
     k_cap: usize,
     limits: Limits,
     timing: Timing,
     readback: std::cell::Cell<f64>,
+    /// Scan of the medoid flags (length T + 1: fixed for the run).
+    flag_scan: ScanJob,
+    /// Scan of the member offsets, for the cluster count it was bound for (changes per split).
+    mem_scan: Option<(usize, ScanJob)>,
     large: u32,
     rounds: u32,
 }
@@ -237,6 +241,7 @@ impl<'a> Run<'a> {
                 &adj.indices.b,
             ],
         );
+        let flag_scan = scan.bind(gpu, &flags, t + 1);
         Ok(Self {
             gpu,
             kernels,
@@ -248,7 +253,6 @@ impl<'a> Run<'a> {
             counters,
             mem_off,
             result,
-            flags,
             scratch,
             t,
             k_cap,
@@ -258,6 +262,8 @@ impl<'a> Run<'a> {
                 ..Timing::default()
             },
             readback: std::cell::Cell::new(0.0),
+            flag_scan,
+            mem_scan: None,
             large: 0,
             rounds: 0,
         })
@@ -336,7 +342,7 @@ impl<'a> Run<'a> {
     }
 
     /// Members CSR of the current labels (recorded into `b`).
-    fn record_members<'b>(&'b self, b: &mut Batch<'b>, k: usize, job: &'b super::scan::ScanJob) {
+    fn record_members<'b>(&'b self, b: &mut Batch<'b>, k: usize, job: &'b ScanJob) {
         let (kern, bind, t) = (self.kernels, &self.bind, self.t);
         b.threads(kern, "mem_clear", bind, self.params(k, 0, 0), k + 1);
         b.threads(kern, "mem_count", bind, self.params(k, 0, 0), t);
@@ -345,18 +351,25 @@ impl<'a> Run<'a> {
     }
 
     /// The update plus the medoid sort; returns (shift sum, changed count).
+    /// Binds the member-offset scan for `k` clusters (once per cluster count).
+    fn bind_mem_scan(&mut self, k: usize) {
+        if self.mem_scan.as_ref().is_none_or(|(n, _)| *n != k) {
+            self.mem_scan = Some((k, self.scan.bind(self.gpu, &self.mem_off, k + 1)));
+        }
+    }
+
     fn update(&mut self, k: usize) -> Result<(u64, u32), GpuError> {
-        let mem_scan = self.scan.bind(self.gpu, &self.mem_off, k + 1);
-        let flag_scan = self.scan.bind(self.gpu, &self.flags, self.t + 1);
+        self.bind_mem_scan(k);
         let time = {
+            let mem_scan = &self.mem_scan.as_ref().expect("bound").1;
             let (kern, bind, t) = (self.kernels, &self.bind, self.t);
             let mut b = Batch::new(self.gpu);
             b.threads(kern, "clear_counters", bind, self.params(k, 0, 0), COUNTERS);
-            self.record_members(&mut b, k, &mem_scan);
+            self.record_members(&mut b, k, mem_scan);
             b.groups(kern, "update", bind, self.params(k, 0, 0), k as u32);
             b.threads(kern, "mark_clear", bind, self.params(k, 0, 0), t + 1);
             b.threads(kern, "mark", bind, self.params(k, 0, 0), k);
-            self.scan.record(&mut b, &flag_scan);
+            self.scan.record(&mut b, &self.flag_scan);
             b.threads(kern, "place", bind, self.params(k, 0, 0), k);
             b.run()?
         };
@@ -411,10 +424,11 @@ impl<'a> Run<'a> {
 
     /// Per cluster: triangles, distinct vertices (within the triangle limit), farthest member.
     fn stats(&mut self, k: usize) -> Result<ClusterStats, GpuError> {
-        let mem_scan = self.scan.bind(self.gpu, &self.mem_off, k + 1);
+        self.bind_mem_scan(k);
         let time = {
+            let mem_scan = &self.mem_scan.as_ref().expect("bound").1;
             let mut b = Batch::new(self.gpu);
-            self.record_members(&mut b, k, &mem_scan);
+            self.record_members(&mut b, k, mem_scan);
             b.groups(
                 self.kernels,
                 "stats",

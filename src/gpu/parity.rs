@@ -2,10 +2,11 @@
 //! kernel family runs on both sides and the outputs are compared (integers exactly, floats within
 //! the tolerance stated where they are compared).
 
+use super::bounds::SphereF32;
 use super::{timed, Gpu, GpuError};
 use crate::adjacency::{dual_graph, side_flags, vertex_triangles, EdgeTable};
 use crate::mesh::Mesh;
-use crate::meshlet::{validate, Limits};
+use crate::meshlet::{validate, Limits, Meshlets};
 use crate::strategy::kmedoids::{self, Config};
 
 /// One comparison.
@@ -53,8 +54,20 @@ fn check(
     }
 }
 
+/// Everything one parity run compared, kept for callers that check more (the stability suite).
+pub struct Parity {
+    /// One entry per kernel family.
+    pub checks: Vec<Check>,
+    /// The CPU k-medoids meshlets (equal to the GPU's when the k-medoids check passed).
+    pub meshlets: Meshlets,
+    /// Their spheres from the GPU kernel.
+    pub gpu_spheres: Vec<SphereF32>,
+    /// Their spheres from the CPU mirror.
+    pub cpu_spheres: Vec<SphereF32>,
+}
+
 /// Runs every kernel family on `mesh` on both sides and compares.
-pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Vec<Check>, GpuError> {
+pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
     let mut out = Vec::new();
     // Adjacency.
     let ((vt, dual, flags), cpu_s) = timed(|| {
@@ -148,5 +161,10 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Vec<Check>, GpuErro
                 .then(|| "vertices outside their CPU sphere".to_string()),
         ],
     ));
-    Ok(out)
+    Ok(Parity {
+        checks: out,
+        meshlets: cpu.meshlets,
+        gpu_spheres: gs,
+        cpu_spheres,
+    })
 }

@@ -503,19 +503,22 @@ impl LocalGraph {
 /// scaled to triangles (so a larger overflow ranks first).
 pub fn overflowing(mesh: &Mesh, labels: &[u32], k: usize, limits: Limits) -> Vec<(u32, u32)> {
     let mem = members(labels, k);
-    (0..k)
+    let triangles: Vec<u32> = (0..k).map(|c| mem.row(c).len() as u32).collect();
+    // Distinct vertices only where the triangle limit holds (the rule checks triangles first).
+    let vertices: Vec<u32> = (0..k)
         .into_par_iter()
-        .filter_map(|c| {
+        .map(|c| {
             let m = mem.row(c);
             if m.len() > limits.max_triangles as usize {
-                return Some((c as u32, m.len() as u32));
+                return 0;
             }
             let mut v: Vec<u32> = m.iter().flat_map(|&t| mesh.triangle(t as usize)).collect();
             v.sort_unstable();
             v.dedup();
-            (v.len() > limits.max_vertices as usize).then_some((c as u32, m.len() as u32))
+            v.len() as u32
         })
-        .collect()
+        .collect();
+    overflowing_from_counts(&triangles, &vertices, limits)
 }
 
 /// [`overflowing`] from per-cluster triangle and distinct-vertex counts (the GPU `stats` kernel's
