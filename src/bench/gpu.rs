@@ -12,8 +12,9 @@ use super::{machine_note, today};
 use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::gpu::{self, timed as secs, Gpu};
 use crate::mesh::{self, subdivide::subdivide, Mesh};
-use crate::meshlet::Limits;
+use crate::meshlet::{Limits, Meshlets};
 use crate::strategy::kmedoids::{cluster, Config as KConfig};
+use crate::strategy::{self, parallel};
 use anyhow::{bail, Context, Result};
 use indicatif::ProgressBar;
 use std::fmt::Write as _;
@@ -46,7 +47,36 @@ struct Row {
     km_gpu: Option<(f64, gpu::adjacency::Timing, u32)>,
     meshlets: usize,
     iterations: u32,
+    grow: Vec<GrowRow>,
 }
+
+/// One strategy's meshlets on one mesh, for the parallel-grower comparison.
+struct GrowRow {
+    what: String,
+    meshlets: usize,
+    tris_per: f64,
+    verts_per: f64,
+    seconds: f64,
+    /// Waves and rounds (parallel grower only).
+    depth: Option<(u32, u32)>,
+}
+
+impl GrowRow {
+    fn new(what: &str, ml: &Meshlets, seconds: f64, depth: Option<(u32, u32)>) -> Self {
+        let n = ml.len().max(1) as f64;
+        Self {
+            what: what.into(),
+            meshlets: ml.len(),
+            tris_per: ml.triangle_count() as f64 / n,
+            verts_per: ml.vertices.len() as f64 / n,
+            seconds,
+            depth,
+        }
+    }
+}
+
+/// The seed-spacing sweep on the bunny: (spacing, CPU rayon row, GPU seconds).
+type Sweep = Vec<(f64, GrowRow, f64)>;
 
 /// Runs the benchmark and writes the results.
 pub fn run(cfg: &Config) -> Result<()> {
@@ -99,7 +129,11 @@ pub fn run(cfg: &Config) -> Result<()> {
         if host.vertex_triangles != vt || host.dual != dual {
             bail!("{name}: GPU adjacency differs from the CPU's");
         }
-        drop((vt, dual, host));
+        drop((vt, host));
+        pb.set_message(format!("{name} ({t} triangles): growers"));
+        let grow = growers(&g, m, &dual, cfg.limits, small_grow(cfg, t), &one)
+            .with_context(|| format!("{name}: parallel grower"))?;
+        drop(dual);
         pb.set_message(format!("{name} ({t} triangles): k-medoids, rayon"));
         let (cr, km_rayon) = secs(|| cluster(m, cfg.limits, &kc));
         let small = t <= cfg.kmedoids_gpu_max;
@@ -131,6 +165,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             km_gpu,
             meshlets: cr.meshlets.len(),
             iterations: cr.iterations,
+            grow,
         });
     }
 
@@ -157,12 +192,81 @@ pub fn run(cfg: &Config) -> Result<()> {
             gr.clustering.initial_seconds,
         ));
     }
-    write(cfg, &g, &rows, &curve)
+    // Seed spacing against meshlet count and rounds (the parallel grower's time against error).
+    let bunny_dual = dual_graph(bunny, &vertex_triangles(bunny));
+    let mut sweep = Sweep::new();
+    for spacing in [1.0, 2.0, 4.0, 8.0] {
+        let (cpu, cs) = secs(|| parallel::grow(bunny, &bunny_dual, cfg.limits, spacing));
+        let gr = gpu::grow::grow(&g, bunny, cfg.limits, spacing)?;
+        if gr.owner != cpu.owner || gr.order != cpu.order {
+            bail!("bunny, spacing {spacing}: GPU grower differs from the CPU's");
+        }
+        sweep.push((
+            spacing,
+            GrowRow::new("", &cpu.meshlets, cs, Some((cpu.waves, cpu.rounds))),
+            gr.seconds,
+        ));
+    }
+    write(cfg, &g, &rows, &curve, &sweep)
+}
+
+/// Whether the GPU and one-thread grower runs fit the benchmark's time (same cut as k-medoids).
+fn small_grow(cfg: &Config, t: usize) -> bool {
+    t <= cfg.kmedoids_gpu_max
+}
+
+/// The serial growers, meshoptimizer and the parallel grower (CPU one thread, rayon, GPU; the
+/// GPU's result checked identical) on one mesh.
+fn growers(
+    g: &Gpu,
+    m: &Mesh,
+    dual: &crate::adjacency::Csr,
+    limits: Limits,
+    small: bool,
+    one: &rayon::ThreadPool,
+) -> Result<Vec<GrowRow>> {
+    let mut out = Vec::new();
+    for name in ["bsphere", "bsphere-coherent", "meshopt"] {
+        let s = strategy::by_name(name, &strategy::Options::default())?;
+        let (ml, secs_) = secs(|| s.build(m, limits));
+        out.push(GrowRow::new(name, &ml, secs_, None));
+    }
+    let sp = parallel::DEFAULT_SPACING;
+    let (cpu, cs) = secs(|| parallel::grow(m, dual, limits, sp));
+    let depth = Some((cpu.waves, cpu.rounds));
+    if small {
+        let c1 = secs(|| one.install(|| parallel::grow(m, dual, limits, sp))).1;
+        out.push(GrowRow::new(
+            "bsphere-parallel, CPU 1 thread",
+            &cpu.meshlets,
+            c1,
+            depth,
+        ));
+    }
+    out.push(GrowRow::new(
+        "bsphere-parallel, CPU rayon",
+        &cpu.meshlets,
+        cs,
+        depth,
+    ));
+    if small {
+        let gr = gpu::grow::grow(g, m, limits, sp)?;
+        if gr.owner != cpu.owner || gr.order != cpu.order || gr.meshlets != cpu.meshlets {
+            bail!("GPU parallel grower differs from the CPU's");
+        }
+        out.push(GrowRow::new(
+            "bsphere-parallel, GPU",
+            &gr.meshlets,
+            gr.seconds,
+            depth,
+        ));
+    }
+    Ok(out)
 }
 
 type Curve = (u32, f64, f64, f64, f64, f64);
 
-fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve]) -> Result<()> {
+fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) -> Result<()> {
     std::fs::create_dir_all(&cfg.out)?;
     let opt =
         |x: Option<f64>, f: &dyn Fn(f64) -> String| x.map(f).unwrap_or_else(|| "skipped".into());
@@ -174,7 +278,7 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve]) -> Result<()> {
         today(),
         machine_note()
     )?;
-    writeln!(md, "GPU adapter: **{}**{}. Every GPU output below was compared with the CPU reference and is identical (adjacency CSR arrays; k-medoids labels and meshlets); a difference aborts the benchmark.\n", g.describe(), if g.timestamps { "; kernel times from GPU timestamp queries" } else { "; no timestamp queries: kernel times are wall time" })?;
+    writeln!(md, "GPU adapter: **{}**{}. Every GPU output below was compared with the CPU reference and is identical (adjacency CSR arrays; k-medoids labels and meshlets; parallel-grower claims, orders and meshlets); a difference aborts the benchmark.\n", g.describe(), if g.timestamps { "; kernel times from GPU timestamp queries" } else { "; no timestamp queries: kernel times are wall time" })?;
     writeln!(md, "Lavapipe is itself a CPU renderer on this machine's cores: a GPU/CPU ratio here compares LLVM-compiled compute shaders with native Rust on the same {} cores, not a GPU with a CPU.\n", std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1))?;
     writeln!(md, "## Adjacency (vertex -> triangle CSR + dual graph)\n")?;
     writeln!(md, "| mesh | triangles | CPU (1 thread) s | GPU kernel s | GPU upload s | GPU readback s | GPU Mtri/s (kernel) | GPU kernel / CPU |")?;
@@ -274,7 +378,45 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve]) -> Result<()> {
     }
     writeln!(
         md,
-        "\n![scaling](gpu_scaling.svg)\n\n![time vs error](gpu_time_vs_error.svg)"
+        "\n## Parallel clustering: bsphere-parallel against the serial growers and meshoptimizer\n"
+    )?;
+    writeln!(md, "Many meshlets grow at once (grid seeds, one GPU workgroup per meshlet scoring its border by the bsphere rule, conflicts by `atomicMin` claims; see `src/strategy/parallel.rs`). GPU and CPU give identical claims, orders and meshlets (checked). Seed spacing {}. Waves and rounds are the parallel depth: every round is two dispatches over all meshlets of the wave.\n", parallel::DEFAULT_SPACING)?;
+    writeln!(md, "| mesh | strategy | meshlets | triangles/meshlet | vertices/meshlet | waves / rounds | s |")?;
+    writeln!(md, "|---|---|---:|---:|---:|---:|---:|")?;
+    for r in rows {
+        for gr in &r.grow {
+            writeln!(
+                md,
+                "| {} | {} | {} | {:.1} | {:.1} | {} | {:.3} |",
+                r.mesh,
+                gr.what,
+                gr.meshlets,
+                gr.tris_per,
+                gr.verts_per,
+                gr.depth
+                    .map(|(w, k)| format!("{w} / {k}"))
+                    .unwrap_or_else(|| "-".into()),
+                gr.seconds
+            )?;
+        }
+    }
+    writeln!(
+        md,
+        "\n### Seed spacing on the bunny: meshlet count against parallel depth\n"
+    )?;
+    writeln!(md, "| spacing (meshlets per cell) | meshlets | triangles/meshlet | waves | rounds | CPU rayon s | GPU s |")?;
+    writeln!(md, "|---:|---:|---:|---:|---:|---:|---:|")?;
+    for (sp, r, gs) in sweep {
+        let (w, k) = r.depth.unwrap_or_default();
+        writeln!(
+            md,
+            "| {sp} | {} | {:.1} | {w} | {k} | {:.3} | {gs:.3} |",
+            r.meshlets, r.tris_per, r.seconds
+        )?;
+    }
+    writeln!(
+        md,
+        "\n![scaling](gpu_scaling.svg)\n\n![time vs error](gpu_time_vs_error.svg)\n\n![grower](gpu_grower_sweep.svg)"
     )?;
     std::fs::write(cfg.out.join("gpu.md"), md)?;
     std::fs::write(cfg.out.join("gpu.csv"), csv)?;
@@ -330,6 +472,20 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve]) -> Result<()> {
                 points: curve.iter().map(|c| (c.5, c.1)).collect(),
             },
         ],
+        Axes::default(),
+    )?;
+    line_chart(
+        &cfg.out.join("gpu_grower_sweep.svg"),
+        "bunny: bsphere-parallel meshlets against rounds (seed spacing 1, 2, 4, 8)",
+        "growth rounds (parallel depth)",
+        "meshlets",
+        &[Series {
+            label: "bsphere-parallel".into(),
+            points: sweep
+                .iter()
+                .map(|(_, r, _)| (r.depth.unwrap_or_default().1 as f64, r.meshlets as f64))
+                .collect(),
+        }],
         Axes::default(),
     )?;
     Ok(())

@@ -15,7 +15,7 @@ use std::time::Duration;
 /// Build, measure and compare meshlets (triangle clusters for GPU mesh shaders).
 ///
 /// Meshes: PLY (ASCII/binary), OBJ, glTF 2.0 (.gltf/.glb), each optionally zstd-compressed (.zst).
-/// Strategies: nvidia, nvidia+tipsify, greedy, bsphere, bsphere-coherent, kmedoids, kmedoids-paper,
+/// Strategies: nvidia, nvidia+tipsify, greedy, bsphere, bsphere-coherent, bsphere-parallel, kmedoids, kmedoids-paper,
 /// compact, meshopt, meshopt-scan, meshopt-spatial ("all" = all but the slow kmedoids-paper).
 /// Limits are VERTICES/TRIANGLES per meshlet; default 64/126 (the JCGT paper's).
 #[derive(Parser, Debug)]

@@ -13,6 +13,7 @@
 
 pub mod adjacency;
 pub mod bounds;
+pub mod grow;
 pub mod kmedoids;
 pub mod parity;
 mod scan;

@@ -101,7 +101,8 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
     ));
     // k-medoids.
     let cfg = Config::default();
-    let (cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, &cfg));
+    let (km, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, &cfg));
+    let cpu = &km;
     let (g, gpu_s) = timed(|| super::kmedoids::cluster(gpu, mesh, limits, &cfg));
     let g = g?.clustering;
     let counts = |c: &kmedoids::Clustering| [c.iterations, c.splits, c.initial_iterations];
@@ -161,9 +162,37 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
                 .then(|| "vertices outside their CPU sphere".to_string()),
         ],
     ));
+    // The parallel grower (bsphere scoring per meshlet, atomic claims).
+    let spacing = crate::strategy::parallel::DEFAULT_SPACING;
+    let (cpu, cpu_s) = timed(|| crate::strategy::parallel::grow(mesh, &dual, limits, spacing));
+    let (g, gpu_s) = timed(|| super::grow::grow(gpu, mesh, limits, spacing));
+    let g = g?;
+    out.push(check(
+        "parallel grower: claims, orders, waves, rounds, meshlets",
+        cpu_s,
+        gpu_s,
+        vec![
+            first_difference("claims (owner per triangle)", &g.owner, &cpu.owner),
+            first_difference("orders", &g.order, &cpu.order),
+            first_difference(
+                "waves/rounds",
+                &[g.waves, g.rounds],
+                &[cpu.waves, cpu.rounds],
+            ),
+            first_difference("meshlets", &g.meshlets.meshlets, &cpu.meshlets.meshlets),
+            first_difference(
+                "meshlet vertices",
+                &g.meshlets.vertices,
+                &cpu.meshlets.vertices,
+            ),
+            validate(mesh, &g.meshlets, limits)
+                .err()
+                .map(|e| format!("GPU meshlets invalid: {e}")),
+        ],
+    ));
     Ok(Parity {
         checks: out,
-        meshlets: cpu.meshlets,
+        meshlets: km.meshlets,
         gpu_spheres: gs,
         cpu_spheres,
     })

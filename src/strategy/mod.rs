@@ -10,6 +10,7 @@ mod greedy;
 pub mod kmedoids;
 mod meshopt;
 mod nvidia;
+pub mod parallel;
 pub mod tipsify;
 
 pub use self::meshopt::{Meshopt, MeshoptScan, MeshoptSpatial};
@@ -18,6 +19,7 @@ pub use compact::Compact;
 pub use greedy::Greedy;
 pub use kmedoids::KMedoids;
 pub use nvidia::Nvidia;
+pub use parallel::ParallelGrower;
 
 use crate::mesh::Mesh;
 use crate::meshlet::order::{optimize_triangle_order, order_meshlets, MeshletOrder};
@@ -72,6 +74,7 @@ pub const NAMES: &[&str] = &[
     "greedy",
     "bsphere",
     "bsphere-coherent",
+    "bsphere-parallel",
     "kmedoids",
     "kmedoids-paper",
     "compact",
@@ -177,6 +180,9 @@ fn base_by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, Unknown
         "greedy" => Box::new(Greedy),
         "bsphere" => Box::new(BoundingSphere { coherent: false }),
         "bsphere-coherent" => Box::new(BoundingSphere { coherent: true }),
+        "bsphere-parallel" => Box::new(ParallelGrower {
+            spacing: parallel::DEFAULT_SPACING,
+        }),
         "compact" => Box::new(Compact),
         "kmedoids" => Box::new(KMedoids {
             config: kmedoids::Config {

@@ -1,0 +1,240 @@
+//! The parallel bounding-sphere grower on the GPU (`wgsl/grow.wgsl`): bsphere candidate scoring for
+//! many meshlets at once, one workgroup per meshlet, conflicts by atomic claims. Step for step the
+//! CPU reference [`crate::strategy::parallel::grow`], with identical owners, orders, wave and round
+//! counts and meshlets.
+//!
+//! Host traffic: per wave the seed count (one word) and per 8 growth or component rounds their
+//! counters; owners and orders come back once, at the end.
+
+use super::adjacency::{AdjacencyKernels, Timing};
+use super::scan::ScanJob;
+use super::{timed, Batch, Gpu, GpuError, Kernels, Params, Scan, PART};
+use crate::mesh::Mesh;
+use crate::meshlet::{Limits, Meshlets};
+use crate::strategy::parallel::{assemble, Setup};
+use std::time::Instant;
+
+/// Rounds recorded per submission (their counters come back together).
+const ROUNDS: u32 = 8;
+
+/// A GPU run of the parallel grower.
+pub struct GpuGrowth {
+    /// Meshlet of every triangle.
+    pub owner: Vec<u32>,
+    /// Position of every triangle in its meshlet.
+    pub order: Vec<u32>,
+    /// The meshlets (assembled on the host from owners and orders, as on the CPU).
+    pub meshlets: Meshlets,
+    /// Waves run.
+    pub waves: u32,
+    /// Growth rounds run.
+    pub rounds: u32,
+    /// Upload, kernel and readback time, adjacency included.
+    pub timing: Timing,
+    /// Wall time in seconds.
+    pub seconds: f64,
+}
+
+/// Per-wave meshlet state, sized for the largest wave so far.
+struct WaveBuffers {
+    cap: usize,
+    state: wgpu::Buffer,
+    mt: wgpu::Buffer,
+    mv: wgpu::Buffer,
+}
+
+impl WaveBuffers {
+    fn new(gpu: &Gpu, cap: usize, limits: Limits) -> Result<Self, GpuError> {
+        let words = cap * limits.max_triangles.max(limits.max_vertices) as usize;
+        if words > PART {
+            return Err(GpuError::TooLarge {
+                what: "parallel grower meshlets in one wave",
+                len: cap,
+                max: PART / limits.max_triangles.max(limits.max_vertices) as usize,
+            });
+        }
+        Ok(Self {
+            cap,
+            state: gpu.zeros("grow state", 8 * cap),
+            mt: gpu.zeros("grow triangles", cap * limits.max_triangles as usize),
+            mv: gpu.zeros("grow vertices", cap * limits.max_vertices as usize),
+        })
+    }
+}
+
+/// Runs the parallel grower on the GPU with seed spacing `spacing` (see
+/// [`crate::strategy::parallel::DEFAULT_SPACING`]).
+pub fn grow(gpu: &Gpu, mesh: &Mesh, limits: Limits, spacing: f64) -> Result<GpuGrowth, GpuError> {
+    let start = Instant::now();
+    let t = mesh.triangle_count();
+    if t + 1 > PART {
+        return Err(GpuError::TooLarge {
+            what: "parallel grower triangles",
+            len: t,
+            max: PART - 1,
+        });
+    }
+    let setup = Setup::new(mesh, limits, spacing);
+    let ak = AdjacencyKernels::new(gpu);
+    let (adj, adj_timing) = ak.build(gpu, mesh)?;
+    let kernels = Kernels::new(
+        gpu,
+        "grow",
+        include_str!("../../wgsl/grow.wgsl"),
+        15,
+        &[
+            "init",
+            "clear_counters",
+            "label_init",
+            "label_round",
+            "clear_cells",
+            "cell_dist",
+            "cell_pick",
+            "seed_flags",
+            "place",
+            "propose",
+            "claim_best",
+        ],
+    );
+    let scan = Scan::new(gpu);
+    let cells = (setup.grid as usize).pow(3);
+    let ((q, claim, order, label, cell_buf, flags, counters), upload) = timed(|| {
+        (
+            gpu.upload("quantised positions", &setup.q),
+            gpu.zeros("claim", t),
+            gpu.zeros("order", t),
+            gpu.zeros("labels", t),
+            gpu.zeros("cells", 2 * cells),
+            gpu.zeros("seed flags", t + 1),
+            gpu.zeros("counters", 16),
+        )
+    });
+    let mut timing = Timing {
+        upload: adj_timing.upload + upload,
+        kernel: adj_timing.kernel,
+        readback: adj_timing.readback,
+    };
+    let flag_scan: ScanJob = scan.bind(gpu, &flags, t + 1);
+    let mut wave = WaveBuffers::new(gpu, 1, limits)?;
+    let bind_for = |w: &WaveBuffers| {
+        kernels.bind(
+            gpu,
+            &[
+                &adj.dual_offsets,
+                &adj.dual_items.a,
+                &adj.dual_items.b,
+                &adj.indices.a,
+                &adj.indices.b,
+                &q,
+                &claim,
+                &order,
+                &label,
+                &cell_buf,
+                &flags,
+                &w.state,
+                &w.mt,
+                &w.mv,
+                &counters,
+            ],
+        )
+    };
+    let mut bind = bind_for(&wave);
+    let params = |n: usize, base: u32, slot: u32| Params {
+        w: [
+            t as u32,
+            n as u32,
+            base,
+            slot,
+            limits.max_vertices,
+            limits.max_triangles,
+            setup.cell,
+            setup.grid,
+        ],
+    };
+    let mut read = |buf: &wgpu::Buffer, off: usize, len: usize| {
+        let (r, s) = timed(|| gpu.read(buf, off, len));
+        timing.readback += s;
+        r
+    };
+    let mut kernel = 0.0;
+    {
+        let mut b = Batch::new(gpu);
+        b.threads(&kernels, "init", &bind, params(0, 0, 0), t);
+        kernel += b.run()?;
+    }
+    let (mut base, mut waves, mut rounds) = (0u32, 0u32, 0u32);
+    loop {
+        let first = waves == 0;
+        if !first {
+            // Unclaimed components, until a round changes no label.
+            let mut b = Batch::new(gpu);
+            b.threads(&kernels, "label_init", &bind, params(0, 0, 0), t);
+            kernel += b.run()?;
+            'labels: loop {
+                let mut b = Batch::new(gpu);
+                b.threads(&kernels, "clear_counters", &bind, params(0, 0, 0), 16);
+                for r in 0..ROUNDS {
+                    b.threads(&kernels, "label_round", &bind, params(0, 0, 8 + r), t);
+                }
+                kernel += b.run()?;
+                if read(&counters, 8, ROUNDS as usize)?.contains(&0) {
+                    break 'labels;
+                }
+            }
+        }
+        let mut b = Batch::new(gpu);
+        b.threads(&kernels, "clear_cells", &bind, params(0, 0, 0), 2 * cells);
+        b.threads(&kernels, "cell_dist", &bind, params(0, 0, 0), t);
+        b.threads(&kernels, "cell_pick", &bind, params(0, 0, 0), t);
+        b.threads(
+            &kernels,
+            "seed_flags",
+            &bind,
+            params(0, 0, u32::from(!first)),
+            t + 1,
+        );
+        scan.record(&mut b, &flag_scan);
+        kernel += b.run()?;
+        let n = read(&flags, t, 1)?[0] as usize;
+        if n == 0 {
+            break;
+        }
+        if n > wave.cap {
+            wave = WaveBuffers::new(gpu, n, limits)?;
+            bind = bind_for(&wave);
+        }
+        let mut b = Batch::new(gpu);
+        b.threads(&kernels, "place", &bind, params(n, base, 0), t);
+        kernel += b.run()?;
+        'grow: loop {
+            let mut b = Batch::new(gpu);
+            b.threads(&kernels, "clear_counters", &bind, params(0, 0, 0), 16);
+            for r in 0..ROUNDS {
+                b.groups(&kernels, "propose", &bind, params(n, base, r), n as u32);
+                b.threads(&kernels, "claim_best", &bind, params(n, base, r), n);
+            }
+            kernel += b.run()?;
+            for c in read(&counters, 0, ROUNDS as usize)? {
+                rounds += 1;
+                if c == 0 {
+                    break 'grow;
+                }
+            }
+        }
+        base += n as u32;
+        waves += 1;
+    }
+    let owner = read(&claim, 0, t)?;
+    let order = read(&order, 0, t)?;
+    timing.kernel += kernel;
+    let meshlets = assemble(mesh, &owner, &order, base as usize, limits);
+    Ok(GpuGrowth {
+        owner,
+        order,
+        meshlets,
+        waves,
+        rounds,
+        timing,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
