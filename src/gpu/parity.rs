@@ -117,7 +117,7 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
             first_difference(
                 "iterations/splits/initial iterations",
                 &counts(&g),
-                &counts(&cpu),
+                &counts(cpu),
             ),
             (g.initial_mean_distance != cpu.initial_mean_distance).then(|| {
                 format!(
