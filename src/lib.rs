@@ -10,4 +10,5 @@ pub mod cli;
 pub mod gpu;
 pub mod mesh;
 pub mod meshlet;
+pub mod render;
 pub mod strategy;

@@ -160,6 +160,36 @@ pub enum Command {
         #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
         limits: Limits,
     },
+    /// Draws MESH's meshlets with task and mesh shaders (VK_EXT_mesh_shader; lavapipe on a machine
+    /// without a GPU) from seeded random views, beside the vertex pipeline: per view the GPU time of
+    /// both, the meshlets the task shader culled, and a PNG of the first view coloured by meshlet.
+    Render {
+        /// Mesh file.
+        mesh: PathBuf,
+        /// Strategy name.
+        #[arg(short, long, default_value = "meshopt")]
+        strategy: String,
+        /// Views (random directions around the mesh, the paper's protocol).
+        #[arg(long, default_value_t = 5)]
+        views: usize,
+        /// Seed of the view sequence (the same for every strategy).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Camera distance from the mesh centre in bounding radii.
+        #[arg(long, default_value_t = 2.5)]
+        distance: f32,
+        /// No task-shader culling.
+        #[arg(long)]
+        no_cull: bool,
+        /// Write the first view, coloured by meshlet, to this PNG.
+        #[arg(long)]
+        png: Option<PathBuf>,
+        /// Enable the Khronos validation layer and fail on any error it reports.
+        #[arg(long)]
+        validate: bool,
+        #[command(flatten)]
+        args: StrategyArgs,
+    },
     /// Benchmarks that write results/.
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -292,6 +322,30 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
             levels,
         } => subdivide(&mesh, &output, levels, q),
         Command::Parity { mesh, limits } => parity(&mesh, limits, q),
+        Command::Render {
+            mesh,
+            strategy,
+            views,
+            seed,
+            distance,
+            no_cull,
+            png,
+            validate,
+            args,
+        } => render(
+            &mesh,
+            &strategy,
+            RenderOpts {
+                views,
+                seed,
+                distance,
+                cull: !no_cull,
+                png,
+                validate,
+            },
+            &args,
+            q,
+        ),
         Command::Bench(BenchCommand::Stability {
             meshes,
             mesh,
@@ -652,6 +706,81 @@ fn parity(path: &Path, limits: Limits, quiet: bool) -> Result<()> {
             path.display(),
             checks.len()
         );
+    }
+    Ok(())
+}
+
+struct RenderOpts {
+    views: usize,
+    seed: u64,
+    distance: f32,
+    cull: bool,
+    png: Option<PathBuf>,
+    validate: bool,
+}
+
+fn render(path: &Path, name: &str, o: RenderOpts, args: &StrategyArgs, quiet: bool) -> Result<()> {
+    use crate::render::{Camera, Context, Pass, Pipeline, Shading};
+    let s = strategy::by_name(name, &args.options())?;
+    let m = load(path, quiet)?;
+    let ml = s.build(&m, args.limits);
+    validate(&m, &ml, args.limits)
+        .with_context(|| format!("{}: {name} built invalid meshlets", path.display()))?;
+    let ctx = Context::new(o.validate)?;
+    let pass = Pass::new(&ctx, &m, &ml)?;
+    println!(
+        "{}: {} triangles, {name}: {} meshlets; device: {}",
+        path.display(),
+        m.triangle_count(),
+        ml.len(),
+        ctx.name
+    );
+    let how = Pipeline::Mesh {
+        frustum: o.cull,
+        cone: o.cull,
+        colour_ids: false,
+    };
+    for (i, cam) in Camera::random_views(&m, o.views, o.seed, o.distance)
+        .iter()
+        .enumerate()
+    {
+        let f = pass.render(cam, how, Shading::Lit)?;
+        let v = pass.render(cam, Pipeline::Vertex, Shading::Lit)?;
+        let pct = |x: u32| 100.0 * x as f64 / ml.len().max(1) as f64;
+        println!(
+            "view {i}: mesh shaders {:8.3} ms  vertex pipeline {:8.3} ms  culled: frustum {:5.1} %  backface {:5.1} %",
+            f.gpu_ns * 1e-6,
+            v.gpu_ns * 1e-6,
+            pct(f.culled_frustum),
+            pct(f.culled_cone)
+        );
+        if i == 0 {
+            if let Some(p) = &o.png {
+                let img = pass.render(
+                    cam,
+                    Pipeline::Mesh {
+                        frustum: o.cull,
+                        cone: o.cull,
+                        colour_ids: true,
+                    },
+                    Shading::Lit,
+                )?;
+                crate::render::write_png(
+                    p,
+                    crate::render::WIDTH,
+                    crate::render::HEIGHT,
+                    &img.pixels,
+                )
+                .with_context(|| format!("cannot write {}", p.display()))?;
+            }
+        }
+    }
+    if let Some(v) = &ctx.validation {
+        let (errors, first) = v.errors();
+        if errors > 0 {
+            bail!("the validation layer reported {errors} errors, first: {first:#?}");
+        }
+        println!("validation layer: no errors");
     }
     Ok(())
 }

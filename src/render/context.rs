@@ -1,0 +1,337 @@
+//! Headless Vulkan through ash: an instance without surfaces, a device with VK_EXT_mesh_shader
+//! (task + mesh), Vulkan 1.3 dynamic rendering and `maintenance4`, host-visible buffers and a
+//! one-shot command helper.
+
+use super::RenderError;
+use ash::vk;
+use std::ffi::CStr;
+
+/// The Vulkan objects every pass needs.
+pub struct Context {
+    _entry: ash::Entry,
+    /// The instance.
+    pub instance: ash::Instance,
+    /// The chosen physical device.
+    pub physical: vk::PhysicalDevice,
+    /// The logical device.
+    pub device: ash::Device,
+    /// VK_EXT_mesh_shader entry points.
+    pub mesh: ash::ext::mesh_shader::Device,
+    /// A graphics queue.
+    pub queue: vk::Queue,
+    /// Its family.
+    pub family: u32,
+    /// Command pool on that family.
+    pub pool: vk::CommandPool,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period: f32,
+    /// Whether the device has `meshShaderQueries` (mesh primitives generated, task/mesh invocations).
+    pub mesh_queries: bool,
+    /// Device name and driver.
+    pub name: String,
+    /// Errors reported by the validation layer (when enabled).
+    pub validation: Option<super::validation::Messenger>,
+    memory: vk::PhysicalDeviceMemoryProperties,
+}
+
+const MESH_EXT: &CStr = ash::ext::mesh_shader::NAME;
+
+fn vk_err(what: &'static str) -> impl Fn(vk::Result) -> RenderError {
+    move |e| RenderError::Vulkan(what, e)
+}
+
+impl Context {
+    /// Opens the first device with task and mesh shaders. With `validate`, the Khronos validation
+    /// layer is enabled (when installed) and its errors are counted.
+    pub fn new(validate: bool) -> Result<Self, RenderError> {
+        // SAFETY: loading the system Vulkan loader; every handle below is destroyed in Drop.
+        let entry =
+            unsafe { ash::Entry::load() }.map_err(|e| RenderError::NoVulkan(e.to_string()))?;
+        let app = vk::ApplicationInfo::default()
+            .application_name(c"meshletlab")
+            .api_version(vk::API_VERSION_1_3);
+        let layer = c"VK_LAYER_KHRONOS_validation";
+        let have_layer = unsafe { entry.enumerate_instance_layer_properties() }
+            .unwrap_or_default()
+            .iter()
+            .any(|l| l.layer_name_as_c_str() == Ok(layer));
+        if validate && !have_layer {
+            return Err(RenderError::NoValidationLayer);
+        }
+        let layers = if validate {
+            vec![layer.as_ptr()]
+        } else {
+            vec![]
+        };
+        let exts = if validate {
+            vec![ash::ext::debug_utils::NAME.as_ptr()]
+        } else {
+            vec![]
+        };
+        let info = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&exts);
+        let instance = unsafe { entry.create_instance(&info, None) }
+            .map_err(|e| RenderError::NoVulkan(format!("vkCreateInstance: {e}")))?;
+        let validation = if validate {
+            Some(super::validation::Messenger::new(&entry, &instance)?)
+        } else {
+            None
+        };
+        let devices = unsafe { instance.enumerate_physical_devices() }
+            .map_err(vk_err("enumerate physical devices"))?;
+        let mut seen = Vec::new();
+        let mut chosen = None;
+        for &pd in &devices {
+            let props = unsafe { instance.get_physical_device_properties(pd) };
+            let name = props
+                .device_name_as_c_str()
+                .map(|c| c.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let has_ext = unsafe { instance.enumerate_device_extension_properties(pd) }
+                .unwrap_or_default()
+                .iter()
+                .any(|e| e.extension_name_as_c_str() == Ok(MESH_EXT));
+            let mut ms = vk::PhysicalDeviceMeshShaderFeaturesEXT::default();
+            let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
+            let mut f2 = vk::PhysicalDeviceFeatures2::default()
+                .push_next(&mut ms)
+                .push_next(&mut v13);
+            if has_ext {
+                unsafe { instance.get_physical_device_features2(pd, &mut f2) };
+            }
+            let ok = has_ext
+                && ms.task_shader == vk::TRUE
+                && ms.mesh_shader == vk::TRUE
+                && v13.dynamic_rendering == vk::TRUE
+                && v13.maintenance4 == vk::TRUE
+                && props.api_version >= vk::API_VERSION_1_3;
+            let family = unsafe { instance.get_physical_device_queue_family_properties(pd) }
+                .iter()
+                .position(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS));
+            seen.push(format!(
+                "{name} ({})",
+                if ok {
+                    "mesh shaders"
+                } else {
+                    "no mesh shaders"
+                }
+            ));
+            if let (true, Some(f), None) = (ok, family, &chosen) {
+                chosen = Some((
+                    pd,
+                    f as u32,
+                    name,
+                    ms.mesh_shader_queries == vk::TRUE,
+                    props,
+                ));
+            }
+        }
+        let Some((physical, family, name, mesh_queries, props)) = chosen else {
+            unsafe { instance.destroy_instance(None) };
+            return Err(RenderError::NoMeshShader(seen.join(", ")));
+        };
+        let priorities = [1.0];
+        let queues = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(family)
+            .queue_priorities(&priorities)];
+        let mut ms = vk::PhysicalDeviceMeshShaderFeaturesEXT::default()
+            .task_shader(true)
+            .mesh_shader(true)
+            .mesh_shader_queries(mesh_queries);
+        // glslangValidator's vulkan1.3 target emits LocalSizeId, which needs maintenance4.
+        let mut v13 = vk::PhysicalDeviceVulkan13Features::default()
+            .dynamic_rendering(true)
+            .maintenance4(true)
+            .synchronization2(true);
+        let core = vk::PhysicalDeviceFeatures::default().pipeline_statistics_query(true);
+        let dev_exts = [MESH_EXT.as_ptr()];
+        let info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queues)
+            .enabled_extension_names(&dev_exts)
+            .enabled_features(&core)
+            .push_next(&mut ms)
+            .push_next(&mut v13);
+        let device = unsafe { instance.create_device(physical, &info, None) }
+            .map_err(vk_err("create device"))?;
+        let queue = unsafe { device.get_device_queue(family, 0) };
+        let pool = unsafe {
+            device.create_command_pool(
+                &vk::CommandPoolCreateInfo::default()
+                    .queue_family_index(family)
+                    .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
+                None,
+            )
+        }
+        .map_err(vk_err("create command pool"))?;
+        let memory = unsafe { instance.get_physical_device_memory_properties(physical) };
+        let mesh = ash::ext::mesh_shader::Device::new(&instance, &device);
+        Ok(Self {
+            _entry: entry,
+            instance,
+            physical,
+            device,
+            mesh,
+            queue,
+            family,
+            pool,
+            timestamp_period: props.limits.timestamp_period,
+            mesh_queries,
+            name,
+            validation,
+            memory,
+        })
+    }
+
+    /// A buffer in host-visible, coherent memory (lavapipe has nothing else; on a discrete GPU a
+    /// device-local copy would be faster, which the render timings do not include anyway).
+    pub fn buffer(&self, size: u64, usage: vk::BufferUsageFlags) -> Result<Buffer, RenderError> {
+        let size = size.max(16);
+        let buf = unsafe {
+            self.device.create_buffer(
+                &vk::BufferCreateInfo::default().size(size).usage(usage),
+                None,
+            )
+        }
+        .map_err(vk_err("create buffer"))?;
+        let req = unsafe { self.device.get_buffer_memory_requirements(buf) };
+        let mem = self.allocate(
+            req,
+            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT,
+        )?;
+        unsafe { self.device.bind_buffer_memory(buf, mem, 0) }.map_err(vk_err("bind buffer"))?;
+        let ptr = unsafe {
+            self.device
+                .map_memory(mem, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty())
+        }
+        .map_err(vk_err("map memory"))? as *mut u8;
+        Ok(Buffer {
+            buf,
+            mem,
+            ptr,
+            size,
+        })
+    }
+
+    /// A buffer holding `data`.
+    pub fn upload<T: bytemuck::Pod>(
+        &self,
+        data: &[T],
+        usage: vk::BufferUsageFlags,
+    ) -> Result<Buffer, RenderError> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        let b = self.buffer(bytes.len() as u64, usage)?;
+        // SAFETY: the mapping is at least `bytes.len()` long and not aliased.
+        unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), b.ptr, bytes.len()) };
+        Ok(b)
+    }
+
+    /// Device memory of a type with `flags` fitting `req`.
+    pub fn allocate(
+        &self,
+        req: vk::MemoryRequirements,
+        flags: vk::MemoryPropertyFlags,
+    ) -> Result<vk::DeviceMemory, RenderError> {
+        let index = (0..self.memory.memory_type_count)
+            .find(|&i| {
+                req.memory_type_bits & (1 << i) != 0
+                    && self.memory.memory_types[i as usize]
+                        .property_flags
+                        .contains(flags)
+            })
+            .ok_or(RenderError::Vulkan(
+                "no suitable memory type",
+                vk::Result::ERROR_OUT_OF_DEVICE_MEMORY,
+            ))?;
+        unsafe {
+            self.device.allocate_memory(
+                &vk::MemoryAllocateInfo::default()
+                    .allocation_size(req.size)
+                    .memory_type_index(index),
+                None,
+            )
+        }
+        .map_err(vk_err("allocate memory"))
+    }
+
+    /// Records `f` into a fresh command buffer, submits it and waits.
+    pub fn submit(&self, f: impl FnOnce(vk::CommandBuffer)) -> Result<(), RenderError> {
+        let d = &self.device;
+        let cmd = unsafe {
+            d.allocate_command_buffers(
+                &vk::CommandBufferAllocateInfo::default()
+                    .command_pool(self.pool)
+                    .command_buffer_count(1),
+            )
+        }
+        .map_err(vk_err("allocate command buffer"))?[0];
+        unsafe {
+            d.begin_command_buffer(
+                cmd,
+                &vk::CommandBufferBeginInfo::default()
+                    .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+            )
+        }
+        .map_err(vk_err("begin command buffer"))?;
+        f(cmd);
+        let result = (|| {
+            unsafe { d.end_command_buffer(cmd) }.map_err(vk_err("end command buffer"))?;
+            let cmds = [cmd];
+            let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+            unsafe { d.queue_submit(self.queue, &submit, vk::Fence::null()) }
+                .map_err(vk_err("queue submit"))?;
+            unsafe { d.queue_wait_idle(self.queue) }.map_err(vk_err("queue wait idle"))
+        })();
+        unsafe { d.free_command_buffers(self.pool, &[cmd]) };
+        result
+    }
+
+    /// Frees a buffer.
+    pub fn destroy_buffer(&self, b: &Buffer) {
+        unsafe {
+            self.device.destroy_buffer(b.buf, None);
+            self.device.free_memory(b.mem, None);
+        }
+    }
+}
+
+impl Drop for Context {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_command_pool(self.pool, None);
+            self.device.destroy_device(None);
+            if let Some(v) = self.validation.take() {
+                v.destroy();
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+/// A host-visible buffer, persistently mapped.
+pub struct Buffer {
+    /// The buffer.
+    pub buf: vk::Buffer,
+    mem: vk::DeviceMemory,
+    ptr: *mut u8,
+    /// Size in bytes.
+    pub size: u64,
+}
+
+impl Buffer {
+    /// Copies the buffer's first `len` bytes out.
+    pub fn read(&self, len: usize) -> Vec<u8> {
+        let len = len.min(self.size as usize);
+        // SAFETY: mapped, coherent, at least `len` bytes, and the GPU is idle after `submit`.
+        unsafe { std::slice::from_raw_parts(self.ptr, len) }.to_vec()
+    }
+
+    /// Overwrites the start of the buffer with `data`.
+    pub fn write(&self, data: &[u8]) {
+        assert!(data.len() as u64 <= self.size);
+        // SAFETY: as in `read`.
+        unsafe { std::ptr::copy_nonoverlapping(data.as_ptr(), self.ptr, data.len()) };
+    }
+}

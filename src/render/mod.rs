@@ -1,0 +1,161 @@
+//! The mesh-shader render benchmark (ash + VK_EXT_mesh_shader, shaders in glsl/): a headless
+//! [`Context`], the [`Pass`] that draws meshlets through task and mesh shaders or the whole mesh
+//! through the vertex pipeline, and the camera protocol.
+
+pub mod context;
+pub mod pass;
+pub mod validation;
+
+pub use context::Context;
+pub use pass::{Frame, Pass, Pipeline, Shading, HEIGHT, WIDTH};
+
+use crate::mesh::Mesh;
+use glam::{Mat4, Vec3};
+use thiserror::Error;
+
+/// Why rendering is not possible or failed.
+#[derive(Debug, Error)]
+pub enum RenderError {
+    /// No Vulkan loader or instance.
+    #[error("no Vulkan: {0}. Install a Vulkan driver; on Debian 12 `make setup` installs Mesa's lavapipe from bookworm-backports")]
+    NoVulkan(String),
+    /// No device with task and mesh shaders.
+    #[error("no Vulkan device with VK_EXT_mesh_shader (task + mesh), Vulkan 1.3 dynamic rendering and maintenance4; found: {0}. Mesa >= 24 lavapipe has it: `make setup` installs it on Debian 12")]
+    NoMeshShader(String),
+    /// The build found no glslangValidator.
+    #[error("the shaders were not compiled (glslangValidator was missing at build time): run `make setup`, then rebuild")]
+    ShadersMissing,
+    /// Validation requested but the layer is not installed.
+    #[error("the Khronos validation layer is not installed (`make setup` installs vulkan-validationlayers)")]
+    NoValidationLayer,
+    /// A Vulkan call failed.
+    #[error("Vulkan call failed: {0}: {1}")]
+    Vulkan(&'static str, ash::vk::Result),
+}
+
+/// A perspective camera looking at a point (60 degree vertical field of view, depth 0..1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Position.
+    pub eye: Vec3,
+    /// The point looked at.
+    pub target: Vec3,
+    /// Near and far plane distances.
+    pub near: f32,
+    /// See `near`.
+    pub far: f32,
+}
+
+impl Camera {
+    /// View and projection for an image of `aspect` (width / height). The y axis is flipped for
+    /// Vulkan's downward framebuffer y, so the image is upright and counter-clockwise stays front.
+    pub fn view_proj(&self, aspect: f32) -> Mat4 {
+        let up = if (self.target - self.eye).cross(Vec3::Y).length_squared() > 1e-12 {
+            Vec3::Y
+        } else {
+            Vec3::Z
+        };
+        let view = Mat4::look_at_rh(self.eye, self.target, up);
+        let proj = Mat4::perspective_rh(60f32.to_radians(), aspect, self.near, self.far);
+        Mat4::from_scale(Vec3::new(1.0, -1.0, 1.0)) * proj * view
+    }
+
+    /// A camera at `eye` looking at `mesh`'s bounding-sphere centre, with planes that enclose it.
+    pub fn looking_at(mesh: &Mesh, eye: Vec3) -> Self {
+        let (lo, hi) = mesh.bounding_box();
+        let centre = (lo + hi) * 0.5;
+        let r = ((hi - lo).length() * 0.5).max(1e-6);
+        let dist = (eye - centre).length();
+        Self {
+            eye,
+            target: centre,
+            near: (dist - 1.5 * r).max(r * 1e-3),
+            far: dist + 1.5 * r,
+        }
+    }
+
+    /// The paper's random-view protocol (§4): `n` cameras at seeded random directions around the
+    /// mesh, at `distance` bounding radii from its centre, looking at it; the same sequence for
+    /// every strategy.
+    pub fn random_views(mesh: &Mesh, n: usize, seed: u64, distance: f32) -> Vec<Self> {
+        let (lo, hi) = mesh.bounding_box();
+        let centre = (lo + hi) * 0.5;
+        let r = ((hi - lo).length() * 0.5).max(1e-6);
+        let mut state = seed;
+        let mut unit = || {
+            state = crate::mesh::generate::splitmix64(state);
+            (state >> 11) as f32 / (1u64 << 53) as f32
+        };
+        (0..n)
+            .map(|_| {
+                // Uniform on the sphere: z uniform in [-1, 1], angle uniform.
+                let z = 2.0 * unit() - 1.0;
+                let a = std::f32::consts::TAU * unit();
+                let s = (1.0 - z * z).max(0.0).sqrt();
+                let dir = Vec3::new(s * a.cos(), z, s * a.sin());
+                Self::looking_at(mesh, centre + dir * r * distance)
+            })
+            .collect()
+    }
+}
+
+/// Every compiled shader as (name, SPIR-V bytes; empty when glslangValidator was missing).
+pub const SHADERS: &[(&str, &[u8])] = &[
+    (
+        "meshlet.task",
+        include_bytes!(concat!(env!("OUT_DIR"), "/meshlet.task.spv")),
+    ),
+    (
+        "meshlet.mesh (64/126)",
+        include_bytes!(concat!(env!("OUT_DIR"), "/meshlet_64_126.mesh.spv")),
+    ),
+    (
+        "meshlet.mesh (256/256)",
+        include_bytes!(concat!(env!("OUT_DIR"), "/meshlet_256_256.mesh.spv")),
+    ),
+    (
+        "baseline.vert",
+        include_bytes!(concat!(env!("OUT_DIR"), "/baseline.vert.spv")),
+    ),
+    (
+        "shade.frag",
+        include_bytes!(concat!(env!("OUT_DIR"), "/shade.frag.spv")),
+    ),
+    (
+        "meshlet_id.frag",
+        include_bytes!(concat!(env!("OUT_DIR"), "/meshlet_id.frag.spv")),
+    ),
+];
+
+/// Pixels that differ between two RGBA8 images (any channel).
+pub fn differing_pixels(a: &[u8], b: &[u8]) -> usize {
+    a.chunks_exact(4)
+        .zip(b.chunks_exact(4))
+        .filter(|(x, y)| x != y)
+        .count()
+}
+
+/// Largest difference of any channel between two RGBA8 images.
+pub fn max_channel_difference(a: &[u8], b: &[u8]) -> u8 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0)
+}
+
+/// Writes RGBA8 `pixels` of a `width` x `height` image as a PNG.
+pub fn write_png(
+    path: &std::path::Path,
+    width: u32,
+    height: u32,
+    pixels: &[u8],
+) -> std::io::Result<()> {
+    let file = std::io::BufWriter::new(std::fs::File::create(path)?);
+    let mut enc = png::Encoder::new(file, width, height);
+    enc.set_color(png::ColorType::Rgba);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut w = enc.write_header().map_err(std::io::Error::other)?;
+    w.write_image_data(pixels).map_err(std::io::Error::other)?;
+    w.finish().map_err(std::io::Error::other)
+}

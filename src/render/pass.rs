@@ -1,0 +1,714 @@
+//! The render pass: 1280x720, 4x MSAA resolved to one sample, D32 depth (the paper's setup), drawn
+//! either by the mesh-shader pipeline (task-shader culling, one mesh workgroup per meshlet) or by
+//! the classic vertex pipeline (one indexed draw of the same mesh) as the baseline.
+
+use super::context::{Buffer, Context};
+use super::{Camera, RenderError};
+use crate::mesh::Mesh;
+use crate::meshlet::{bounds::compute_bounds, Limits, Meshlets};
+use ash::vk;
+
+/// Image width (the paper's).
+pub const WIDTH: u32 = 1280;
+/// Image height.
+pub const HEIGHT: u32 = 720;
+const SAMPLES: vk::SampleCountFlags = vk::SampleCountFlags::TYPE_4;
+const COLOR: vk::Format = vk::Format::R8G8B8A8_UNORM;
+const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
+/// Meshlets per task workgroup (`TASK_GROUP` in glsl/common.glsl).
+const TASK_GROUP: u32 = 32;
+
+/// Which pipeline draws, and how.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pipeline {
+    /// Task + mesh shaders over the meshlets.
+    Mesh {
+        /// Task-shader frustum culling against the bounding sphere.
+        frustum: bool,
+        /// Task-shader backface culling against the normal cone.
+        cone: bool,
+        /// Colour by meshlet id instead of plain shading.
+        colour_ids: bool,
+    },
+    /// One indexed draw through the vertex shader.
+    Vertex,
+}
+
+/// How fragments are coloured (the meshlet-id colouring is a [`Pipeline::Mesh`] option).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Shading {
+    /// Flat shading from screen-space derivatives.
+    #[default]
+    Lit,
+    /// Plain white: coverage and depth only, for exact comparisons between pipelines.
+    Unlit,
+}
+
+/// One rendered frame.
+pub struct Frame {
+    /// RGBA8 pixels, row-major, top row first.
+    pub pixels: Vec<u8>,
+    /// GPU time of the draw in nanoseconds (timestamps around the rendering).
+    pub gpu_ns: f64,
+    /// Meshlets the task shader culled by the frustum and by the normal cone, and drew.
+    pub culled_frustum: u32,
+    /// See `culled_frustum`.
+    pub culled_cone: u32,
+    /// See `culled_frustum`.
+    pub drawn: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Push {
+    view_proj: [f32; 16],
+    camera: [f32; 4],
+    meshlet_count: u32,
+    flags: u32,
+}
+
+struct Target {
+    image: vk::Image,
+    memory: vk::DeviceMemory,
+    view: vk::ImageView,
+}
+
+/// A mesh and its meshlets on the device, with the pipelines and targets to draw them.
+pub struct Pass<'a> {
+    ctx: &'a Context,
+    buffers: Vec<Buffer>,
+    counters: Buffer,
+    readback: Buffer,
+    index_count: u32,
+    meshlet_count: u32,
+    set_layout: vk::DescriptorSetLayout,
+    pool: vk::DescriptorPool,
+    set: vk::DescriptorSet,
+    layout: vk::PipelineLayout,
+    mesh_shade: vk::Pipeline,
+    mesh_ids: vk::Pipeline,
+    vertex: vk::Pipeline,
+    targets: [Target; 3],
+    queries: vk::QueryPool,
+}
+
+fn vk_err(what: &'static str) -> impl Fn(vk::Result) -> RenderError {
+    move |e| RenderError::Vulkan(what, e)
+}
+
+fn spirv(bytes: &[u8]) -> Result<Vec<u32>, RenderError> {
+    if bytes.is_empty() {
+        return Err(RenderError::ShadersMissing);
+    }
+    ash::util::read_spv(&mut std::io::Cursor::new(bytes))
+        .map_err(|e| RenderError::NoVulkan(format!("bad SPIR-V: {e}")))
+}
+
+fn shader(name: &str) -> &'static [u8] {
+    super::SHADERS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, b)| *b)
+        .unwrap_or_else(|| panic!("shader {name} not in SHADERS"))
+}
+
+impl<'a> Pass<'a> {
+    /// Uploads `mesh` and `ml` (bounds computed here) and builds the pipelines.
+    pub fn new(ctx: &'a Context, mesh: &Mesh, ml: &Meshlets) -> Result<Self, RenderError> {
+        let limits = ml.meshlets.iter().fold((0, 0), |(v, t), m| {
+            (v.max(m.vertex_count), t.max(m.triangle_count))
+        });
+        let mesh_spv: &[u8] = if limits.0 <= Limits::DEFAULT.max_vertices
+            && limits.1 <= Limits::DEFAULT.max_triangles
+        {
+            shader("meshlet.mesh (64/126)")
+        } else {
+            shader("meshlet.mesh (256/256)")
+        };
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let bounds: Vec<[f32; 12]> = compute_bounds(mesh, ml)
+            .iter()
+            .map(|b| {
+                let (s, c) = (b.sphere, b.cone);
+                [
+                    s.center[0],
+                    s.center[1],
+                    s.center[2],
+                    s.radius,
+                    c.apex[0],
+                    c.apex[1],
+                    c.apex[2],
+                    c.cutoff,
+                    c.axis[0],
+                    c.axis[1],
+                    c.axis[2],
+                    0.0,
+                ]
+            })
+            .collect();
+        let mut tri_bytes = ml.triangles.clone();
+        tri_bytes.resize(ml.triangles.len().next_multiple_of(4), 0);
+        let buffers = vec![
+            ctx.upload(
+                &mesh.positions,
+                storage | vk::BufferUsageFlags::VERTEX_BUFFER,
+            )?,
+            ctx.upload(&ml.meshlets, storage)?,
+            ctx.upload(&ml.vertices, storage)?,
+            ctx.upload(&tri_bytes, storage)?,
+            ctx.upload(&bounds, storage)?,
+            ctx.upload(&mesh.indices, vk::BufferUsageFlags::INDEX_BUFFER)?,
+        ];
+        let counters = ctx.buffer(16, storage)?;
+        let readback = ctx.buffer(
+            WIDTH as u64 * HEIGHT as u64 * 4,
+            vk::BufferUsageFlags::TRANSFER_DST,
+        )?;
+        let d = &ctx.device;
+        let stages = vk::ShaderStageFlags::TASK_EXT
+            | vk::ShaderStageFlags::MESH_EXT
+            | vk::ShaderStageFlags::VERTEX
+            | vk::ShaderStageFlags::FRAGMENT;
+        let bindings: Vec<_> = (0..6)
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_count(1)
+                    .stage_flags(stages)
+            })
+            .collect();
+        let set_layout = unsafe {
+            d.create_descriptor_set_layout(
+                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
+                None,
+            )
+        }
+        .map_err(vk_err("descriptor set layout"))?;
+        let sizes = [vk::DescriptorPoolSize::default()
+            .ty(vk::DescriptorType::STORAGE_BUFFER)
+            .descriptor_count(6)];
+        let pool = unsafe {
+            d.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default()
+                    .max_sets(1)
+                    .pool_sizes(&sizes),
+                None,
+            )
+        }
+        .map_err(vk_err("descriptor pool"))?;
+        let layouts = [set_layout];
+        let set = unsafe {
+            d.allocate_descriptor_sets(
+                &vk::DescriptorSetAllocateInfo::default()
+                    .descriptor_pool(pool)
+                    .set_layouts(&layouts),
+            )
+        }
+        .map_err(vk_err("descriptor set"))?[0];
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers[..5]
+            .iter()
+            .chain(std::iter::once(&counters))
+            .map(|b| {
+                [vk::DescriptorBufferInfo::default()
+                    .buffer(b.buf)
+                    .range(vk::WHOLE_SIZE)]
+            })
+            .collect();
+        let writes: Vec<_> = infos
+            .iter()
+            .enumerate()
+            .map(|(i, info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(i as u32)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(info)
+            })
+            .collect();
+        unsafe { d.update_descriptor_sets(&writes, &[]) };
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(stages)
+            .size(std::mem::size_of::<Push>() as u32)];
+        let layout = unsafe {
+            d.create_pipeline_layout(
+                &vk::PipelineLayoutCreateInfo::default()
+                    .set_layouts(&layouts)
+                    .push_constant_ranges(&ranges),
+                None,
+            )
+        }
+        .map_err(vk_err("pipeline layout"))?;
+        let module = |bytes: &[u8]| -> Result<vk::ShaderModule, RenderError> {
+            let code = spirv(bytes)?;
+            unsafe {
+                d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None)
+            }
+            .map_err(vk_err("shader module"))
+        };
+        let task = module(shader("meshlet.task"))?;
+        let meshm = module(mesh_spv)?;
+        let vert = module(shader("baseline.vert"))?;
+        let shade = module(shader("shade.frag"))?;
+        let ids = module(shader("meshlet_id.frag"))?;
+        let build = |mods: &[(vk::ShaderStageFlags, vk::ShaderModule)], vertex_input: bool| {
+            pipeline(d, layout, mods, vertex_input)
+        };
+        let stage = |s, m| (s, m);
+        let mesh_shade = build(
+            &[
+                stage(vk::ShaderStageFlags::TASK_EXT, task),
+                stage(vk::ShaderStageFlags::MESH_EXT, meshm),
+                stage(vk::ShaderStageFlags::FRAGMENT, shade),
+            ],
+            false,
+        )?;
+        let mesh_ids = build(
+            &[
+                stage(vk::ShaderStageFlags::TASK_EXT, task),
+                stage(vk::ShaderStageFlags::MESH_EXT, meshm),
+                stage(vk::ShaderStageFlags::FRAGMENT, ids),
+            ],
+            false,
+        )?;
+        let vertex = build(
+            &[
+                stage(vk::ShaderStageFlags::VERTEX, vert),
+                stage(vk::ShaderStageFlags::FRAGMENT, shade),
+            ],
+            true,
+        )?;
+        for m in [task, meshm, vert, shade, ids] {
+            unsafe { d.destroy_shader_module(m, None) };
+        }
+        let targets = [
+            target(ctx, COLOR, SAMPLES, vk::ImageUsageFlags::COLOR_ATTACHMENT)?,
+            target(
+                ctx,
+                COLOR,
+                vk::SampleCountFlags::TYPE_1,
+                vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+            )?,
+            target(
+                ctx,
+                DEPTH,
+                SAMPLES,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            )?,
+        ];
+        let queries = unsafe {
+            d.create_query_pool(
+                &vk::QueryPoolCreateInfo::default()
+                    .query_type(vk::QueryType::TIMESTAMP)
+                    .query_count(2),
+                None,
+            )
+        }
+        .map_err(vk_err("query pool"))?;
+        Ok(Self {
+            ctx,
+            buffers,
+            counters,
+            readback,
+            index_count: mesh.indices.len() as u32,
+            meshlet_count: ml.len() as u32,
+            set_layout,
+            pool,
+            set,
+            layout,
+            mesh_shade,
+            mesh_ids,
+            vertex,
+            targets,
+            queries,
+        })
+    }
+
+    /// Draws one frame from `camera` with `how`.
+    pub fn render(
+        &self,
+        camera: &Camera,
+        how: Pipeline,
+        shading: Shading,
+    ) -> Result<Frame, RenderError> {
+        let ctx = self.ctx;
+        let d = &ctx.device;
+        self.counters.write(&[0u8; 16]);
+        let (pipeline, flags) = match how {
+            Pipeline::Mesh {
+                frustum,
+                cone,
+                colour_ids,
+            } => (
+                if colour_ids {
+                    self.mesh_ids
+                } else {
+                    self.mesh_shade
+                },
+                frustum as u32 | (cone as u32) << 1,
+            ),
+            Pipeline::Vertex => (self.vertex, 0),
+        };
+        let push = Push {
+            view_proj: camera
+                .view_proj(WIDTH as f32 / HEIGHT as f32)
+                .to_cols_array(),
+            camera: camera.eye.extend(1.0).to_array(),
+            meshlet_count: self.meshlet_count,
+            flags: flags | u32::from(shading == Shading::Unlit) << 2,
+        };
+        let [msaa, resolve, depth] = &self.targets;
+        ctx.submit(|cmd| unsafe {
+            d.cmd_reset_query_pool(cmd, self.queries, 0, 2);
+            let barrier =
+                |image, old, new, aspect, src_stage, src_access, dst_stage, dst_access| {
+                    vk::ImageMemoryBarrier2::default()
+                        .image(image)
+                        .old_layout(old)
+                        .new_layout(new)
+                        .src_stage_mask(src_stage)
+                        .src_access_mask(src_access)
+                        .dst_stage_mask(dst_stage)
+                        .dst_access_mask(dst_access)
+                        .subresource_range(
+                            vk::ImageSubresourceRange::default()
+                                .aspect_mask(aspect)
+                                .level_count(1)
+                                .layer_count(1),
+                        )
+                };
+            let colour_out = vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT;
+            let depth_stages = vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
+                | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS;
+            let start = [
+                barrier(
+                    msaa.image,
+                    vk::ImageLayout::UNDEFINED,
+                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                    vk::ImageAspectFlags::COLOR,
+                    colour_out,
+                    vk::AccessFlags2::NONE,
+                    colour_out,
+                    vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+                ),
+                barrier(
+                    resolve.image,
+                    vk::ImageLayout::UNDEFINED,
+                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                    vk::ImageAspectFlags::COLOR,
+                    vk::PipelineStageFlags2::TRANSFER | colour_out,
+                    vk::AccessFlags2::NONE,
+                    colour_out,
+                    vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+                ),
+                barrier(
+                    depth.image,
+                    vk::ImageLayout::UNDEFINED,
+                    vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+                    vk::ImageAspectFlags::DEPTH,
+                    depth_stages,
+                    vk::AccessFlags2::NONE,
+                    depth_stages,
+                    vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE
+                        | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ,
+                ),
+            ];
+            d.cmd_pipeline_barrier2(
+                cmd,
+                &vk::DependencyInfo::default().image_memory_barriers(&start),
+            );
+            let colour = [vk::RenderingAttachmentInfo::default()
+                .image_view(msaa.view)
+                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                .resolve_mode(vk::ResolveModeFlags::AVERAGE)
+                .resolve_image_view(resolve.view)
+                .resolve_image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::DONT_CARE)
+                .clear_value(vk::ClearValue {
+                    color: vk::ClearColorValue {
+                        float32: [0.08, 0.09, 0.12, 1.0],
+                    },
+                })];
+            let depth_att = vk::RenderingAttachmentInfo::default()
+                .image_view(depth.view)
+                .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::DONT_CARE)
+                .clear_value(vk::ClearValue {
+                    depth_stencil: vk::ClearDepthStencilValue {
+                        depth: 1.0,
+                        stencil: 0,
+                    },
+                });
+            let area = vk::Rect2D::default().extent(vk::Extent2D {
+                width: WIDTH,
+                height: HEIGHT,
+            });
+            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, self.queries, 0);
+            d.cmd_begin_rendering(
+                cmd,
+                &vk::RenderingInfo::default()
+                    .render_area(area)
+                    .layer_count(1)
+                    .color_attachments(&colour)
+                    .depth_attachment(&depth_att),
+            );
+            d.cmd_set_viewport(
+                cmd,
+                0,
+                &[vk::Viewport::default()
+                    .width(WIDTH as f32)
+                    .height(HEIGHT as f32)
+                    .max_depth(1.0)],
+            );
+            d.cmd_set_scissor(cmd, 0, &[area]);
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.layout,
+                0,
+                &[self.set],
+                &[],
+            );
+            d.cmd_push_constants(
+                cmd,
+                self.layout,
+                vk::ShaderStageFlags::TASK_EXT
+                    | vk::ShaderStageFlags::MESH_EXT
+                    | vk::ShaderStageFlags::VERTEX
+                    | vk::ShaderStageFlags::FRAGMENT,
+                0,
+                bytemuck::bytes_of(&push),
+            );
+            match how {
+                Pipeline::Mesh { .. } => {
+                    ctx.mesh.cmd_draw_mesh_tasks(
+                        cmd,
+                        self.meshlet_count.div_ceil(TASK_GROUP),
+                        1,
+                        1,
+                    );
+                }
+                Pipeline::Vertex => {
+                    d.cmd_bind_vertex_buffers(cmd, 0, &[self.buffers[0].buf], &[0]);
+                    d.cmd_bind_index_buffer(cmd, self.buffers[5].buf, 0, vk::IndexType::UINT32);
+                    d.cmd_draw_indexed(cmd, self.index_count, 1, 0, 0, 0);
+                }
+            }
+            d.cmd_end_rendering(cmd);
+            d.cmd_write_timestamp2(
+                cmd,
+                vk::PipelineStageFlags2::BOTTOM_OF_PIPE,
+                self.queries,
+                1,
+            );
+            let to_copy = [barrier(
+                resolve.image,
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::ImageAspectFlags::COLOR,
+                colour_out,
+                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+                vk::PipelineStageFlags2::TRANSFER,
+                vk::AccessFlags2::TRANSFER_READ,
+            )];
+            d.cmd_pipeline_barrier2(
+                cmd,
+                &vk::DependencyInfo::default().image_memory_barriers(&to_copy),
+            );
+            d.cmd_copy_image_to_buffer(
+                cmd,
+                resolve.image,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                self.readback.buf,
+                &[vk::BufferImageCopy::default()
+                    .image_subresource(
+                        vk::ImageSubresourceLayers::default()
+                            .aspect_mask(vk::ImageAspectFlags::COLOR)
+                            .layer_count(1),
+                    )
+                    .image_extent(vk::Extent3D {
+                        width: WIDTH,
+                        height: HEIGHT,
+                        depth: 1,
+                    })],
+            );
+            let host = [vk::MemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+                .dst_access_mask(vk::AccessFlags2::HOST_READ)];
+            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&host));
+        })?;
+        let mut ts = [0u64; 2];
+        unsafe {
+            d.get_query_pool_results(
+                self.queries,
+                0,
+                &mut ts,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .map_err(vk_err("timestamps"))?;
+        let c: Vec<u32> = bytemuck::cast_slice(&self.counters.read(16)).to_vec();
+        Ok(Frame {
+            pixels: self.readback.read((WIDTH * HEIGHT * 4) as usize),
+            gpu_ns: ts[1].saturating_sub(ts[0]) as f64 * ctx.timestamp_period as f64,
+            culled_frustum: c[0],
+            culled_cone: c[1],
+            drawn: c[2],
+        })
+    }
+}
+
+impl Drop for Pass<'_> {
+    fn drop(&mut self) {
+        let ctx = self.ctx;
+        let d = &ctx.device;
+        unsafe {
+            let _ = d.device_wait_idle();
+            d.destroy_query_pool(self.queries, None);
+            for t in &self.targets {
+                d.destroy_image_view(t.view, None);
+                d.destroy_image(t.image, None);
+                d.free_memory(t.memory, None);
+            }
+            for p in [self.mesh_shade, self.mesh_ids, self.vertex] {
+                d.destroy_pipeline(p, None);
+            }
+            d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_descriptor_pool(self.pool, None);
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+        for b in self.buffers.iter().chain([&self.counters, &self.readback]) {
+            ctx.destroy_buffer(b);
+        }
+    }
+}
+
+fn target(
+    ctx: &Context,
+    format: vk::Format,
+    samples: vk::SampleCountFlags,
+    usage: vk::ImageUsageFlags,
+) -> Result<Target, RenderError> {
+    let d = &ctx.device;
+    let image = unsafe {
+        d.create_image(
+            &vk::ImageCreateInfo::default()
+                .image_type(vk::ImageType::TYPE_2D)
+                .format(format)
+                .extent(vk::Extent3D {
+                    width: WIDTH,
+                    height: HEIGHT,
+                    depth: 1,
+                })
+                .mip_levels(1)
+                .array_layers(1)
+                .samples(samples)
+                .tiling(vk::ImageTiling::OPTIMAL)
+                .usage(usage),
+            None,
+        )
+    }
+    .map_err(vk_err("create image"))?;
+    let req = unsafe { d.get_image_memory_requirements(image) };
+    let memory = ctx.allocate(req, vk::MemoryPropertyFlags::empty())?;
+    unsafe { d.bind_image_memory(image, memory, 0) }.map_err(vk_err("bind image"))?;
+    let aspect = if format == DEPTH {
+        vk::ImageAspectFlags::DEPTH
+    } else {
+        vk::ImageAspectFlags::COLOR
+    };
+    let view = unsafe {
+        d.create_image_view(
+            &vk::ImageViewCreateInfo::default()
+                .image(image)
+                .view_type(vk::ImageViewType::TYPE_2D)
+                .format(format)
+                .subresource_range(
+                    vk::ImageSubresourceRange::default()
+                        .aspect_mask(aspect)
+                        .level_count(1)
+                        .layer_count(1),
+                ),
+            None,
+        )
+    }
+    .map_err(vk_err("create image view"))?;
+    Ok(Target {
+        image,
+        memory,
+        view,
+    })
+}
+
+fn pipeline(
+    d: &ash::Device,
+    layout: vk::PipelineLayout,
+    mods: &[(vk::ShaderStageFlags, vk::ShaderModule)],
+    vertex_input: bool,
+) -> Result<vk::Pipeline, RenderError> {
+    let stages: Vec<_> = mods
+        .iter()
+        .map(|&(s, m)| {
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(s)
+                .module(m)
+                .name(c"main")
+        })
+        .collect();
+    let attributes = [vk::VertexInputAttributeDescription::default()
+        .location(0)
+        .format(vk::Format::R32G32B32_SFLOAT)];
+    let vbind = [vk::VertexInputBindingDescription::default()
+        .stride(12)
+        .input_rate(vk::VertexInputRate::VERTEX)];
+    let vi = vk::PipelineVertexInputStateCreateInfo::default()
+        .vertex_attribute_descriptions(&attributes)
+        .vertex_binding_descriptions(&vbind);
+    let ia = vk::PipelineInputAssemblyStateCreateInfo::default()
+        .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+    let vp = vk::PipelineViewportStateCreateInfo::default()
+        .viewport_count(1)
+        .scissor_count(1);
+    // Back faces are culled by the rasteriser in both pipelines (counter-clockwise = front, as in
+    // meshoptimizer and the meshlet cones), so task-shader cone culling removes nothing visible.
+    let rs = vk::PipelineRasterizationStateCreateInfo::default()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(vk::CullModeFlags::BACK)
+        .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+        .line_width(1.0);
+    let ms = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(SAMPLES);
+    let ds = vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(true)
+        .depth_write_enable(true)
+        .depth_compare_op(vk::CompareOp::LESS);
+    let blend = [vk::PipelineColorBlendAttachmentState::default()
+        .color_write_mask(vk::ColorComponentFlags::RGBA)];
+    let cb = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
+    let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+    let dy = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
+    let formats = [COLOR];
+    let mut rendering = vk::PipelineRenderingCreateInfo::default()
+        .color_attachment_formats(&formats)
+        .depth_attachment_format(DEPTH);
+    let mut info = vk::GraphicsPipelineCreateInfo::default()
+        .stages(&stages)
+        .viewport_state(&vp)
+        .rasterization_state(&rs)
+        .multisample_state(&ms)
+        .depth_stencil_state(&ds)
+        .color_blend_state(&cb)
+        .dynamic_state(&dy)
+        .layout(layout)
+        .push_next(&mut rendering);
+    if vertex_input {
+        info = info.vertex_input_state(&vi).input_assembly_state(&ia);
+    }
+    unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
+        .map(|p| p[0])
+        .map_err(|(_, e)| RenderError::Vulkan("create graphics pipeline", e))
+}

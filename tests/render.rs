@@ -1,0 +1,142 @@
+//! The mesh-shader pass on lavapipe (installed by `make setup`): SPIR-V validity, mesh pipeline
+//! against the vertex pipeline, culling against no culling, task-shader counters, and zero
+//! validation-layer errors over the whole run.
+
+mod common;
+
+use meshletlab::meshlet::{Limits, Meshlets};
+use meshletlab::render::{
+    differing_pixels, max_channel_difference, Camera, Context, Pass, Pipeline, Shading, SHADERS,
+};
+use meshletlab::strategy::{self, Options};
+
+#[test]
+fn every_shader_is_valid_spirv() {
+    let dir = std::env::temp_dir().join(format!("meshletlab-spv-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, spv) in SHADERS {
+        assert!(
+            !spv.is_empty(),
+            "{name}: not compiled (glslangValidator missing at build time)"
+        );
+        let p = dir.join("shader.spv");
+        std::fs::write(&p, spv).unwrap();
+        let out = std::process::Command::new("spirv-val")
+            .args(["--target-env", "vulkan1.3"])
+            .arg(&p)
+            .output()
+            .expect("spirv-val runs (make setup installs spirv-tools)");
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+const MESH_CULL: Pipeline = Pipeline::Mesh {
+    frustum: true,
+    cone: true,
+    colour_ids: false,
+};
+const MESH_NO_CULL: Pipeline = Pipeline::Mesh {
+    frustum: false,
+    cone: false,
+    colour_ids: false,
+};
+
+fn meshlets(mesh: &meshletlab::mesh::Mesh, name: &str, limits: Limits) -> Meshlets {
+    strategy::by_name(name, &Options::default())
+        .unwrap()
+        .build(mesh, limits)
+}
+
+/// Everything the pass promises, for one mesh, strategy and set of cameras.
+fn check_views(
+    ctx: &Context,
+    mesh: &meshletlab::mesh::Mesh,
+    ml: &Meshlets,
+    views: &[Camera],
+) -> (u32, u32) {
+    let pass = Pass::new(ctx, mesh, ml).unwrap();
+    let (mut frustum, mut cone) = (0, 0);
+    for (i, v) in views.iter().enumerate() {
+        // Coverage and depth: the two pipelines rasterise exactly the same samples.
+        let a = pass.render(v, MESH_CULL, Shading::Unlit).unwrap();
+        let b = pass.render(v, Pipeline::Vertex, Shading::Unlit).unwrap();
+        assert_eq!(
+            differing_pixels(&a.pixels, &b.pixels),
+            0,
+            "view {i}: coverage differs"
+        );
+        assert!(
+            a.pixels.chunks_exact(4).any(|p| p == [255; 4]),
+            "view {i}: nothing drawn"
+        );
+        // Lit: the normal comes from screen-space derivatives of the interpolated position, which
+        // lavapipe sets up (and clips at the near plane) separately for vertex- and mesh-shader
+        // outputs. Last-bit differences move far views by a level on a few dozen pixels; close
+        // views, whose triangles cross the near plane, by up to 3 levels on about 0.5 % of the
+        // image. Allowed: under 1 % of the pixels, by at most 16 levels.
+        let a = pass.render(v, MESH_CULL, Shading::Lit).unwrap();
+        let b = pass.render(v, Pipeline::Vertex, Shading::Lit).unwrap();
+        let (n, most) = (
+            differing_pixels(&a.pixels, &b.pixels),
+            max_channel_difference(&a.pixels, &b.pixels),
+        );
+        assert!(
+            n * 100 < a.pixels.len() / 4 && most <= 16,
+            "view {i}: lit images differ by {most} levels on {n} pixels"
+        );
+        // Culling never removes a visible triangle.
+        let c = pass.render(v, MESH_NO_CULL, Shading::Lit).unwrap();
+        assert_eq!(
+            differing_pixels(&a.pixels, &c.pixels),
+            0,
+            "view {i}: culling changed the image"
+        );
+        assert_eq!(a.culled_frustum + a.culled_cone + a.drawn, ml.len() as u32);
+        assert_eq!(
+            (c.culled_frustum, c.culled_cone, c.drawn),
+            (0, 0, ml.len() as u32)
+        );
+        assert!(a.gpu_ns > 0.0);
+        frustum += a.culled_frustum;
+        cone += a.culled_cone;
+    }
+    (frustum, cone)
+}
+
+#[test]
+fn mesh_shaders_match_the_vertex_pipeline_and_culling_removes_nothing_visible() {
+    let ctx = Context::new(true).expect("lavapipe with VK_EXT_mesh_shader (make setup)");
+    let bunny = common::load("stanford_bunny");
+    // Views around the mesh (cone culling) and from close up inside its bounds (frustum culling).
+    let mut views = Camera::random_views(&bunny, 3, 7, 2.5);
+    views.extend(Camera::random_views(&bunny, 2, 11, 0.6));
+    for name in ["meshopt", "bsphere-parallel", "kmedoids"] {
+        let ml = meshlets(&bunny, name, Limits::DEFAULT);
+        let (frustum, cone) = check_views(&ctx, &bunny, &ml, &views);
+        assert!(cone > 0, "{name}: the normal cone never culled");
+        assert!(frustum > 0, "{name}: the frustum never culled");
+    }
+    // Limits above 64/126 take the 256/256 mesh shader.
+    let ml = meshlets(&bunny, "meshopt", Limits::new(128, 256).unwrap());
+    check_views(&ctx, &bunny, &ml, &views[..2]);
+    let (errors, first) = ctx.validation.as_ref().unwrap().errors();
+    assert_eq!(errors, 0, "validation layer errors: {first:#?}");
+}
+
+#[test]
+fn random_views_are_seeded_and_look_at_the_mesh() {
+    let bunny = common::load("stanford_bunny");
+    let a = Camera::random_views(&bunny, 5, 3, 2.5);
+    assert_eq!(a, Camera::random_views(&bunny, 5, 3, 2.5));
+    assert_ne!(a, Camera::random_views(&bunny, 5, 4, 2.5));
+    let (lo, hi) = bunny.bounding_box();
+    for c in &a {
+        assert!((c.target - (lo + hi) * 0.5).length() < 1e-6);
+        assert!(c.near > 0.0 && c.far > c.near);
+    }
+}
