@@ -29,3 +29,4 @@ bench: setup
 	$(CARGO) run --release --quiet -- bench kmedoids
 	$(CARGO) run --release --quiet -- bench gpu
 	$(CARGO) run --release --quiet -- bench stability
+	$(CARGO) run --release --quiet -- bench render

@@ -6,6 +6,7 @@ pub mod gpu;
 pub mod kmedoids;
 pub mod paper;
 pub mod plot;
+pub mod render;
 pub mod stability;
 
 use crate::mesh::Mesh;

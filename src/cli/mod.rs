@@ -233,6 +233,31 @@ pub enum BenchCommand {
         #[arg(long)]
         quick: bool,
     },
+    /// Mesh shaders against the vertex pipeline on every shared mesh: ms per frame with and without
+    /// task-shader culling, culled shares, ns per triangle, bunny images -> render.md.
+    Render {
+        /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Meshlet limits.
+        #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
+        limits: Limits,
+        /// Strategies (comma-separated).
+        #[arg(short, long, value_delimiter = ',', default_values_t = bench::render::DEFAULT_STRATEGIES.iter().map(|s| s.to_string()))]
+        strategy: Vec<String>,
+        /// Views per mesh (sized for lavapipe; the paper used 100,000 frames on a GPU).
+        #[arg(long, default_value_t = 10)]
+        views: usize,
+        /// Seed of the view sequence.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Camera distance from the mesh centre in bounding radii.
+        #[arg(long, default_value_t = 2.5)]
+        distance: f32,
+    },
     /// GPU/CPU agreement and conservative bounds on a mesh translated, scaled, flattened, with
     /// duplicate vertices and a huge coordinate range -> stability.md.
     Stability {
@@ -383,6 +408,29 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
             };
             bench::gpu::run(&cfg)?;
             println!("wrote {}", cfg.out.join("gpu.md").display());
+            Ok(())
+        }
+        Command::Bench(BenchCommand::Render {
+            meshes,
+            out,
+            limits,
+            strategy,
+            views,
+            seed,
+            distance,
+        }) => {
+            let cfg = bench::render::Config {
+                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                out,
+                limits,
+                strategies: strategy,
+                views,
+                seed,
+                distance,
+                quiet: q,
+            };
+            bench::render::run(&cfg)?;
+            println!("wrote {}", cfg.out.join("render.md").display());
             Ok(())
         }
         Command::Bench(BenchCommand::Kmedoids {
