@@ -17,7 +17,8 @@ layout(std430, set = 0, binding = 2) readonly buffer Vertices { uint vertices[];
 layout(std430, set = 0, binding = 3) readonly buffer Triangles { uint triangles[]; };
 // Per meshlet: (sphere centre, radius), (cone apex, cutoff), (cone axis, 0).
 layout(std430, set = 0, binding = 4) readonly buffer Bounds { vec4 bounds[]; };
-// 0: meshlets culled by the frustum, 1: by the normal cone, 2: meshlets drawn.
+// 0: meshlets culled by the frustum, 1: by the normal cone, 2: meshlets drawn; 3, 4: triangles
+// culled by the frustum and by the cone.
 layout(std430, set = 0, binding = 5) buffer Counters { uint counters[]; };
 
 vec3 position(uint v) { return vec3(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]); }

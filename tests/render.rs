@@ -102,6 +102,10 @@ fn check_views(
             (0, 0, ml.len() as u32)
         );
         assert!(a.gpu_ns > 0.0);
+        // Triangle counters: present exactly when meshlets were culled, and never above the mesh.
+        assert_eq!(a.culled_triangles[0] > 0, a.culled_frustum > 0);
+        assert_eq!(a.culled_triangles[1] > 0, a.culled_cone > 0);
+        assert!(a.culled_triangles.iter().sum::<u32>() as usize <= ml.triangle_count());
         frustum += a.culled_frustum;
         cone += a.culled_cone;
     }

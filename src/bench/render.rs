@@ -56,16 +56,18 @@ pub const DEFAULT_STRATEGIES: &[&str] = &[
 
 /// Frame times in ms of `how` over `views` (the first view rendered twice, once discarded), and
 /// the summed culling counters.
-fn frames(pass: &Pass, views: &[Camera], how: Pipeline) -> Result<(Vec<f64>, [u64; 3])> {
+fn frames(pass: &Pass, views: &[Camera], how: Pipeline) -> Result<(Vec<f64>, [u64; 5])> {
     pass.render(&views[0], how, Shading::Lit)?;
     let mut ms = Vec::with_capacity(views.len());
-    let mut counts = [0u64; 3];
+    let mut counts = [0u64; 5];
     for v in views {
         let f = pass.render(v, how, Shading::Lit)?;
         ms.push(f.gpu_ns * 1e-6);
         counts[0] += f.culled_frustum as u64;
         counts[1] += f.culled_cone as u64;
         counts[2] += f.drawn as u64;
+        counts[3] += f.culled_triangles[0] as u64;
+        counts[4] += f.culled_triangles[1] as u64;
     }
     Ok((ms, counts))
 }
@@ -86,6 +88,8 @@ struct Row {
     vertex: Vec<f64>,
     frustum_pct: f64,
     backface_pct: f64,
+    /// Share of the triangles the task shader skipped (frustum + backface).
+    skipped_tri_pct: f64,
 }
 
 /// Runs the benchmark and writes the results.
@@ -152,6 +156,8 @@ pub fn run(cfg: &Config) -> Result<()> {
                 vertex,
                 frustum_pct: 100.0 * counts[0] as f64 / total,
                 backface_pct: 100.0 * counts[1] as f64 / total,
+                skipped_tri_pct: 100.0 * (counts[3] + counts[4]) as f64
+                    / (m.triangle_count() * views.len()).max(1) as f64,
             });
             pb.inc(1);
         }
@@ -185,20 +191,21 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
     writeln!(md, "Device: **{}** (Vulkan, VK_EXT_mesh_shader). {}×{}, 4× MSAA resolved, D32 depth, back faces culled by the rasteriser in both pipelines. {} seeded random views per mesh at {} bounding radii (seed {}), the first frame discarded; GPU time from timestamps around the draw. Limits {}/{}.\n", ctx.name, WIDTH, HEIGHT, cfg.views, cfg.distance, cfg.seed, cfg.limits.max_vertices, cfg.limits.max_triangles)?;
     writeln!(md, "On lavapipe the \"GPU\" is this machine's CPU cores running LLVM-compiled shaders: the ratios say how the two pipelines map onto a software rasteriser, not onto a GPU.\n")?;
     writeln!(md, "## ms per frame\n")?;
-    writeln!(md, "| mesh | triangles | strategy | meshlets | culled: frustum % | culled: backface % | mesh, culling: median (p95) | mesh, no culling: median (p95) | vertex pipeline: median (p95) | mesh culling / vertex |")?;
-    writeln!(md, "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|")?;
-    let mut csv = String::from("mesh,triangles,strategy,meshlets,frustum_culled_pct,backface_culled_pct,mesh_cull_ms_median,mesh_cull_ms_p95,mesh_nocull_ms_median,mesh_nocull_ms_p95,vertex_ms_median,vertex_ms_p95\n");
+    writeln!(md, "| mesh | triangles | strategy | meshlets | meshlets culled: frustum % | backface % | triangles skipped % | mesh, culling: median (p95) | mesh, no culling: median (p95) | vertex pipeline: median (p95) | mesh culling / vertex |")?;
+    writeln!(md, "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+    let mut csv = String::from("mesh,triangles,strategy,meshlets,frustum_culled_pct,backface_culled_pct,triangles_skipped_pct,mesh_cull_ms_median,mesh_cull_ms_p95,mesh_nocull_ms_median,mesh_nocull_ms_p95,vertex_ms_median,vertex_ms_p95\n");
     for r in rows {
         let (a, b, c) = (median(&r.cull), median(&r.no_cull), median(&r.vertex));
         writeln!(
             md,
-            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.2} ({:.2}) | {:.2} ({:.2}) | {:.2} ({:.2}) | {:.2}x |",
+            "| {} | {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.2} ({:.2}) | {:.2} ({:.2}) | {:.2} ({:.2}) | {:.2}x |",
             r.mesh,
             r.triangles,
             r.strategy,
             r.meshlets,
             r.frustum_pct,
             r.backface_pct,
+            r.skipped_tri_pct,
             a,
             p95(&r.cull),
             b,
@@ -209,13 +216,14 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
         )?;
         writeln!(
             csv,
-            "{},{},{},{},{:.3},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
+            "{},{},{},{},{:.3},{:.3},{:.3},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
             r.mesh,
             r.triangles,
             r.strategy,
             r.meshlets,
             r.frustum_pct,
             r.backface_pct,
+            r.skipped_tri_pct,
             a,
             p95(&r.cull),
             b,

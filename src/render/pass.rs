@@ -56,6 +56,8 @@ pub struct Frame {
     pub culled_cone: u32,
     /// See `culled_frustum`.
     pub drawn: u32,
+    /// Triangles in the meshlets culled by the frustum and by the normal cone.
+    pub culled_triangles: [u32; 2],
 }
 
 #[repr(C)]
@@ -159,7 +161,7 @@ impl<'a> Pass<'a> {
             ctx.upload(&bounds, storage)?,
             ctx.upload(&mesh.indices, vk::BufferUsageFlags::INDEX_BUFFER)?,
         ];
-        let counters = ctx.buffer(16, storage)?;
+        let counters = ctx.buffer(32, storage)?;
         let readback = ctx.buffer(
             WIDTH as u64 * HEIGHT as u64 * 4,
             vk::BufferUsageFlags::TRANSFER_DST,
@@ -333,7 +335,7 @@ impl<'a> Pass<'a> {
     ) -> Result<Frame, RenderError> {
         let ctx = self.ctx;
         let d = &ctx.device;
-        self.counters.write(&[0u8; 16]);
+        self.counters.write(&[0u8; 32]);
         let (pipeline, flags) = match how {
             Pipeline::Mesh {
                 frustum,
@@ -552,13 +554,14 @@ impl<'a> Pass<'a> {
             )
         }
         .map_err(vk_err("timestamps"))?;
-        let c: Vec<u32> = bytemuck::cast_slice(&self.counters.read(16)).to_vec();
+        let c: Vec<u32> = bytemuck::cast_slice(&self.counters.read(20)).to_vec();
         Ok(Frame {
             pixels: self.readback.read((WIDTH * HEIGHT * 4) as usize),
             gpu_ns: ts[1].saturating_sub(ts[0]) as f64 * ctx.timestamp_period as f64,
             culled_frustum: c[0],
             culled_cone: c[1],
             drawn: c[2],
+            culled_triangles: [c[3], c[4]],
         })
     }
 }
