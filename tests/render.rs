@@ -106,6 +106,21 @@ fn check_views(
         assert_eq!(a.culled_triangles[0] > 0, a.culled_frustum > 0);
         assert_eq!(a.culled_triangles[1] > 0, a.culled_cone > 0);
         assert!(a.culled_triangles.iter().sum::<u32>() as usize <= ml.triangle_count());
+        // Mesh queries (lavapipe has them): every meshlet's triangles are emitted without culling,
+        // exactly the survivors' with it; one task invocation per meshlet slot.
+        let (qa, qc) = (
+            a.queries.expect("mesh queries"),
+            c.queries.expect("mesh queries"),
+        );
+        assert_eq!(qc.primitives as usize, ml.triangle_count(), "view {i}");
+        assert_eq!(
+            qa.primitives as usize,
+            ml.triangle_count() - a.culled_triangles.iter().sum::<u32>() as usize
+        );
+        let slots = (ml.len() as u64).div_ceil(32) * 32;
+        assert_eq!((qa.task_invocations, qc.task_invocations), (slots, slots));
+        assert!(qc.mesh_invocations >= ml.len() as u64);
+        assert!(qa.mesh_invocations < qc.mesh_invocations || a.drawn == c.drawn);
         frustum += a.culled_frustum;
         cone += a.culled_cone;
     }

@@ -795,8 +795,12 @@ fn render(path: &Path, name: &str, o: RenderOpts, args: &StrategyArgs, quiet: bo
         let f = pass.render(cam, how, Shading::Lit)?;
         let v = pass.render(cam, Pipeline::Vertex, Shading::Lit)?;
         let pct = |x: u32| 100.0 * x as f64 / ml.len().max(1) as f64;
+        let prims = f
+            .queries
+            .map(|q| format!("  mesh primitives generated {}", q.primitives))
+            .unwrap_or_default();
         println!(
-            "view {i}: mesh shaders {:8.3} ms  vertex pipeline {:8.3} ms  culled: frustum {:5.1} %  backface {:5.1} %",
+            "view {i}: mesh shaders {:8.3} ms  vertex pipeline {:8.3} ms  culled: frustum {:5.1} %  backface {:5.1} %{prims}",
             f.gpu_ns * 1e-6,
             v.gpu_ns * 1e-6,
             pct(f.culled_frustum),

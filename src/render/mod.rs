@@ -7,7 +7,7 @@ pub mod pass;
 pub mod validation;
 
 pub use context::Context;
-pub use pass::{Frame, Pass, Pipeline, Shading, HEIGHT, WIDTH};
+pub use pass::{Frame, MeshQueries, Pass, Pipeline, Shading, HEIGHT, WIDTH};
 
 use crate::mesh::Mesh;
 use glam::{Mat4, Vec3};

@@ -58,6 +58,19 @@ pub struct Frame {
     pub drawn: u32,
     /// Triangles in the meshlets culled by the frustum and by the normal cone.
     pub culled_triangles: [u32; 2],
+    /// Mesh-pipeline queries, when the device has `meshShaderQueries` (lavapipe does).
+    pub queries: Option<MeshQueries>,
+}
+
+/// What the mesh-shader queries counted for one draw.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MeshQueries {
+    /// Task-shader invocations (pipeline statistics).
+    pub task_invocations: u64,
+    /// Mesh-shader invocations (pipeline statistics).
+    pub mesh_invocations: u64,
+    /// Primitives the mesh shaders emitted (`MESH_PRIMITIVES_GENERATED_EXT`).
+    pub primitives: u64,
 }
 
 #[repr(C)]
@@ -92,6 +105,8 @@ pub struct Pass<'a> {
     vertex: vk::Pipeline,
     targets: [Target; 3],
     queries: vk::QueryPool,
+    /// Pipeline statistics (task, mesh invocations) and mesh primitives generated.
+    mesh_queries: Option<(vk::QueryPool, vk::QueryPool)>,
 }
 
 fn vk_err(what: &'static str) -> impl Fn(vk::Result) -> RenderError {
@@ -307,6 +322,33 @@ impl<'a> Pass<'a> {
             )
         }
         .map_err(vk_err("query pool"))?;
+        let mesh_queries = if ctx.mesh_queries {
+            let stats = unsafe {
+                d.create_query_pool(
+                    &vk::QueryPoolCreateInfo::default()
+                        .query_type(vk::QueryType::PIPELINE_STATISTICS)
+                        .pipeline_statistics(
+                            vk::QueryPipelineStatisticFlags::TASK_SHADER_INVOCATIONS_EXT
+                                | vk::QueryPipelineStatisticFlags::MESH_SHADER_INVOCATIONS_EXT,
+                        )
+                        .query_count(1),
+                    None,
+                )
+            }
+            .map_err(vk_err("statistics query pool"))?;
+            let prims = unsafe {
+                d.create_query_pool(
+                    &vk::QueryPoolCreateInfo::default()
+                        .query_type(vk::QueryType::MESH_PRIMITIVES_GENERATED_EXT)
+                        .query_count(1),
+                    None,
+                )
+            }
+            .map_err(vk_err("primitives query pool"))?;
+            Some((stats, prims))
+        } else {
+            None
+        };
         Ok(Self {
             ctx,
             buffers,
@@ -323,6 +365,7 @@ impl<'a> Pass<'a> {
             vertex,
             targets,
             queries,
+            mesh_queries,
         })
     }
 
@@ -362,6 +405,10 @@ impl<'a> Pass<'a> {
         let [msaa, resolve, depth] = &self.targets;
         ctx.submit(|cmd| unsafe {
             d.cmd_reset_query_pool(cmd, self.queries, 0, 2);
+            if let Some((stats, prims)) = self.mesh_queries {
+                d.cmd_reset_query_pool(cmd, stats, 0, 1);
+                d.cmd_reset_query_pool(cmd, prims, 0, 1);
+            }
             let barrier =
                 |image, old, new, aspect, src_stage, src_access, dst_stage, dst_access| {
                     vk::ImageMemoryBarrier2::default()
@@ -448,6 +495,15 @@ impl<'a> Pass<'a> {
                 height: HEIGHT,
             });
             d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, self.queries, 0);
+            // Queries span the whole rendering (lavapipe left them unavailable when begun inside).
+            let mesh_queries = match how {
+                Pipeline::Mesh { .. } => self.mesh_queries,
+                Pipeline::Vertex => None,
+            };
+            if let Some((stats, prims)) = mesh_queries {
+                d.cmd_begin_query(cmd, stats, 0, vk::QueryControlFlags::empty());
+                d.cmd_begin_query(cmd, prims, 0, vk::QueryControlFlags::empty());
+            }
             d.cmd_begin_rendering(
                 cmd,
                 &vk::RenderingInfo::default()
@@ -500,6 +556,10 @@ impl<'a> Pass<'a> {
                 }
             }
             d.cmd_end_rendering(cmd);
+            if let Some((stats, prims)) = mesh_queries {
+                d.cmd_end_query(cmd, prims, 0);
+                d.cmd_end_query(cmd, stats, 0);
+            }
             d.cmd_write_timestamp2(
                 cmd,
                 vk::PipelineStageFlags2::BOTTOM_OF_PIPE,
@@ -555,6 +615,26 @@ impl<'a> Pass<'a> {
         }
         .map_err(vk_err("timestamps"))?;
         let c: Vec<u32> = bytemuck::cast_slice(&self.counters.read(20)).to_vec();
+        let queries = match (how, self.mesh_queries) {
+            (Pipeline::Mesh { .. }, Some((stats, prims))) => {
+                // In ash the slice length is the number of queries: one query, two statistics.
+                let mut s = [[0u64; 2]];
+                let mut p = [0u64];
+                let flags = vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT;
+                unsafe {
+                    d.get_query_pool_results(stats, 0, &mut s, flags)
+                        .map_err(vk_err("pipeline statistics"))?;
+                    d.get_query_pool_results(prims, 0, &mut p, flags)
+                        .map_err(vk_err("mesh primitives generated"))?;
+                }
+                Some(MeshQueries {
+                    task_invocations: s[0][0],
+                    mesh_invocations: s[0][1],
+                    primitives: p[0],
+                })
+            }
+            _ => None,
+        };
         Ok(Frame {
             pixels: self.readback.read((WIDTH * HEIGHT * 4) as usize),
             gpu_ns: ts[1].saturating_sub(ts[0]) as f64 * ctx.timestamp_period as f64,
@@ -562,6 +642,7 @@ impl<'a> Pass<'a> {
             culled_cone: c[1],
             drawn: c[2],
             culled_triangles: [c[3], c[4]],
+            queries,
         })
     }
 }
@@ -573,6 +654,10 @@ impl Drop for Pass<'_> {
         unsafe {
             let _ = d.device_wait_idle();
             d.destroy_query_pool(self.queries, None);
+            if let Some((stats, prims)) = self.mesh_queries {
+                d.destroy_query_pool(stats, None);
+                d.destroy_query_pool(prims, None);
+            }
             for t in &self.targets {
                 d.destroy_image_view(t.view, None);
                 d.destroy_image(t.image, None);
