@@ -54,6 +54,24 @@ fn check(
     }
 }
 
+/// Differences between the GPU's and the CPU's meshlets (descriptors, vertex and triangle lists),
+/// and the GPU's validity.
+fn meshlet_differences(
+    mesh: &Mesh,
+    limits: Limits,
+    gpu: &Meshlets,
+    cpu: &Meshlets,
+) -> Vec<Option<String>> {
+    vec![
+        first_difference("meshlets", &gpu.meshlets, &cpu.meshlets),
+        first_difference("meshlet vertices", &gpu.vertices, &cpu.vertices),
+        first_difference("meshlet triangles", &gpu.triangles, &cpu.triangles),
+        validate(mesh, gpu, limits)
+            .err()
+            .map(|e| format!("GPU meshlets invalid: {e}")),
+    ]
+}
+
 /// Everything one parity run compared, kept for callers that check more (the stability suite).
 pub struct Parity {
     /// One entry per kernel family.
@@ -125,21 +143,15 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
                     g.initial_mean_distance, cpu.initial_mean_distance
                 )
             }),
-            first_difference("meshlets", &g.meshlets.meshlets, &cpu.meshlets.meshlets),
-            first_difference(
-                "meshlet vertices",
-                &g.meshlets.vertices,
-                &cpu.meshlets.vertices,
-            ),
-            first_difference(
-                "meshlet triangles",
-                &g.meshlets.triangles,
-                &cpu.meshlets.triangles,
-            ),
-            validate(mesh, &g.meshlets, limits)
-                .err()
-                .map(|e| format!("GPU meshlets invalid: {e}")),
-        ],
+        ]
+        .into_iter()
+        .chain(meshlet_differences(
+            mesh,
+            limits,
+            &g.meshlets,
+            &cpu.meshlets,
+        ))
+        .collect(),
     ));
     // Bounding spheres of the k-medoids meshlets.
     let ml = &cpu.meshlets;
@@ -179,16 +191,15 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
                 &[g.waves, g.rounds],
                 &[cpu.waves, cpu.rounds],
             ),
-            first_difference("meshlets", &g.meshlets.meshlets, &cpu.meshlets.meshlets),
-            first_difference(
-                "meshlet vertices",
-                &g.meshlets.vertices,
-                &cpu.meshlets.vertices,
-            ),
-            validate(mesh, &g.meshlets, limits)
-                .err()
-                .map(|e| format!("GPU meshlets invalid: {e}")),
-        ],
+        ]
+        .into_iter()
+        .chain(meshlet_differences(
+            mesh,
+            limits,
+            &g.meshlets,
+            &cpu.meshlets,
+        ))
+        .collect(),
     ));
     Ok(Parity {
         checks: out,

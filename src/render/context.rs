@@ -2,7 +2,7 @@
 //! (task + mesh), Vulkan 1.3 dynamic rendering and `maintenance4`, host-visible buffers and a
 //! one-shot command helper.
 
-use super::RenderError;
+use super::{vk_err, RenderError};
 use ash::vk;
 use std::ffi::CStr;
 
@@ -35,10 +35,6 @@ pub struct Context {
 }
 
 const MESH_EXT: &CStr = ash::ext::mesh_shader::NAME;
-
-fn vk_err(what: &'static str) -> impl Fn(vk::Result) -> RenderError {
-    move |e| RenderError::Vulkan(what, e)
-}
 
 impl Context {
     /// Opens the first device with task and mesh shaders. With `validate`, the Khronos validation

@@ -33,6 +33,11 @@ pub enum RenderError {
     Vulkan(&'static str, ash::vk::Result),
 }
 
+/// Maps a failed Vulkan call to [`RenderError::Vulkan`] naming the call.
+pub(crate) fn vk_err(what: &'static str) -> impl Fn(ash::vk::Result) -> RenderError {
+    move |e| RenderError::Vulkan(what, e)
+}
+
 /// A perspective camera looking at a point (60 degree vertical field of view, depth 0..1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {

@@ -3,7 +3,7 @@
 //! the classic vertex pipeline (one indexed draw of the same mesh) as the baseline.
 
 use super::context::{Buffer, Context};
-use super::{Camera, RenderError};
+use super::{vk_err, Camera, RenderError};
 use crate::mesh::Mesh;
 use crate::meshlet::{bounds::compute_bounds, Limits, Meshlets};
 use ash::vk;
@@ -107,10 +107,6 @@ pub struct Pass<'a> {
     queries: vk::QueryPool,
     /// Pipeline statistics (task, mesh invocations) and mesh primitives generated.
     mesh_queries: Option<(vk::QueryPool, vk::QueryPool)>,
-}
-
-fn vk_err(what: &'static str) -> impl Fn(vk::Result) -> RenderError {
-    move |e| RenderError::Vulkan(what, e)
 }
 
 fn spirv(bytes: &[u8]) -> Result<Vec<u32>, RenderError> {
@@ -271,27 +267,26 @@ impl<'a> Pass<'a> {
         let build = |mods: &[(vk::ShaderStageFlags, vk::ShaderModule)], vertex_input: bool| {
             pipeline(d, layout, mods, vertex_input)
         };
-        let stage = |s, m| (s, m);
         let mesh_shade = build(
             &[
-                stage(vk::ShaderStageFlags::TASK_EXT, task),
-                stage(vk::ShaderStageFlags::MESH_EXT, meshm),
-                stage(vk::ShaderStageFlags::FRAGMENT, shade),
+                (vk::ShaderStageFlags::TASK_EXT, task),
+                (vk::ShaderStageFlags::MESH_EXT, meshm),
+                (vk::ShaderStageFlags::FRAGMENT, shade),
             ],
             false,
         )?;
         let mesh_ids = build(
             &[
-                stage(vk::ShaderStageFlags::TASK_EXT, task),
-                stage(vk::ShaderStageFlags::MESH_EXT, meshm),
-                stage(vk::ShaderStageFlags::FRAGMENT, ids),
+                (vk::ShaderStageFlags::TASK_EXT, task),
+                (vk::ShaderStageFlags::MESH_EXT, meshm),
+                (vk::ShaderStageFlags::FRAGMENT, ids),
             ],
             false,
         )?;
         let vertex = build(
             &[
-                stage(vk::ShaderStageFlags::VERTEX, vert),
-                stage(vk::ShaderStageFlags::FRAGMENT, shade),
+                (vk::ShaderStageFlags::VERTEX, vert),
+                (vk::ShaderStageFlags::FRAGMENT, shade),
             ],
             true,
         )?;
