@@ -48,6 +48,8 @@ fn flat(gid: vec3<u32>) -> u32 { return gid.x + gid.y * 65535u * 64u; }
 fn group(wid: vec3<u32>) -> u32 { return wid.x + wid.y * 65535u; }
 fn tri(t: u32) -> vec3<u32> { return vec3<u32>(idx(3u * t), idx(3u * t + 1u), idx(3u * t + 2u)); }
 fn unclaimed(t: u32) -> bool { return atomicLoad(&claim[t]) == NONE; }
+// Corner k of v repeats an earlier corner (a degenerate triangle): the CPU's `distinct` skips it.
+fn repeats(v: vec3<u32>, k: u32) -> bool { return (k >= 1u && v[k] == v.x) || (k == 2u && v[k] == v.y); }
 
 // Exact squared distance of two quantised vertices (at most 3 * 32767^2 < 2^32).
 fn d2(a: u32, b: u32) -> u32 {
@@ -176,7 +178,7 @@ fn place(@builtin(global_invocation_id) gid: vec3<u32>) {
     var r2 = 0u;
     for (var k = 0u; k < 3u; k++) {
         let x = v[k];
-        if ((k >= 1u && x == v.x) || (k == 2u && x == v.y)) { continue; }
+        if (repeats(v, k)) { continue; }
         mv[j * p.max_v + nv] = x;
         nv++;
         r2 = max(r2, d2(v.x, x));
@@ -262,7 +264,7 @@ fn propose(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
             let v = tri(prop);
             for (var k = 0u; k < 3u; k++) {
                 let x = v[k];
-                if ((k >= 1u && x == v.x) || (k == 2u && x == v.y) || inside(x, nv)) { continue; }
+                if (repeats(v, k) || inside(x, nv)) { continue; }
                 s_verts[nv] = x;
                 let h = bloom_bit(x);
                 atomicOr(&s_bloom[h >> 5u], 1u << (h & 31u));
@@ -304,7 +306,7 @@ fn propose(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
             var nr2 = r2;
             for (var k = 0u; k < 3u; k++) {
                 let x = v[k];
-                if ((k >= 1u && x == v.x) || (k == 2u && x == v.y)) { continue; }
+                if (repeats(v, k)) { continue; }
                 count++;
                 // The vertices of t (the shared edge) are inside without a search.
                 if (any(vt == vec3<u32>(x)) || inside(x, nv)) { ins++; } else { nr2 = max(nr2, d2(c, x)); }
