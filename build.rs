@@ -1,45 +1,69 @@
-//! Compiles the GLSL in glsl/ to SPIR-V with glslangValidator (installed by `make setup`). Without
-//! it the build still succeeds, with empty shader files: the render commands then say how to get it,
-//! and everything else works.
+//! Compiles the GLSL in glsl/ to SPIR-V with glslangValidator (installed by `make setup`), one task
+//! and two mesh shaders (64/126 and 256/256) per descriptor layout, and writes the list of modules
+//! (`shaders.rs`, included by src/render/mod.rs). Without glslangValidator the build still
+//! succeeds, with empty shader files: the render commands then say how to get it, and everything
+//! else works.
 
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// (source, output, extra defines)
-const SHADERS: &[(&str, &str, &[&str])] = &[
-    ("meshlet.task", "meshlet.task.spv", &[]),
-    (
-        "meshlet.mesh",
-        "meshlet_64_126.mesh.spv",
-        &["-DMAX_V=64", "-DMAX_P=126"],
-    ),
-    (
-        "meshlet.mesh",
-        "meshlet_256_256.mesh.spv",
-        &["-DMAX_V=256", "-DMAX_P=256"],
-    ),
-    ("baseline.vert", "baseline.vert.spv", &[]),
-    ("shade.frag", "shade.frag.spv", &[]),
-    ("meshlet_id.frag", "meshlet_id.frag.spv", &[]),
+/// Descriptor layouts: (name, DESC value), as `meshlet::descriptor::Format`.
+const FORMATS: &[(&str, u32)] = &[
+    ("split", 0),
+    ("nvidia-a", 1),
+    ("nvidia-b", 2),
+    ("monolithic", 3),
 ];
+
+/// (module name, source, output file, defines)
+fn shaders() -> Vec<(String, &'static str, String, Vec<String>)> {
+    let mut list = Vec::new();
+    for (fmt, id) in FORMATS {
+        list.push((
+            format!("meshlet.task ({fmt})"),
+            "meshlet.task",
+            format!("meshlet_{fmt}.task.spv"),
+            vec![format!("-DDESC={id}")],
+        ));
+        for (v, p) in [(64, 126), (256, 256)] {
+            list.push((
+                format!("meshlet.mesh ({fmt}, {v}/{p})"),
+                "meshlet.mesh",
+                format!("meshlet_{fmt}_{v}_{p}.mesh.spv"),
+                vec![
+                    format!("-DDESC={id}"),
+                    format!("-DMAX_V={v}"),
+                    format!("-DMAX_P={p}"),
+                ],
+            ));
+        }
+    }
+    for src in ["baseline.vert", "shade.frag", "meshlet_id.frag"] {
+        list.push((src.to_string(), src, format!("{src}.spv"), vec![]));
+    }
+    list
+}
 
 fn main() {
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     let glsl = Path::new("glsl");
     println!("cargo:rerun-if-changed=glsl");
     let mut missing = false;
-    for (src, dst, defines) in SHADERS {
-        let target = out.join(dst);
+    let mut table = String::from("/// Every compiled shader as (name, SPIR-V bytes; empty when glslangValidator was missing).\npub const SHADERS: &[(&str, &[u8])] = &[\n");
+    for (name, src, dst, defines) in shaders() {
+        let target = out.join(&dst);
         let status = Command::new("glslangValidator")
             .args(["--target-env", "vulkan1.3", "-o"])
             .arg(&target)
-            .args(*defines)
+            .args(&defines)
             .arg(glsl.join(src))
             .output();
         match status {
             Ok(o) if o.status.success() => {}
             Ok(o) => panic!(
-                "glslangValidator failed on glsl/{src}:\n{}{}",
+                "glslangValidator failed on glsl/{src} ({}):\n{}{}",
+                defines.join(" "),
                 String::from_utf8_lossy(&o.stdout),
                 String::from_utf8_lossy(&o.stderr)
             ),
@@ -48,7 +72,14 @@ fn main() {
                 std::fs::write(&target, []).expect("write placeholder");
             }
         }
+        writeln!(
+            table,
+            "    ({name:?}, include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{dst}\"))),"
+        )
+        .unwrap();
     }
+    table.push_str("];\n");
+    std::fs::write(out.join("shaders.rs"), table).expect("write shaders.rs");
     if missing {
         println!(
             "cargo:warning=glslangValidator not found: the mesh-shader render pass is disabled (run `make setup`)"

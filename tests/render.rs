@@ -4,6 +4,7 @@
 
 mod common;
 
+use meshletlab::meshlet::descriptor::Format;
 use meshletlab::meshlet::{Limits, Meshlets};
 use meshletlab::render::{
     differing_pixels, max_channel_difference, Camera, Context, Pass, Pipeline, Shading, SHADERS,
@@ -58,8 +59,9 @@ fn check_views(
     mesh: &meshletlab::mesh::Mesh,
     ml: &Meshlets,
     views: &[Camera],
+    format: Format,
 ) -> (u32, u32) {
-    let pass = Pass::new(ctx, mesh, ml).unwrap();
+    let pass = Pass::with_format(ctx, mesh, ml, format).unwrap();
     let (mut frustum, mut cone) = (0, 0);
     for (i, v) in views.iter().enumerate() {
         // Coverage and depth: the two pipelines rasterise exactly the same samples.
@@ -136,13 +138,67 @@ fn mesh_shaders_match_the_vertex_pipeline_and_culling_removes_nothing_visible() 
     views.extend(Camera::random_views(&bunny, 2, 11, 0.6));
     for name in ["meshopt", "bsphere-parallel", "kmedoids"] {
         let ml = meshlets(&bunny, name, Limits::DEFAULT);
-        let (frustum, cone) = check_views(&ctx, &bunny, &ml, &views);
+        let (frustum, cone) = check_views(&ctx, &bunny, &ml, &views, Format::Split);
         assert!(cone > 0, "{name}: the normal cone never culled");
         assert!(frustum > 0, "{name}: the frustum never culled");
     }
     // Limits above 64/126 take the 256/256 mesh shader.
     let ml = meshlets(&bunny, "meshopt", Limits::new(128, 256).unwrap());
-    check_views(&ctx, &bunny, &ml, &views[..2]);
+    check_views(&ctx, &bunny, &ml, &views[..2], Format::Split);
+    let (errors, first) = ctx.validation.as_ref().unwrap().errors();
+    assert_eq!(errors, 0, "validation layer errors: {first:#?}");
+}
+
+#[test]
+fn every_descriptor_format_draws_the_same_meshlets() {
+    let ctx = Context::new(true).expect("lavapipe with VK_EXT_mesh_shader (make setup)");
+    let bunny = common::load("stanford_bunny");
+    let mut views = Camera::random_views(&bunny, 2, 7, 2.5);
+    views.extend(Camera::random_views(&bunny, 2, 11, 0.6));
+    let colour_ids = Pipeline::Mesh {
+        frustum: false,
+        cone: false,
+        colour_ids: true,
+    };
+    for (name, limits) in [
+        ("meshopt", Limits::DEFAULT),
+        ("kmedoids", Limits::DEFAULT),
+        ("meshopt", Limits::new(256, 256).unwrap()),
+    ] {
+        let ml = meshlets(&bunny, name, limits);
+        let split = Pass::new(&ctx, &bunny, &ml).unwrap();
+        let reference: Vec<_> = views
+            .iter()
+            .map(|v| split.render(v, colour_ids, Shading::Lit).unwrap().pixels)
+            .collect();
+        let (split_frustum, split_cone) = check_views(&ctx, &bunny, &ml, &views, Format::Split);
+        for format in [Format::NvidiaA, Format::NvidiaB, Format::Monolithic] {
+            // Decoding: every meshlet's vertices, triangles and id come out as the split layout's,
+            // so the meshlet-coloured images are identical.
+            let pass = Pass::with_format(&ctx, &bunny, &ml, format).unwrap();
+            assert_eq!(pass.format(), format);
+            for (v, want) in views.iter().zip(&reference) {
+                let got = pass.render(v, colour_ids, Shading::Lit).unwrap();
+                assert_eq!(
+                    differing_pixels(&got.pixels, want),
+                    0,
+                    "{name} {limits} {format}"
+                );
+            }
+            // Culling through this layout's bounds is safe and counted (check_views), and
+            // quantised bounds cull no more than exact ones.
+            let (frustum, cone) = check_views(&ctx, &bunny, &ml, &views, format);
+            assert!(
+                cone > 0 && frustum > 0,
+                "{name} {limits} {format}: {frustum} {cone}"
+            );
+            if format.quantised() {
+                assert!(cone <= split_cone, "{format}: {cone} > {split_cone}");
+            } else {
+                assert_eq!((frustum, cone), (split_frustum, split_cone), "{format}");
+            }
+        }
+    }
     let (errors, first) = ctx.validation.as_ref().unwrap().errors();
     assert_eq!(errors, 0, "validation layer errors: {first:#?}");
 }

@@ -8,6 +8,7 @@
 
 pub mod bounds;
 mod builder;
+pub mod descriptor;
 pub mod io;
 pub mod metrics;
 pub mod order;

@@ -28,6 +28,9 @@ pub enum RenderError {
     /// Validation requested but the layer is not installed.
     #[error("the Khronos validation layer is not installed (`make setup` installs vulkan-validationlayers)")]
     NoValidationLayer,
+    /// The meshlets do not fit the chosen descriptor layout.
+    #[error(transparent)]
+    Descriptor(#[from] crate::meshlet::descriptor::DescriptorError),
     /// A Vulkan call failed.
     #[error("Vulkan call failed: {0}: {1}")]
     Vulkan(&'static str, ash::vk::Result),
@@ -104,33 +107,7 @@ impl Camera {
     }
 }
 
-/// Every compiled shader as (name, SPIR-V bytes; empty when glslangValidator was missing).
-pub const SHADERS: &[(&str, &[u8])] = &[
-    (
-        "meshlet.task",
-        include_bytes!(concat!(env!("OUT_DIR"), "/meshlet.task.spv")),
-    ),
-    (
-        "meshlet.mesh (64/126)",
-        include_bytes!(concat!(env!("OUT_DIR"), "/meshlet_64_126.mesh.spv")),
-    ),
-    (
-        "meshlet.mesh (256/256)",
-        include_bytes!(concat!(env!("OUT_DIR"), "/meshlet_256_256.mesh.spv")),
-    ),
-    (
-        "baseline.vert",
-        include_bytes!(concat!(env!("OUT_DIR"), "/baseline.vert.spv")),
-    ),
-    (
-        "shade.frag",
-        include_bytes!(concat!(env!("OUT_DIR"), "/shade.frag.spv")),
-    ),
-    (
-        "meshlet_id.frag",
-        include_bytes!(concat!(env!("OUT_DIR"), "/meshlet_id.frag.spv")),
-    ),
-];
+include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 
 /// Pixels that differ between two RGBA8 images (any channel).
 pub fn differing_pixels(a: &[u8], b: &[u8]) -> usize {

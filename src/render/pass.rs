@@ -5,7 +5,8 @@
 use super::context::{Buffer, Context};
 use super::{vk_err, Camera, RenderError};
 use crate::mesh::Mesh;
-use crate::meshlet::{bounds::compute_bounds, Limits, Meshlets};
+use crate::meshlet::descriptor::{self, Format};
+use crate::meshlet::{Limits, Meshlets};
 use ash::vk;
 
 /// Image width (the paper's).
@@ -78,6 +79,8 @@ pub struct MeshQueries {
 struct Push {
     view_proj: [f32; 16],
     camera: [f32; 4],
+    box_min: [f32; 4],
+    box_step: [f32; 4],
     meshlet_count: u32,
     flags: u32,
 }
@@ -96,6 +99,9 @@ pub struct Pass<'a> {
     readback: Buffer,
     index_count: u32,
     meshlet_count: u32,
+    format: Format,
+    object: descriptor::ObjectBox,
+    device_bytes: usize,
     set_layout: vk::DescriptorSetLayout,
     pool: vk::DescriptorPool,
     set: vk::DescriptorSet,
@@ -126,50 +132,55 @@ fn shader(name: &str) -> &'static [u8] {
 }
 
 impl<'a> Pass<'a> {
-    /// Uploads `mesh` and `ml` (bounds computed here) and builds the pipelines.
+    /// Uploads `mesh` and `ml` in the split descriptor layout (bounds computed here) and builds the
+    /// pipelines.
     pub fn new(ctx: &'a Context, mesh: &Mesh, ml: &Meshlets) -> Result<Self, RenderError> {
+        Self::with_format(ctx, mesh, ml, Format::Split)
+    }
+
+    /// Uploads `mesh` and `ml` packed in `format` and builds the pipelines for it.
+    pub fn with_format(
+        ctx: &'a Context,
+        mesh: &Mesh,
+        ml: &Meshlets,
+        format: Format,
+    ) -> Result<Self, RenderError> {
         let limits = ml.meshlets.iter().fold((0, 0), |(v, t), m| {
             (v.max(m.vertex_count), t.max(m.triangle_count))
         });
-        let mesh_spv: &[u8] = if limits.0 <= Limits::DEFAULT.max_vertices
+        let size = if limits.0 <= Limits::DEFAULT.max_vertices
             && limits.1 <= Limits::DEFAULT.max_triangles
         {
-            shader("meshlet.mesh (64/126)")
+            "64/126"
         } else {
-            shader("meshlet.mesh (256/256)")
+            "256/256"
         };
+        let task_spv = shader(&format!("meshlet.task ({format})"));
+        let mesh_spv = shader(&format!("meshlet.mesh ({format}, {size})"));
+        let packed = descriptor::pack(mesh, ml, format)?;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let bounds: Vec<[f32; 12]> = compute_bounds(mesh, ml)
-            .iter()
-            .map(|b| {
-                let (s, c) = (b.sphere, b.cone);
-                [
-                    s.center[0],
-                    s.center[1],
-                    s.center[2],
-                    s.radius,
-                    c.apex[0],
-                    c.apex[1],
-                    c.apex[2],
-                    c.cutoff,
-                    c.axis[0],
-                    c.axis[1],
-                    c.axis[2],
-                    0.0,
-                ]
-            })
-            .collect();
-        let mut tri_bytes = ml.triangles.clone();
-        tri_bytes.resize(ml.triangles.len().next_multiple_of(4), 0);
+        // Vulkan has no empty buffers: a format's unused bindings get one zero vec4.
+        let words = |w: &[u32]| -> Vec<u32> {
+            if w.is_empty() {
+                vec![0; 4]
+            } else {
+                w.to_vec()
+            }
+        };
+        let task: Vec<[f32; 4]> = if packed.task.is_empty() {
+            vec![[0.0; 4]]
+        } else {
+            packed.task.clone()
+        };
         let buffers = vec![
             ctx.upload(
                 &mesh.positions,
                 storage | vk::BufferUsageFlags::VERTEX_BUFFER,
             )?,
-            ctx.upload(&ml.meshlets, storage)?,
-            ctx.upload(&ml.vertices, storage)?,
-            ctx.upload(&tri_bytes, storage)?,
-            ctx.upload(&bounds, storage)?,
+            ctx.upload(&words(&packed.descriptors), storage)?,
+            ctx.upload(&words(&packed.data), storage)?,
+            ctx.upload(&words(&packed.triangles), storage)?,
+            ctx.upload(&task, storage)?,
             ctx.upload(&mesh.indices, vk::BufferUsageFlags::INDEX_BUFFER)?,
         ];
         let counters = ctx.buffer(32, storage)?;
@@ -259,7 +270,7 @@ impl<'a> Pass<'a> {
             }
             .map_err(vk_err("shader module"))
         };
-        let task = module(shader("meshlet.task"))?;
+        let task = module(task_spv)?;
         let meshm = module(mesh_spv)?;
         let vert = module(shader("baseline.vert"))?;
         let shade = module(shader("shade.frag"))?;
@@ -351,6 +362,9 @@ impl<'a> Pass<'a> {
             readback,
             index_count: mesh.indices.len() as u32,
             meshlet_count: ml.len() as u32,
+            format,
+            object: packed.object,
+            device_bytes: packed.device_bytes(mesh.positions.len()),
             set_layout,
             pool,
             set,
@@ -362,6 +376,16 @@ impl<'a> Pass<'a> {
             queries,
             mesh_queries,
         })
+    }
+
+    /// The descriptor layout the meshlets were uploaded in.
+    pub fn format(&self) -> Format {
+        self.format
+    }
+
+    /// Device bytes of the meshlet data in this layout (see `Packed::device_bytes`).
+    pub fn device_bytes(&self) -> usize {
+        self.device_bytes
     }
 
     /// Draws one frame from `camera` with `how`.
@@ -394,6 +418,18 @@ impl<'a> Pass<'a> {
                 .view_proj(WIDTH as f32 / HEIGHT as f32)
                 .to_cols_array(),
             camera: camera.eye.extend(1.0).to_array(),
+            box_min: [
+                self.object.min[0],
+                self.object.min[1],
+                self.object.min[2],
+                0.0,
+            ],
+            box_step: [
+                self.object.step[0],
+                self.object.step[1],
+                self.object.step[2],
+                0.0,
+            ],
             meshlet_count: self.meshlet_count,
             flags: flags | u32::from(shading == Shading::Unlit) << 2,
         };
