@@ -623,6 +623,8 @@ fn exact_bounds(t: &[[f32; 4]; 3]) -> MeshletBounds {
 
 #[cfg(test)]
 mod tests {
+    // The tests walk several arrays in step by meshlet index.
+    #![allow(clippy::needless_range_loop)]
     use super::*;
     use crate::mesh::generate;
     use crate::meshlet::{Limits, Meshlet};
