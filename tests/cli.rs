@@ -133,3 +133,47 @@ fn help_explains_commands() {
     let out = ok(&["stats", "--help"]);
     assert!(out.contains("--limits") && out.contains("64/126"), "{out}");
 }
+
+#[test]
+fn render_writes_a_meshlet_coloured_png_for_each_descriptor() {
+    let dir = common::scratch("render-png");
+    let mesh = common::meshes_dir().join("fandisk.ply.zst");
+    let mut images = Vec::new();
+    for d in ["split", "nvidia-b"] {
+        let png = dir.join(format!("fandisk-{d}.png"));
+        let out = ok(&[
+            "render",
+            "-q",
+            mesh.to_str().unwrap(),
+            "--strategy",
+            "bsphere",
+            "--views",
+            "2",
+            "-d",
+            d,
+            "-o",
+            png.to_str().unwrap(),
+            "--validate",
+        ]);
+        assert!(
+            out.contains("view 1:") && out.contains("validation layer: no errors"),
+            "{out}"
+        );
+        assert!(out.contains(&format!("{d} descriptors")), "{out}");
+        // A 1280x720 RGBA image with many meshlet colours on a black background.
+        let decoder =
+            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+        let mut reader = decoder.read_info().unwrap();
+        let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut pixels).unwrap();
+        assert_eq!((info.width, info.height), (1280, 720));
+        let colours: std::collections::HashSet<&[u8]> = pixels.chunks_exact(4).collect();
+        assert!(colours.len() > 50, "{d}: {} colours", colours.len());
+        images.push(pixels);
+    }
+    assert_eq!(images[0], images[1], "layouts draw the same meshlets");
+    // A layout the meshlets do not fit, or an unknown one: a clear error, no panic.
+    let out = cli(&["render", "-q", mesh.to_str().unwrap(), "-d", "nvidia-c"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("split, nvidia-a, nvidia-b, monolithic"));
+}

@@ -3,6 +3,7 @@
 
 use crate::bench::{self, evaluate, metrics_table, Evaluation};
 use crate::mesh::{self, generate, Mesh, MeshStats};
+use crate::meshlet::descriptor::Format;
 use crate::meshlet::order::MeshletOrder;
 use crate::meshlet::{io::MeshletFile, validate, Limits};
 use crate::strategy::{self, Options, Strategy};
@@ -181,9 +182,13 @@ pub enum Command {
         /// No task-shader culling.
         #[arg(long)]
         no_cull: bool,
-        /// Write the first view, coloured by meshlet, to this PNG.
-        #[arg(long)]
-        png: Option<PathBuf>,
+        /// Meshlet descriptor layout on the GPU: split (exact bounds), nvidia-a, nvidia-b
+        /// (quantised bounds), monolithic (per-meshlet vertex copies).
+        #[arg(short, long, default_value = "split", value_parser = clap::value_parser!(Format))]
+        descriptor: Format,
+        /// Write the first view, coloured by meshlet (the paper's Figure 1), to this PNG.
+        #[arg(short, long = "output", visible_alias = "png", value_name = "PNG")]
+        output: Option<PathBuf>,
         /// Enable the Khronos validation layer and fail on any error it reports.
         #[arg(long)]
         validate: bool,
@@ -354,7 +359,8 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
             seed,
             distance,
             no_cull,
-            png,
+            descriptor,
+            output,
             validate,
             args,
         } => render(
@@ -365,7 +371,8 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
                 seed,
                 distance,
                 cull: !no_cull,
-                png,
+                descriptor,
+                png: output,
                 validate,
             },
             &args,
@@ -763,6 +770,7 @@ struct RenderOpts {
     seed: u64,
     distance: f32,
     cull: bool,
+    descriptor: Format,
     png: Option<PathBuf>,
     validate: bool,
 }
@@ -775,12 +783,15 @@ fn render(path: &Path, name: &str, o: RenderOpts, args: &StrategyArgs, quiet: bo
     validate(&m, &ml, args.limits)
         .with_context(|| format!("{}: {name} built invalid meshlets", path.display()))?;
     let ctx = Context::new(o.validate)?;
-    let pass = Pass::new(&ctx, &m, &ml)?;
+    let pass = Pass::with_format(&ctx, &m, &ml, o.descriptor)
+        .with_context(|| format!("{}: {name}", path.display()))?;
     println!(
-        "{}: {} triangles, {name}: {} meshlets; device: {}",
+        "{}: {} triangles, {name}: {} meshlets, {} descriptors: {:.1} bytes per triangle; device: {}",
         path.display(),
         m.triangle_count(),
         ml.len(),
+        o.descriptor,
+        pass.device_bytes() as f64 / m.triangle_count().max(1) as f64,
         ctx.name
     );
     let how = Pipeline::Mesh {
