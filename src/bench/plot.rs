@@ -1,4 +1,4 @@
-//! Line charts for results/ (SVG: no font files needed, readable in any browser or on GitHub).
+//! Line and bar charts for results/ (SVG: no font files needed, readable in any browser or on GitHub).
 
 use anyhow::{Context, Result};
 use plotters::prelude::*;
@@ -88,6 +88,99 @@ pub fn line_chart(
                 PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
             });
         chart.draw_series(pts.into_iter().map(|p| Circle::new(p, 3, color.filled())))?;
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()
+        .with_context(|| format!("{}: cannot write plot", path.display()))?;
+    Ok(())
+}
+
+/// One bar series: a value per category; series with the same `stack` are stacked on each other,
+/// different stacks stand side by side within a category.
+pub struct Bars {
+    /// Legend label.
+    pub label: String,
+    /// One value per category.
+    pub values: Vec<f64>,
+    /// Stack index (0-based).
+    pub stack: usize,
+}
+
+/// Draws grouped (and optionally stacked) bars, one group per category.
+pub fn bar_chart(
+    path: &Path,
+    title: &str,
+    y_label: &str,
+    categories: &[String],
+    bars: &[Bars],
+) -> Result<()> {
+    let root = SVGBackend::new(path, (1000, 560)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let stacks = bars.iter().map(|b| b.stack + 1).max().unwrap_or(1);
+    let mut top: f64 = 0.0;
+    for c in 0..categories.len() {
+        for s in 0..stacks {
+            let h: f64 = bars
+                .iter()
+                .filter(|b| b.stack == s)
+                .map(|b| b.values.get(c).copied().unwrap_or(0.0).max(0.0))
+                .sum();
+            top = top.max(h);
+        }
+    }
+    let n = categories.len().max(1) as f64;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 22))
+        .margin(16)
+        .x_label_area_size(56)
+        .y_label_area_size(64)
+        .build_cartesian_2d(0.0..n, 0.0..(top * 1.1).max(1e-9))?;
+    let names = categories.to_vec();
+    let xfmt = move |x: &f64| {
+        let i = x.floor() as usize;
+        // Label once per category, at its centre.
+        if (x - (i as f64 + 0.5)).abs() < 1e-6 {
+            names.get(i).cloned().unwrap_or_default()
+        } else {
+            String::new()
+        }
+    };
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(2 * categories.len() + 1)
+        .x_label_formatter(&xfmt)
+        .y_desc(y_label)
+        .draw()?;
+    // Each category spans [c, c + 1): 10 % margin on both sides, stacks share the rest.
+    let width = 0.8 / stacks as f64;
+    for (i, b) in bars.iter().enumerate() {
+        let color = Palette99::pick(i).to_rgba();
+        let rects: Vec<_> = b
+            .values
+            .iter()
+            .enumerate()
+            .map(|(c, &v)| {
+                let below: f64 = bars[..i]
+                    .iter()
+                    .filter(|o| o.stack == b.stack)
+                    .map(|o| o.values.get(c).copied().unwrap_or(0.0).max(0.0))
+                    .sum();
+                let x0 = c as f64 + 0.1 + width * b.stack as f64;
+                Rectangle::new(
+                    [(x0, below), (x0 + width * 0.92, below + v.max(0.0))],
+                    color.filled(),
+                )
+            })
+            .collect();
+        chart
+            .draw_series(rects)?
+            .label(b.label.clone())
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], color.filled()));
     }
     chart
         .configure_series_labels()

@@ -253,15 +253,23 @@ pub enum BenchCommand {
         /// Strategies (comma-separated).
         #[arg(short, long, value_delimiter = ',', default_values_t = bench::render::DEFAULT_STRATEGIES.iter().map(|s| s.to_string()))]
         strategy: Vec<String>,
+        /// Strategies of the experiments: the four descriptor layouts, meshlets ordered by
+        /// primitive count, triangle order inside meshlets (comma-separated; empty: none).
+        #[arg(long, value_delimiter = ',', default_values_t = bench::render::DEFAULT_EXPERIMENT_STRATEGIES.iter().map(|s| s.to_string()))]
+        experiment_strategy: Vec<String>,
         /// Views per mesh (sized for lavapipe; the paper used 100,000 frames on a GPU).
         #[arg(long, default_value_t = 10)]
         views: usize,
         /// Seed of the view sequence.
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Camera distance from the mesh centre in bounding radii.
+        /// Camera distance from the mesh centre in bounding radii (every view sees the whole mesh).
         #[arg(long, default_value_t = 2.5)]
         distance: f32,
+        /// Distance of the close views for the culling shares (inside the bounding sphere, so the
+        /// frustum culls).
+        #[arg(long, default_value_t = 0.9)]
+        near_distance: f32,
     },
     /// GPU/CPU agreement and conservative bounds on a mesh translated, scaled, flattened, with
     /// duplicate vertices and a huge coordinate range -> stability.md.
@@ -422,18 +430,25 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
             out,
             limits,
             strategy,
+            experiment_strategy,
             views,
             seed,
             distance,
+            near_distance,
         }) => {
             let cfg = bench::render::Config {
                 meshes: meshes.unwrap_or_else(default_meshes_dir),
                 out,
                 limits,
                 strategies: strategy,
+                experiment_strategies: experiment_strategy
+                    .into_iter()
+                    .filter(|s| !s.is_empty())
+                    .collect(),
                 views,
                 seed,
                 distance,
+                near_distance,
                 quiet: q,
             };
             bench::render::run(&cfg)?;
