@@ -138,7 +138,8 @@ pub fn bar_chart(
         .margin(16)
         .x_label_area_size(56)
         .y_label_area_size(64)
-        .build_cartesian_2d(0.0..n, 0.0..(top * 1.1).max(1e-9))?;
+        // Headroom above the tallest bar for the legend.
+        .build_cartesian_2d(0.0..n, 0.0..(top * 1.3).max(1e-9))?;
     let names = categories.to_vec();
     let xfmt = move |x: &f64| {
         let i = x.floor() as usize;
@@ -184,6 +185,7 @@ pub fn bar_chart(
     }
     chart
         .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .draw()?;

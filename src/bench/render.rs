@@ -170,6 +170,8 @@ struct Variant {
     no_cull: Vec<f64>,
     /// Far views: meshlets culled by frustum and backface, triangles skipped (%).
     shares: [f64; 3],
+    /// Why the variant could not run (a layout's field too narrow for the mesh); nothing measured.
+    unfit: Option<String>,
 }
 
 fn load(path: &std::path::Path) -> Result<Mesh> {
@@ -310,16 +312,27 @@ fn experiments(
     let mut out = Vec::new();
     // Layouts: a meshlet set too large for a layout's fields is reported, not measured.
     let mut passes = Vec::new();
+    let mut unfit = Vec::new();
     for f in Format::ALL {
         match Pass::with_format(ctx, m, &base, f) {
             Ok(p) => passes.push((f.name().to_string(), &base, p)),
-            Err(RenderError::Descriptor(e)) => {
-                eprintln!("{name}: {s}: {e}");
-            }
+            Err(RenderError::Descriptor(e)) => unfit.push(Variant {
+                mesh: name.to_string(),
+                strategy: s.to_string(),
+                experiment: "descriptor",
+                variant: f.name().to_string(),
+                bytes_per_triangle: f64::NAN,
+                miss_rate: local_miss_rate(&base, 8),
+                cull: Vec::new(),
+                no_cull: Vec::new(),
+                shares: [f64::NAN; 3],
+                unfit: Some(e.to_string()),
+            }),
             Err(e) => return Err(e.into()),
         }
     }
     out.extend(measure(m, name, s, "descriptor", &passes, views)?);
+    out.extend(unfit);
     drop(passes);
     let passes = vec![
         ("as built".to_string(), &base, Pass::new(ctx, m, &base)?),
@@ -365,6 +378,7 @@ fn measure(
                 cull,
                 no_cull,
                 shares: counts.shares(ml.len(), m.triangle_count(), views.len()),
+                unfit: None,
             },
         )
         .collect())
@@ -584,7 +598,7 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
         })
     };
     let mut csv = String::from("mesh,strategy,experiment,variant,bytes_per_triangle,local_miss_rate,frustum_culled_pct,backface_culled_pct,triangles_skipped_pct,cull_ms_median,cull_ms_p95,nocull_ms_median,nocull_ms_p95\n");
-    for v in variants {
+    for v in variants.iter().filter(|v| v.unfit.is_none()) {
         writeln!(
             csv,
             "{},{},{},{},{:.3},{:.4},{:.3},{:.3},{:.3},{:.4},{:.4},{:.4},{:.4}",
@@ -616,6 +630,14 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
     writeln!(md, "|---|---|---|---:|---:|---:|---:|---:|---:|")?;
     let mut ratios: std::collections::BTreeMap<(String, String), Vec<f64>> = Default::default();
     for v in variants.iter().filter(|v| v.experiment == "descriptor") {
+        if let Some(why) = &v.unfit {
+            writeln!(
+                md,
+                "| {} | {} | {} | does not fit: {why} | | | | | |",
+                v.mesh, v.strategy, v.variant
+            )?;
+            continue;
+        }
         let Some(base) = find(v, Format::Split.name()) else {
             continue;
         };
