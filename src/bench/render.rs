@@ -232,9 +232,10 @@ fn strategy_row(
     near: &[Camera],
 ) -> Result<Row> {
     let pass = Pass::new(ctx, m, ml)?;
-    let [(cull, counts)] = <[_; 1]>::try_from(frames(&[&pass], views, CULL)?).unwrap();
-    let [(no_cull, _)] = <[_; 1]>::try_from(frames(&[&pass], views, NO_CULL)?).unwrap();
-    let [(vertex, _)] = <[_; 1]>::try_from(frames(&[&pass], views, Pipeline::Vertex)?).unwrap();
+    let one = |how| -> Result<(Vec<f64>, Counts)> { Ok(frames(&[&pass], views, how)?.remove(0)) };
+    let (cull, counts) = one(CULL)?;
+    let (no_cull, _) = one(NO_CULL)?;
+    let (vertex, _) = one(Pipeline::Vertex)?;
     // Close views: culling counters only (every frame is rendered, its time is not reported).
     let mut near_counts = Counts::default();
     for v in near {
