@@ -11,7 +11,9 @@ use super::plot::{bar_chart, line_chart, Axes, Bars, Series};
 use super::{machine_note, median, today};
 use crate::mesh::{self, Mesh};
 use crate::meshlet::descriptor::Format;
-use crate::meshlet::order::{local_miss_rate, MeshletOrder};
+use crate::meshlet::order::{
+    local_miss_rate, optimize_triangle_order, order_meshlets, MeshletOrder,
+};
 use crate::meshlet::{validate, Limits, Meshlets};
 use crate::render::{
     write_png, Camera, Context, Pass, Pipeline, RenderError, Shading, HEIGHT, WIDTH,
@@ -178,8 +180,8 @@ fn load(path: &std::path::Path) -> Result<Mesh> {
     mesh::load(path).with_context(|| format!("loading {}", path.display()))
 }
 
-fn build(m: &Mesh, s: &str, opts: &Options, limits: Limits, name: &str) -> Result<Meshlets> {
-    let ml = strategy::by_name(s, opts)?.build(m, limits);
+fn build(m: &Mesh, s: &str, limits: Limits, name: &str) -> Result<Meshlets> {
+    let ml = strategy::by_name(s, &Options::default())?.build(m, limits);
     validate(m, &ml, limits).with_context(|| format!("{name}: {s}"))?;
     Ok(ml)
 }
@@ -204,7 +206,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         let near = Camera::random_views(&m, cfg.views.max(1), cfg.seed, cfg.near_distance);
         for s in &cfg.strategies {
             pb.set_message(format!("{name}: {s}"));
-            let ml = build(&m, s, &Options::default(), cfg.limits, &name)?;
+            let ml = build(&m, s, cfg.limits, &name)?;
             rows.push(strategy_row(cfg, &ctx, &m, &name, s, &ml, &views, &near)?);
             pb.inc(1);
         }
@@ -289,27 +291,16 @@ fn experiments(
     s: &str,
     views: &[Camera],
 ) -> Result<Vec<Variant>> {
-    let base = build(m, s, &Options::default(), cfg.limits, name)?;
-    let by_triangles = build(
-        m,
-        s,
-        &Options {
-            meshlet_order: MeshletOrder::Triangles,
-            ..Options::default()
-        },
-        cfg.limits,
-        name,
-    )?;
-    let local = build(
-        m,
-        s,
-        &Options {
-            local_order: true,
-            ..Options::default()
-        },
-        cfg.limits,
-        name,
-    )?;
+    let base = build(m, s, cfg.limits, name)?;
+    // The variants reorder the same meshlets (what `--meshlet-order` and `--local-order` do after
+    // any strategy), so they are derived from `base` rather than built again.
+    let mut by_triangles = base.clone();
+    order_meshlets(&mut by_triangles, MeshletOrder::Triangles);
+    let mut local = base.clone();
+    optimize_triangle_order(&mut local);
+    for ml in [&by_triangles, &local] {
+        validate(m, ml, cfg.limits).with_context(|| format!("{name}: {s}, reordered"))?;
+    }
     let mut out = Vec::new();
     // Layouts: a meshlet set too large for a layout's fields is reported, not measured.
     let mut passes = Vec::new();
