@@ -57,7 +57,10 @@ fn cases() -> Vec<Case> {
         ("nan.obj", b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n".to_vec(), |k| matches!(k, MeshErrorKind::NonFinite { .. })),
         ("empty.obj", b"# nothing\nv 0 0 0\n".to_vec(), |k| matches!(k, MeshErrorKind::Empty(_))),
         ("bad.gltf", b"{ not json".to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),
-        ("bad.glb", b"glTF\x02\x00\x00\x00\xff\xff\xff\xff".to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("bad.glb", b"glTF\x02\x00\x00\x00\xff\xff\xff\xff".to_vec(), |k| matches!(k, MeshErrorKind::Truncated(_))),
+        ("short.glb", b"glTF\x02\x00\x00\x00\x05\x00\x00\x00".to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("accessor_range.gltf", br#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":7}}]}]}"#.to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("node_cycle.gltf", br#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"children":[1]},{"children":[0]}]}"#.to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),
         ("empty.gltf", br#"{"asset":{"version":"2.0"}}"#.to_vec(), |k| matches!(k, MeshErrorKind::Empty(_))),
     ]
 }

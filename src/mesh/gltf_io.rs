@@ -1,89 +1,636 @@
-//! glTF 2.0 (.gltf and .glb): all triangle primitives of all meshes, node transforms applied.
+//! glTF 2.0 (.gltf and .glb): all triangle primitives of all meshes, node transforms applied; and a
+//! GLB writer for [`crate::meshlet::export`].
 //!
 //! The default scene (or every scene when none is marked default) is walked from its roots; each
 //! mesh instance is baked with its world transform, and mirrored instances (negative determinant)
 //! get their winding flipped so front faces stay front faces. Meshes that no node instances are
 //! added untransformed, so every mesh in the file appears at least once. Triangle strips and fans
 //! are unrolled; point and line primitives are skipped.
+//!
+//! **Validated here, not by the `gltf` crate.** The crate's own validation and accessor readers
+//! index arrays without bounds checks and subtract before checking (a primitive naming an accessor
+//! past the end of `accessors`, a GLB header length below 12 or an accessor count of 0 panic inside
+//! it, and a POSITION accessor of the wrong type is read as garbage). So only its serde types are
+//! used: the JSON is deserialised without validation, and this module follows every index with a
+//! bounds check, reads every accessor with checked arithmetic against the bytes present, checks
+//! component types, and enforces the spec's rule that nodes form trees (a cycle or a node reached
+//! twice is an error, so instancing cannot blow up exponentially). The baked output may be at most
+//! [`MAX_EXPANSION`] times the input plus [`EXPANSION_SLACK`] bytes: one accessor named by many
+//! primitives or meshes instanced by many nodes cannot allocate without bound.
 
 use super::error::{parse_err, MeshErrorKind};
-use glam::{Mat4, Vec3};
-use gltf::mesh::Mode;
-use std::path::Path;
+use glam::{Mat4, Quat, Vec3};
+use gltf::json::{self, accessor::ComponentType, accessor::Type, mesh::Mode, validation::Checked};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+/// Baked positions and indices may take at most this many times the file's bytes (plus
+/// [`EXPANSION_SLACK`]); real files instance far less, a hostile one could ask for any amount.
+pub const MAX_EXPANSION: u64 = 64;
+/// Bytes of baked output allowed on top of [`MAX_EXPANSION`] times the input.
+pub const EXPANSION_SLACK: u64 = 16 << 20;
+
+const GLB_MAGIC: &[u8; 4] = b"glTF";
+const CHUNK_JSON: u32 = 0x4E4F_534A;
+const CHUNK_BIN: u32 = 0x004E_4942;
 
 /// Parses a .gltf or .glb file; `base` resolves external buffer URIs.
 pub fn parse(data: &[u8], base: Option<&Path>) -> Result<(Vec<[f32; 3]>, Vec<u32>), MeshErrorKind> {
-    let gltf = gltf::Gltf::from_slice(data).map_err(|e| parse_err("glTF", e.to_string()))?;
-    let doc = &gltf.document;
-    let buffers = doc
-        .buffers()
-        .map(|b| load_buffer(&b, gltf.blob.as_deref(), base))
-        .collect::<Result<Vec<_>, _>>()?;
-    let mut out = (Vec::new(), Vec::new());
-    let mut instanced = vec![false; doc.meshes().len()];
-
-    let roots: Vec<gltf::Node> = match doc.default_scene() {
-        Some(s) => s.nodes().collect(),
-        None => doc.scenes().flat_map(|s| s.nodes()).collect(),
-    };
-    // Iterative walk; a depth cap guards against cyclic node graphs in malformed files.
-    let mut stack: Vec<(gltf::Node, Mat4, usize)> =
-        roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
-    while let Some((node, parent, depth)) = stack.pop() {
-        if depth > 1024 {
-            return Err(parse_err(
-                format!("node {}", node.index()),
-                "node hierarchy deeper than 1024 (cycle?)",
-            ));
+    let doc = Document::parse(data, base)?;
+    let budget = (data.len() as u64)
+        .saturating_mul(MAX_EXPANSION)
+        .saturating_add(EXPANSION_SLACK);
+    let instances = doc.instances()?;
+    // Sizes first, so nothing is allocated for output that the budget would refuse.
+    let mut out_bytes = 0u64;
+    for (mesh, _) in &instances {
+        for p in &doc.root.meshes[*mesh].primitives {
+            if let Some((v, i)) = doc.primitive_size(p)? {
+                out_bytes = out_bytes.saturating_add(12 * v + 4 * i);
+            }
         }
-        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        if let Some(mesh) = node.mesh() {
-            instanced[mesh.index()] = true;
-            append_mesh(&mesh, world, &buffers, &mut out)?;
+        if out_bytes > budget {
+            return Err(MeshErrorKind::TooLarge(format!(
+                "meshes and node instancing expand to more than {budget} bytes of vertices and \
+                 indices ({MAX_EXPANSION}x the file plus {} MiB)",
+                EXPANSION_SLACK >> 20
+            )));
         }
-        stack.extend(node.children().map(|c| (c, world, depth + 1)));
     }
-    for mesh in doc.meshes().filter(|m| !instanced[m.index()]) {
-        append_mesh(&mesh, Mat4::IDENTITY, &buffers, &mut out)?;
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for (mesh, world) in instances {
+        doc.append_mesh(mesh, world, &mut positions, &mut indices)?;
+    }
+    Ok((positions, indices))
+}
+
+/// `COLOR_0` of every triangle primitive, in the order [`parse`] emits their vertices (RGBA; RGB gets
+/// alpha 1). Float, normalised u8 and normalised u16 colours are read. A primitive without colours
+/// is an error: this is for files whose colours matter, such as `meshletlab export`'s.
+pub fn colours(data: &[u8], base: Option<&Path>) -> Result<Vec<[f32; 4]>, MeshErrorKind> {
+    let doc = Document::parse(data, base)?;
+    let mut out = Vec::new();
+    for (mesh, _) in doc.instances()? {
+        for (pi, p) in doc.root.meshes[mesh].primitives.iter().enumerate() {
+            if doc.primitive_size(p)?.is_none() {
+                continue;
+            }
+            let loc = format!("mesh {mesh} primitive {pi}");
+            let a = p
+                .attributes
+                .get(&Checked::Valid(json::mesh::Semantic::Colors(0)))
+                .ok_or_else(|| parse_err(&loc, "no COLOR_0"))?;
+            let acc = doc.accessor(a.value(), &loc)?;
+            let n = match acc.ty {
+                Type::Vec3 => 3,
+                Type::Vec4 => 4,
+                _ => return Err(parse_err(&loc, "COLOR_0 is not VEC3 or VEC4")),
+            };
+            let norm = match acc.component {
+                ComponentType::F32 => 1.0,
+                ComponentType::U8 if acc.normalized => 255.0,
+                ComponentType::U16 if acc.normalized => 65535.0,
+                _ => return Err(parse_err(&loc, "COLOR_0 component type")),
+            };
+            let raw = acc.read_f32(n)?;
+            out.extend(raw.chunks_exact(n).map(|c| {
+                let mut rgba = [1.0; 4];
+                for (o, v) in rgba.iter_mut().zip(c) {
+                    *o = v / norm;
+                }
+                rgba
+            }));
+        }
     }
     Ok(out)
 }
 
-/// Bytes of one buffer: the GLB binary chunk, a base64 `data:` URI, or a file next to the glTF.
+/// Writes a GLB container: the JSON chunk padded with spaces, the binary chunk with zeros.
+pub fn write_glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let pad4 = |n: usize| n.div_ceil(4) * 4;
+    let (jl, bl) = (pad4(json.len()), pad4(bin.len()));
+    let total = 12 + 8 + jl + if bin.is_empty() { 0 } else { 8 + bl };
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(GLB_MAGIC);
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(jl as u32).to_le_bytes());
+    out.extend_from_slice(&CHUNK_JSON.to_le_bytes());
+    out.extend_from_slice(json);
+    out.resize(20 + jl, b' ');
+    if !bin.is_empty() {
+        out.extend_from_slice(&(bl as u32).to_le_bytes());
+        out.extend_from_slice(&CHUNK_BIN.to_le_bytes());
+        out.extend_from_slice(bin);
+        out.resize(total, 0);
+    }
+    out
+}
+
+/// Splits a GLB container into its JSON chunk and optional binary chunk, checking every length.
+fn split_glb(data: &[u8]) -> Result<(&[u8], Option<&[u8]>), MeshErrorKind> {
+    let u32_at = |at: usize| -> Result<u32, MeshErrorKind> {
+        data.get(at..at + 4)
+            .map(|b| u32::from_le_bytes(b.try_into().expect("4 bytes")))
+            .ok_or_else(|| MeshErrorKind::Truncated(format!("GLB ends at byte {}", data.len())))
+    };
+    let version = u32_at(4)?;
+    if version != 2 {
+        return Err(MeshErrorKind::Unsupported(format!("GLB version {version}")));
+    }
+    let total = u32_at(8)? as usize;
+    if total > data.len() {
+        return Err(MeshErrorKind::Truncated(format!(
+            "GLB header says {total} bytes, the file has {}",
+            data.len()
+        )));
+    }
+    if total < 20 {
+        return Err(parse_err(
+            "GLB header",
+            format!("length {total} is too small"),
+        ));
+    }
+    let data = &data[..total];
+    let mut chunks = Vec::new();
+    let mut at = 12usize;
+    while at < data.len() {
+        let len = u32_at(at)? as usize;
+        let ty = u32_at(at + 4)?;
+        let body = data
+            .get(at + 8..)
+            .and_then(|d| d.get(..len))
+            .ok_or_else(|| {
+                MeshErrorKind::Truncated(format!(
+                    "GLB chunk at byte {at} announces {len} bytes past the end"
+                ))
+            })?;
+        chunks.push((ty, body));
+        at += 8 + len.div_ceil(4) * 4;
+    }
+    match chunks.as_slice() {
+        [(CHUNK_JSON, j)] => Ok((j, None)),
+        [(CHUNK_JSON, j), (CHUNK_BIN, b), ..] => Ok((j, Some(b))),
+        [(CHUNK_JSON, j), ..] => Ok((j, None)),
+        _ => Err(parse_err("GLB", "the first chunk is not JSON")),
+    }
+}
+
+/// A deserialised (unvalidated) glTF document and its buffers.
+struct Document {
+    root: json::Root,
+    /// Buffer bytes, loaded up front (each checked against its declared length). Shared, so a
+    /// file whose buffers all name the GLB chunk or one external file holds its bytes once.
+    buffers: Vec<Rc<[u8]>>,
+}
+
+/// An accessor checked for range against its buffer view: element `i` starts at `data[i * stride]`.
+struct Accessor<'a> {
+    data: &'a [u8],
+    count: usize,
+    stride: usize,
+    component: ComponentType,
+    ty: Type,
+    normalized: bool,
+    loc: String,
+}
+
+fn component_size(c: ComponentType) -> usize {
+    match c {
+        ComponentType::I8 | ComponentType::U8 => 1,
+        ComponentType::I16 | ComponentType::U16 => 2,
+        ComponentType::U32 | ComponentType::F32 => 4,
+    }
+}
+
+fn type_len(t: Type) -> usize {
+    match t {
+        Type::Scalar => 1,
+        Type::Vec2 => 2,
+        Type::Vec3 => 3,
+        Type::Vec4 | Type::Mat2 => 4,
+        Type::Mat3 => 9,
+        Type::Mat4 => 16,
+    }
+}
+
+impl Accessor<'_> {
+    /// Component values as f32, `n` per element (components read little-endian; integers as is).
+    fn read_f32(&self, n: usize) -> Result<Vec<f32>, MeshErrorKind> {
+        let size = component_size(self.component);
+        let mut out = Vec::with_capacity(self.count * n);
+        for i in 0..self.count {
+            let e = &self.data[i * self.stride..];
+            for c in 0..n {
+                let b = &e[c * size..(c + 1) * size];
+                out.push(match self.component {
+                    ComponentType::F32 => f32::from_le_bytes(b.try_into().expect("4 bytes")),
+                    ComponentType::U8 => b[0] as f32,
+                    ComponentType::I8 => b[0] as i8 as f32,
+                    ComponentType::U16 => u16::from_le_bytes([b[0], b[1]]) as f32,
+                    ComponentType::I16 => i16::from_le_bytes([b[0], b[1]]) as f32,
+                    ComponentType::U32 => u32::from_le_bytes(b.try_into().expect("4 bytes")) as f32,
+                });
+            }
+        }
+        Ok(out)
+    }
+
+    /// Unsigned integer scalars (index buffers).
+    fn read_indices(&self) -> Result<Vec<u32>, MeshErrorKind> {
+        if self.ty != Type::Scalar || self.normalized {
+            return Err(parse_err(
+                &self.loc,
+                "indices must be non-normalised SCALAR",
+            ));
+        }
+        let at = |i: usize| &self.data[i * self.stride..];
+        Ok(match self.component {
+            ComponentType::U8 => (0..self.count).map(|i| at(i)[0] as u32).collect(),
+            ComponentType::U16 => (0..self.count)
+                .map(|i| u16::from_le_bytes([at(i)[0], at(i)[1]]) as u32)
+                .collect(),
+            ComponentType::U32 => (0..self.count)
+                .map(|i| u32::from_le_bytes(at(i)[..4].try_into().expect("4 bytes")))
+                .collect(),
+            c => {
+                return Err(parse_err(
+                    &self.loc,
+                    format!("indices of component type {c:?} (u8, u16 or u32 required)"),
+                ))
+            }
+        })
+    }
+}
+
+impl Document {
+    fn parse(data: &[u8], base: Option<&Path>) -> Result<Self, MeshErrorKind> {
+        let (json_bytes, blob) = if data.starts_with(GLB_MAGIC) {
+            split_glb(data)?
+        } else {
+            (data, None)
+        };
+        let root: json::Root = serde_json::from_slice(json_bytes)
+            .map_err(|e| parse_err("glTF JSON", e.to_string()))?;
+        let blob: Option<Rc<[u8]>> = blob.map(Rc::from);
+        let mut files = HashMap::new();
+        let buffers = root
+            .buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| load_buffer(i, b, blob.as_ref(), base, &mut files))
+            .collect::<Result<_, _>>()?;
+        Ok(Self { root, buffers })
+    }
+
+    /// Mesh instances to bake: (mesh index, world transform), in a fixed order.
+    fn instances(&self) -> Result<Vec<(usize, Mat4)>, MeshErrorKind> {
+        let r = &self.root;
+        let scenes: Vec<usize> = match &r.scene {
+            Some(s) => {
+                let s = s.value();
+                if s >= r.scenes.len() {
+                    return Err(parse_err(
+                        "scene",
+                        format!("default scene {s} does not exist"),
+                    ));
+                }
+                vec![s]
+            }
+            None => (0..r.scenes.len()).collect(),
+        };
+        let mut reached = vec![false; r.nodes.len()];
+        let mut out = Vec::new();
+        let mut instanced = vec![false; r.meshes.len()];
+        for s in scenes {
+            // Roots listed twice (or in two scenes) are drawn once.
+            let mut stack: Vec<(usize, Mat4)> = Vec::new();
+            for n in r.scenes[s].nodes.iter().rev() {
+                let n = self.node_index(n.value(), &format!("scene {s}"))?;
+                if !reached[n] {
+                    stack.push((n, Mat4::IDENTITY));
+                }
+            }
+            while let Some((n, parent)) = stack.pop() {
+                // glTF nodes form trees: reaching a node twice means a cycle or a shared child.
+                if reached[n] {
+                    return Err(parse_err(
+                        format!("node {n}"),
+                        "reached twice: glTF nodes must form trees (cycle or shared child)",
+                    ));
+                }
+                reached[n] = true;
+                let node = &r.nodes[n];
+                let world = parent * local_transform(node);
+                if let Some(m) = &node.mesh {
+                    let m = m.value();
+                    if m >= r.meshes.len() {
+                        return Err(parse_err(
+                            format!("node {n}"),
+                            format!("mesh {m} does not exist"),
+                        ));
+                    }
+                    instanced[m] = true;
+                    out.push((m, world));
+                }
+                for c in node.children.iter().flatten().rev() {
+                    stack.push((self.node_index(c.value(), &format!("node {n}"))?, world));
+                }
+            }
+        }
+        out.extend(
+            (0..r.meshes.len())
+                .filter(|&m| !instanced[m])
+                .map(|m| (m, Mat4::IDENTITY)),
+        );
+        Ok(out)
+    }
+
+    fn node_index(&self, n: usize, loc: &str) -> Result<usize, MeshErrorKind> {
+        if n < self.root.nodes.len() {
+            Ok(n)
+        } else {
+            Err(parse_err(loc, format!("node {n} does not exist")))
+        }
+    }
+
+    /// Accessor `i`, with its bytes range-checked against its view and buffer.
+    fn accessor(&self, i: usize, loc: &str) -> Result<Accessor<'_>, MeshErrorKind> {
+        let loc = format!("{loc} accessor {i}");
+        let a = self
+            .root
+            .accessors
+            .get(i)
+            .ok_or_else(|| parse_err(&loc, "does not exist"))?;
+        if a.sparse.is_some() {
+            return Err(MeshErrorKind::Unsupported(format!(
+                "{loc}: sparse accessor"
+            )));
+        }
+        let (Checked::Valid(component), Checked::Valid(ty)) = (&a.component_type, &a.type_) else {
+            return Err(parse_err(&loc, "invalid componentType or type"));
+        };
+        let (component, ty) = (component.0, *ty);
+        let elem = component_size(component) * type_len(ty);
+        let count = usize::try_from(a.count.0).map_err(|_| parse_err(&loc, "count too large"))?;
+        let Some(view) = &a.buffer_view else {
+            return Err(MeshErrorKind::Unsupported(format!(
+                "{loc}: accessor without a bufferView (implicit zeros)"
+            )));
+        };
+        let vi = view.value();
+        let v = self
+            .root
+            .buffer_views
+            .get(vi)
+            .ok_or_else(|| parse_err(&loc, format!("bufferView {vi} does not exist")))?;
+        let bi = v.buffer.value();
+        let buffer = self
+            .buffers
+            .get(bi)
+            .ok_or_else(|| parse_err(&loc, format!("buffer {bi} does not exist")))?;
+        let stride = v.byte_stride.map(|s| s.0).unwrap_or(elem);
+        if stride < elem {
+            return Err(parse_err(
+                &loc,
+                format!("byteStride {stride} < element size {elem}"),
+            ));
+        }
+        // view range inside the buffer, accessor range inside the view; all checked.
+        let too_far = || {
+            MeshErrorKind::Truncated(format!(
+                "{loc}: reaches past the end of its buffer view or buffer"
+            ))
+        };
+        let v_off = v.byte_offset.map(|o| o.0).unwrap_or(0);
+        let v_end = v_off.checked_add(v.byte_length.0).ok_or_else(too_far)?;
+        let view_bytes = usize::try_from(v_off)
+            .ok()
+            .zip(usize::try_from(v_end).ok())
+            .and_then(|(s, e)| buffer.get(s..e))
+            .ok_or_else(too_far)?;
+        let a_off =
+            usize::try_from(a.byte_offset.map(|o| o.0).unwrap_or(0)).map_err(|_| too_far())?;
+        let span = match count {
+            0 => 0,
+            c => (c - 1)
+                .checked_mul(stride)
+                .and_then(|x| x.checked_add(elem))
+                .ok_or_else(too_far)?,
+        };
+        let data = a_off
+            .checked_add(span)
+            .and_then(|end| view_bytes.get(a_off..end))
+            .ok_or_else(too_far)?;
+        Ok(Accessor {
+            data,
+            count,
+            stride,
+            component,
+            ty,
+            normalized: a.normalized,
+            loc,
+        })
+    }
+
+    /// (vertices, indices after unrolling) of a triangle primitive, `None` for points and lines.
+    fn primitive_size(
+        &self,
+        p: &json::mesh::Primitive,
+    ) -> Result<Option<(u64, u64)>, MeshErrorKind> {
+        let mode = match p.mode {
+            Checked::Valid(m) => m,
+            Checked::Invalid => return Err(parse_err("primitive", "invalid mode")),
+        };
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            return Ok(None);
+        }
+        let count = |i: usize| -> Result<u64, MeshErrorKind> {
+            Ok(self
+                .root
+                .accessors
+                .get(i)
+                .ok_or_else(|| parse_err("primitive", format!("accessor {i} does not exist")))?
+                .count
+                .0)
+        };
+        let pos = p
+            .attributes
+            .get(&Checked::Valid(json::mesh::Semantic::Positions))
+            .ok_or_else(|| parse_err("primitive", "triangle primitive without POSITION"))?;
+        let v = count(pos.value())?;
+        let n = match &p.indices {
+            Some(i) => count(i.value())?,
+            None => v,
+        };
+        let i = match mode {
+            Mode::Triangles => n,
+            _ => 3 * n.saturating_sub(2),
+        };
+        Ok(Some((v, i)))
+    }
+
+    fn append_mesh(
+        &self,
+        mesh: usize,
+        world: Mat4,
+        positions: &mut Vec<[f32; 3]>,
+        indices: &mut Vec<u32>,
+    ) -> Result<(), MeshErrorKind> {
+        let flip = world.determinant() < 0.0;
+        for (pi, prim) in self.root.meshes[mesh].primitives.iter().enumerate() {
+            if self.primitive_size(prim)?.is_none() {
+                continue;
+            }
+            let loc = format!("mesh {mesh} primitive {pi}");
+            let pa = prim
+                .attributes
+                .get(&Checked::Valid(json::mesh::Semantic::Positions))
+                .expect("checked by primitive_size");
+            let acc = self.accessor(pa.value(), &loc)?;
+            if acc.ty != Type::Vec3 || acc.component != ComponentType::F32 {
+                return Err(MeshErrorKind::Unsupported(format!(
+                    "{loc}: POSITION must be VEC3 of float (found {:?} of {:?}; quantised positions are not supported)",
+                    acc.ty, acc.component
+                )));
+            }
+            let base = positions.len();
+            let n = acc.count as u32;
+            if (base as u64 + acc.count as u64) > u32::MAX as u64 {
+                return Err(MeshErrorKind::TooLarge("more than 2^32 vertices".into()));
+            }
+            let raw = acc.read_f32(3)?;
+            positions.extend(raw.chunks_exact(3).map(|p| {
+                world
+                    .transform_point3(Vec3::new(p[0], p[1], p[2]))
+                    .to_array()
+            }));
+            let local: Vec<u32> = match &prim.indices {
+                Some(i) => self.accessor(i.value(), &loc)?.read_indices()?,
+                None => (0..n).collect(),
+            };
+            if let Some(&bad) = local.iter().find(|&&i| i >= n) {
+                return Err(parse_err(
+                    &loc,
+                    format!("index {bad} out of range ({n} vertices)"),
+                ));
+            }
+            let mode = match prim.mode {
+                Checked::Valid(m) => m,
+                Checked::Invalid => unreachable!("checked by primitive_size"),
+            };
+            let mut push = |a: u32, b: u32, c: u32| {
+                let (a, b, c) = (a + base as u32, b + base as u32, c + base as u32);
+                indices.extend_from_slice(&if flip { [a, c, b] } else { [a, b, c] });
+            };
+            match mode {
+                Mode::Triangles => {
+                    if !local.len().is_multiple_of(3) {
+                        return Err(parse_err(
+                            &loc,
+                            format!("{} indices is not a multiple of 3", local.len()),
+                        ));
+                    }
+                    for t in local.chunks_exact(3) {
+                        push(t[0], t[1], t[2]);
+                    }
+                }
+                Mode::TriangleStrip => {
+                    for i in 2..local.len() {
+                        if i % 2 == 0 {
+                            push(local[i - 2], local[i - 1], local[i]);
+                        } else {
+                            push(local[i - 1], local[i - 2], local[i]);
+                        }
+                    }
+                }
+                _ => {
+                    for i in 2..local.len() {
+                        push(local[0], local[i - 1], local[i]);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A node's local transform: its matrix, or translation * rotation * scale.
+fn local_transform(n: &json::Node) -> Mat4 {
+    if let Some(m) = n.matrix {
+        return Mat4::from_cols_array(&m);
+    }
+    let t = n.translation.map(Vec3::from_array).unwrap_or(Vec3::ZERO);
+    let r = n
+        .rotation
+        .map(|q| Quat::from_array(q.0))
+        .unwrap_or(Quat::IDENTITY);
+    let s = n.scale.map(Vec3::from_array).unwrap_or(Vec3::ONE);
+    Mat4::from_scale_rotation_translation(s, r, t)
+}
+
+/// Bytes of one buffer: the GLB binary chunk, a base64 `data:` URI, or a regular file next to the
+/// glTF (read once however many buffers name it, and only if it is a regular file).
 fn load_buffer(
-    b: &gltf::Buffer,
-    blob: Option<&[u8]>,
+    i: usize,
+    b: &json::Buffer,
+    blob: Option<&Rc<[u8]>>,
     base: Option<&Path>,
-) -> Result<Vec<u8>, MeshErrorKind> {
+    files: &mut HashMap<PathBuf, Rc<[u8]>>,
+) -> Result<Rc<[u8]>, MeshErrorKind> {
     use base64::Engine as _;
-    let loc = || format!("buffer {}", b.index());
-    let bytes = match b.source() {
-        gltf::buffer::Source::Bin => blob
+    use std::io::Read as _;
+    let loc = || format!("buffer {i}");
+    let declared = b.byte_length.0;
+    let bytes = match b.uri.as_deref() {
+        None => blob
             .ok_or_else(|| parse_err(loc(), "refers to a GLB binary chunk that is missing"))?
-            .to_vec(),
-        gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+            .clone(),
+        Some(uri) if uri.starts_with("data:") => {
             let (_, payload) = uri
                 .split_once(";base64,")
                 .ok_or_else(|| parse_err(loc(), "data URI is not base64"))?;
             base64::engine::general_purpose::STANDARD
                 .decode(payload)
                 .map_err(|e| parse_err(loc(), format!("bad base64: {e}")))?
+                .into()
         }
-        gltf::buffer::Source::Uri(uri) => {
+        Some(uri) => {
             let rel = percent_decode(uri);
             let path = base
                 .map(|d| d.join(&rel))
                 .unwrap_or_else(|| rel.clone().into());
-            std::fs::read(&path)
-                .map_err(|e| parse_err(loc(), format!("cannot read '{}': {e}", path.display())))?
+            if let Some(b) = files.get(&path) {
+                b.clone()
+            } else {
+                let cannot =
+                    |e: String| parse_err(loc(), format!("cannot read '{}': {e}", path.display()));
+                let f = std::fs::File::open(&path).map_err(|e| cannot(e.to_string()))?;
+                let meta = f.metadata().map_err(|e| cannot(e.to_string()))?;
+                // A device or pipe (/dev/zero) could feed bytes forever.
+                if !meta.is_file() {
+                    return Err(cannot("not a regular file".into()));
+                }
+                let mut v = Vec::new();
+                f.take(meta.len())
+                    .read_to_end(&mut v)
+                    .map_err(|e| cannot(e.to_string()))?;
+                let v: Rc<[u8]> = v.into();
+                files.insert(path, v.clone());
+                v
+            }
         }
     };
-    if bytes.len() < b.length() {
+    if (bytes.len() as u64) < declared {
         return Err(MeshErrorKind::Truncated(format!(
-            "{} has {} bytes, {} declared",
+            "{} has {} bytes, {declared} declared",
             loc(),
             bytes.len(),
-            b.length()
         )));
     }
     Ok(bytes)
@@ -107,70 +654,4 @@ fn percent_decode(s: &str) -> String {
         i += 1;
     }
     String::from_utf8_lossy(&out).into_owned()
-}
-
-fn append_mesh(
-    mesh: &gltf::Mesh,
-    world: Mat4,
-    buffers: &[Vec<u8>],
-    (positions, indices): &mut (Vec<[f32; 3]>, Vec<u32>),
-) -> Result<(), MeshErrorKind> {
-    let flip = world.determinant() < 0.0;
-    for prim in mesh.primitives() {
-        let loc = || format!("mesh {} primitive {}", mesh.index(), prim.index());
-        if !matches!(
-            prim.mode(),
-            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-        ) {
-            continue;
-        }
-        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
-        let Some(pos) = reader.read_positions() else {
-            return Err(parse_err(loc(), "triangle primitive without POSITION"));
-        };
-        let base = positions.len();
-        positions.extend(pos.map(|p| world.transform_point3(Vec3::from_array(p)).to_array()));
-        let n = (positions.len() - base) as u32;
-        let local: Vec<u32> = match reader.read_indices() {
-            Some(ix) => ix.into_u32().collect(),
-            None => (0..n).collect(),
-        };
-        if let Some(&bad) = local.iter().find(|&&i| i >= n) {
-            return Err(parse_err(
-                loc(),
-                format!("index {bad} out of range ({n} vertices)"),
-            ));
-        }
-        let tris: Vec<[u32; 3]> = match prim.mode() {
-            Mode::Triangles => {
-                if !local.len().is_multiple_of(3) {
-                    return Err(parse_err(
-                        loc(),
-                        format!("{} indices is not a multiple of 3", local.len()),
-                    ));
-                }
-                local.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect()
-            }
-            Mode::TriangleStrip => (2..local.len())
-                .map(|i| {
-                    if i % 2 == 0 {
-                        [local[i - 2], local[i - 1], local[i]]
-                    } else {
-                        [local[i - 1], local[i - 2], local[i]]
-                    }
-                })
-                .collect(),
-            _ => (2..local.len())
-                .map(|i| [local[0], local[i - 1], local[i]])
-                .collect(),
-        };
-        if positions.len() > u32::MAX as usize {
-            return Err(MeshErrorKind::TooLarge("more than 2^32 vertices".into()));
-        }
-        for [a, b, c] in tris {
-            let (a, b, c) = (a + base as u32, b + base as u32, c + base as u32);
-            indices.extend_from_slice(&if flip { [a, c, b] } else { [a, b, c] });
-        }
-    }
-    Ok(())
 }
