@@ -1,7 +1,7 @@
 # meshletlab: two-command quick start is `make demo` and `make test`.
 CARGO ?= cargo
 
-.PHONY: setup demo test lint bench build
+.PHONY: setup demo test lint bench build bench-robustness
 
 # Idempotent: installs only what is missing (Debian 12, as root); silent when all is present.
 # Set SKIP_SETUP=1 on systems you provision by hand (see README, "Other systems").
@@ -11,7 +11,7 @@ setup:
 build: setup
 	$(CARGO) build --release
 
-# Compare every strategy on generated meshes (no input files needed).
+# The whole pipeline on generated meshes (no input files needed): strategies, GPU parity, a render.
 demo: setup
 	$(CARGO) run --release --quiet -- demo
 
@@ -30,3 +30,8 @@ bench: setup
 	$(CARGO) run --release --quiet -- bench gpu
 	$(CARGO) run --release --quiet -- bench stability
 	$(CARGO) run --release --quiet -- bench render
+	$(MAKE) bench-robustness
+
+# The fuzzer runs in the `fuzz` profile (optimised, overflow checks on): >= 1 M cases, results/robustness.md.
+bench-robustness: setup
+	$(CARGO) run --profile fuzz --quiet -- bench robustness

@@ -2,11 +2,13 @@
 //! GPU mesh shaders).
 //!
 //! Data flows one way: [`mesh`] (load, validate, generate) -> [`adjacency`] -> [`strategy`] ->
-//! [`meshlet`] (model, validator, bounds, metrics) -> [`bench`] results.
+//! [`meshlet`] (model, validator, bounds, metrics) -> [`gpu`] / [`render`] -> [`bench`] results.
+//! [`fuzz`] feeds mutated files to every reader.
 
 pub mod adjacency;
 pub mod bench;
 pub mod cli;
+pub mod fuzz;
 pub mod gpu;
 pub mod mesh;
 pub mod meshlet;

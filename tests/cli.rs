@@ -85,7 +85,8 @@ fn stats_json_lists_every_strategy_with_metrics() {
 
 #[test]
 fn demo_compares_strategies_on_generated_meshes() {
-    let out = ok(&["demo", "-q"]);
+    let dir = common::scratch("demo");
+    let out = ok(&["demo", "-q", "--out", dir.to_str().unwrap()]);
     for name in ["noisy-sphere", "knot-tube", "terrain"] {
         assert!(out.contains(name), "{out}");
     }
@@ -97,6 +98,18 @@ fn demo_compares_strategies_on_generated_meshes() {
     }
     assert!(out.contains("All outputs validated"));
     assert!(!out.contains("INVALID"));
+    // The GPU part on lavapipe: the parity verdict, culling statistics and the files it names.
+    assert!(out.contains("Parity: all 4 GPU kernels identical"), "{out}");
+    assert!(out.contains("by their normal cones"), "{out}");
+    for f in ["noisy-sphere_meshopt.png", "noisy-sphere_meshopt.glb"] {
+        assert!(out.contains(f) && dir.join(f).is_file(), "{f}:\n{out}");
+    }
+    assert_eq!(
+        meshletlab::mesh::load(&dir.join("noisy-sphere_meshopt.glb"))
+            .unwrap()
+            .triangle_count(),
+        20480
+    );
 }
 
 #[test]
@@ -156,7 +169,7 @@ fn render_writes_a_meshlet_coloured_png_for_each_descriptor() {
             "--validate",
         ]);
         assert!(
-            out.contains("view 1:") && out.contains("validation layer: no errors"),
+            out.contains("view 1 (") && out.contains("validation layer: no errors"),
             "{out}"
         );
         assert!(out.contains(&format!("{d} descriptors")), "{out}");
@@ -176,4 +189,101 @@ fn render_writes_a_meshlet_coloured_png_for_each_descriptor() {
     let out = cli(&["render", "-q", mesh.to_str().unwrap(), "-d", "nvidia-c"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("split, nvidia-a, nvidia-b, monolithic"));
+}
+
+#[test]
+fn export_writes_a_glb_the_loader_reads_back() {
+    let dir = common::scratch("export-cli");
+    let mesh = common::meshes_dir().join("stellarium_gaspra.ply.zst");
+    let out = dir.join("gaspra.glb");
+    let text = ok(&[
+        "export",
+        "-q",
+        mesh.to_str().unwrap(),
+        "--strategy",
+        "bsphere",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        text.contains("meshlets") && text.contains("gaspra.glb"),
+        "{text}"
+    );
+    let back = meshletlab::mesh::load(&out).unwrap();
+    assert_eq!(back.triangle_count(), 32040);
+    let colours = meshletlab::mesh::gltf_io::colours(&std::fs::read(&out).unwrap(), None).unwrap();
+    let distinct: std::collections::HashSet<[u32; 4]> =
+        colours.iter().map(|c| c.map(f32::to_bits)).collect();
+    assert!(distinct.len() > 100, "{} colours", distinct.len());
+    // A bad output path: one error line naming it.
+    let out = cli(&[
+        "export",
+        "-q",
+        mesh.to_str().unwrap(),
+        "-o",
+        "/nonexistent/x.glb",
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/x.glb"));
+}
+
+#[test]
+fn parity_and_render_print_json() {
+    let dir = common::scratch("json");
+    let mesh = common::meshes_dir().join("fandisk.ply.zst");
+    let m = mesh.to_str().unwrap();
+    let v: serde_json::Value = serde_json::from_str(&ok(&["parity", "-q", m, "--json"])).unwrap();
+    assert_eq!(v["triangles"], 12946);
+    assert_eq!(v["identical"], true);
+    let checks = v["checks"].as_array().unwrap();
+    assert!(checks.len() >= 4, "{v}");
+    for c in checks {
+        assert!(
+            c["mismatch"].is_null() && c["gpu_seconds"].as_f64().unwrap() > 0.0,
+            "{c}"
+        );
+    }
+    let png = dir.join("f.png");
+    let v: serde_json::Value = serde_json::from_str(&ok(&[
+        "render",
+        "-q",
+        m,
+        "--views",
+        "3",
+        "--json",
+        "-o",
+        png.to_str().unwrap(),
+    ]))
+    .unwrap();
+    let views = v["views"].as_array().unwrap();
+    assert_eq!(views.len(), 3);
+    let meshlets = v["meshlets"].as_u64().unwrap();
+    for w in views {
+        let culled = w["meshlets_culled_frustum"].as_u64().unwrap()
+            + w["meshlets_culled_backface"].as_u64().unwrap();
+        assert_eq!(
+            culled + w["meshlets_drawn"].as_u64().unwrap(),
+            meshlets,
+            "{w}"
+        );
+        // Framed: the camera sits just far enough that the mesh fits.
+        let d = w["distance_radii"].as_f64().unwrap();
+        assert!(d > 0.5 && d < 2.5, "{w}");
+    }
+    // The first view fills most of the frame: the drawn pixels span > 80 % of its height or width.
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut px = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut px).unwrap();
+    let (w, h) = (info.width as usize, info.height as usize);
+    let bg = px[..4].to_vec();
+    let (mut x0, mut x1, mut y0, mut y1) = (w, 0, h, 0);
+    for (i, p) in px.chunks_exact(4).enumerate() {
+        if p != &bg[..] {
+            let (x, y) = (i % w, i / w);
+            (x0, x1, y0, y1) = (x0.min(x), x1.max(x), y0.min(y), y1.max(y));
+        }
+    }
+    let fill = ((x1 - x0) as f64 / w as f64).max((y1 - y0) as f64 / h as f64);
+    assert!(fill > 0.8, "the mesh spans {fill:.2} of the frame");
 }

@@ -7,6 +7,7 @@ pub mod kmedoids;
 pub mod paper;
 pub mod plot;
 pub mod render;
+pub mod robustness;
 pub mod stability;
 
 use crate::mesh::Mesh;

@@ -10,7 +10,7 @@ use crate::meshlet::{validate, Limits, Meshlets};
 use crate::strategy::kmedoids::{self, Config};
 
 /// One comparison.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize)]
 pub struct Check {
     /// What was compared.
     pub name: &'static str,

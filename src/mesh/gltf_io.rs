@@ -47,7 +47,9 @@ pub fn parse(data: &[u8], base: Option<&Path>) -> Result<(Vec<[f32; 3]>, Vec<u32
     for (mesh, _) in &instances {
         for p in &doc.root.meshes[*mesh].primitives {
             if let Some((v, i)) = doc.primitive_size(p)? {
-                out_bytes = out_bytes.saturating_add(12 * v + 4 * i);
+                out_bytes = out_bytes
+                    .saturating_add(v.saturating_mul(12))
+                    .saturating_add(i.saturating_mul(4));
             }
         }
         if out_bytes > budget {
@@ -470,7 +472,7 @@ impl Document {
         };
         let i = match mode {
             Mode::Triangles => n,
-            _ => 3 * n.saturating_sub(2),
+            _ => n.saturating_sub(2).saturating_mul(3),
         };
         Ok(Some((v, i)))
     }
@@ -602,6 +604,22 @@ fn load_buffer(
         }
         Some(uri) => {
             let rel = percent_decode(uri);
+            // Only files beside the glTF (or below it): an absolute path or `..` could reach
+            // anything on the machine (/proc/kcore reads as a huge regular file).
+            let p = Path::new(&rel);
+            if p.is_absolute()
+                || p.components().any(|c| {
+                    !matches!(
+                        c,
+                        std::path::Component::Normal(_) | std::path::Component::CurDir
+                    )
+                })
+            {
+                return Err(MeshErrorKind::Unsupported(format!(
+                    "{}: URI '{uri}' is not a relative path below the glTF's folder",
+                    loc()
+                )));
+            }
             let path = base
                 .map(|d| d.join(&rel))
                 .unwrap_or_else(|| rel.clone().into());

@@ -54,8 +54,7 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
     let (format, zst) = Format::of(path).ok_or_else(|| err(MeshErrorKind::UnknownFormat))?;
     let owned;
     let data: &[u8] = if zst {
-        owned = zstd::stream::decode_all(bytes)
-            .map_err(|e| err(MeshErrorKind::Decompress(e.to_string())))?;
+        owned = decompress(bytes).map_err(err)?;
         &owned
     } else {
         bytes
@@ -67,6 +66,33 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
     }
     .map_err(err)?;
     Mesh::new(positions, indices, path)
+}
+
+/// A `.zst` input may decompress to at most this many times its size (plus [`ZSTD_SLACK`]). Real
+/// meshes compress 2-3x; a few hundred bytes of zstd can otherwise announce gigabytes.
+pub const MAX_ZSTD_RATIO: u64 = 1024;
+/// Decompressed bytes allowed on top of [`MAX_ZSTD_RATIO`] times the compressed size.
+pub const ZSTD_SLACK: u64 = 1 << 20;
+
+/// Decompresses a zstd stream, refusing output beyond [`MAX_ZSTD_RATIO`] (a decompression bomb
+/// becomes a typed error, not an allocation).
+pub fn decompress(bytes: &[u8]) -> Result<Vec<u8>, MeshErrorKind> {
+    use std::io::Read as _;
+    let cap = (bytes.len() as u64)
+        .saturating_mul(MAX_ZSTD_RATIO)
+        .saturating_add(ZSTD_SLACK);
+    let dec = zstd::stream::read::Decoder::new(bytes)
+        .map_err(|e| MeshErrorKind::Decompress(e.to_string()))?;
+    let mut out = Vec::new();
+    dec.take(cap + 1)
+        .read_to_end(&mut out)
+        .map_err(|e| MeshErrorKind::Decompress(e.to_string()))?;
+    if out.len() as u64 > cap {
+        return Err(MeshErrorKind::TooLarge(format!(
+            "zstd stream expands to more than {cap} bytes ({MAX_ZSTD_RATIO}x its size; a decompression bomb?)"
+        )));
+    }
+    Ok(out)
 }
 
 /// Writes a mesh as binary PLY, zstd-compressed when the name ends in `.zst`.

@@ -7,7 +7,7 @@
 
 mod error;
 pub mod generate;
-mod gltf_io;
+pub mod gltf_io;
 mod load;
 mod obj;
 pub mod ply;
@@ -15,7 +15,7 @@ mod stats;
 pub mod subdivide;
 
 pub use error::{MeshError, MeshErrorKind};
-pub use load::{load, load_bytes, save_ply, Format};
+pub use load::{decompress, load, load_bytes, save_ply, Format, MAX_ZSTD_RATIO, ZSTD_SLACK};
 pub use stats::MeshStats;
 
 use glam::Vec3;

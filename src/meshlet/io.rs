@@ -152,6 +152,32 @@ impl MeshletFile {
         })
     }
 
+    /// `meshletlab check`: the file was built from `mesh` (counts and fingerprint agree) and its
+    /// meshlets pass the validator under the file's limits. `path` labels errors.
+    pub fn check(&self, mesh: &crate::mesh::Mesh, path: &Path) -> Result<(), MeshletFileError> {
+        let err = |m: String| MeshletFileError {
+            path: path.to_path_buf(),
+            message: m,
+        };
+        if self.source_vertices as usize != mesh.vertex_count()
+            || self.source_triangles as usize != mesh.triangle_count()
+        {
+            return Err(err(format!(
+                "built from a mesh with {} vertices / {} triangles, but this mesh has {} / {}",
+                self.source_vertices,
+                self.source_triangles,
+                mesh.vertex_count(),
+                mesh.triangle_count()
+            )));
+        }
+        if self.fingerprint != mesh.fingerprint() {
+            return Err(err(
+                "built from a different mesh (fingerprint differs)".into()
+            ));
+        }
+        super::validate(mesh, &self.meshlets, self.limits).map_err(|e| err(format!("invalid: {e}")))
+    }
+
     /// Writes to a file.
     pub fn save(&self, path: &Path) -> Result<(), MeshletFileError> {
         std::fs::write(path, self.to_bytes()).map_err(|e| MeshletFileError {

@@ -9,6 +9,7 @@
 pub mod bounds;
 mod builder;
 pub mod descriptor;
+pub mod export;
 pub mod io;
 pub mod metrics;
 pub mod order;

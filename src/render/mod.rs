@@ -89,22 +89,71 @@ impl Camera {
         let (lo, hi) = mesh.bounding_box();
         let centre = (lo + hi) * 0.5;
         let r = ((hi - lo).length() * 0.5).max(1e-6);
-        let mut state = seed;
-        let mut unit = || {
-            state = crate::mesh::generate::splitmix64(state);
-            (state >> 11) as f32 / (1u64 << 53) as f32
-        };
-        (0..n)
-            .map(|_| {
-                // Uniform on the sphere: z uniform in [-1, 1], angle uniform.
-                let z = 2.0 * unit() - 1.0;
-                let a = std::f32::consts::TAU * unit();
-                let s = (1.0 - z * z).max(0.0).sqrt();
-                let dir = Vec3::new(s * a.cos(), z, s * a.sin());
-                Self::looking_at(mesh, centre + dir * r * distance)
-            })
+        random_directions(n, seed)
+            .into_iter()
+            .map(|dir| Self::looking_at(mesh, centre + dir * r * distance))
             .collect()
     }
+
+    /// The same directions as [`Camera::random_views`], each camera as close as it can be with the
+    /// whole mesh inside `fill` of the image's half-width and half-height: framed, so the mesh
+    /// fills most of the picture whatever its shape.
+    pub fn framed_views(mesh: &Mesh, n: usize, seed: u64, aspect: f32, fill: f32) -> Vec<Self> {
+        random_directions(n, seed)
+            .into_iter()
+            .map(|dir| Self::framed(mesh, dir, aspect, fill))
+            .collect()
+    }
+
+    /// A camera on the ray from `mesh`'s box centre along `dir`, at the least distance for which
+    /// every vertex projects inside `fill` (0..1) of the image (vertical field of view 60 degrees,
+    /// `aspect` = width / height). A vertex at offset (x, y, z) in the camera frame (z towards the
+    /// camera) is inside when |y| <= tan(30 deg) * fill * (d - z), and likewise for x with the
+    /// horizontal half-angle, so d is the largest z + |y| / (tan * fill) over the vertices.
+    pub fn framed(mesh: &Mesh, dir: Vec3, aspect: f32, fill: f32) -> Self {
+        let (lo, hi) = mesh.bounding_box();
+        let centre = (lo + hi) * 0.5;
+        let r = ((hi - lo).length() * 0.5).max(1e-6);
+        let dir = dir.normalize_or(Vec3::Z);
+        // The same frame view_proj builds for a camera looking along -dir.
+        let up = if dir.cross(Vec3::Y).length_squared() > 1e-12 {
+            Vec3::Y
+        } else {
+            Vec3::Z
+        };
+        let right = (-dir).cross(up).normalize();
+        let cam_up = right.cross(-dir);
+        let tan_v = 30f32.to_radians().tan() * fill.clamp(0.05, 1.0);
+        let tan_h = tan_v * aspect;
+        let mut d = f32::MIN;
+        for p in &mesh.positions {
+            let q = Vec3::from_array(*p) - centre;
+            let z = q.dot(dir);
+            d = d
+                .max(z + q.dot(right).abs() / tan_h)
+                .max(z + q.dot(cam_up).abs() / tan_v);
+        }
+        // Off the centre even for a flat mesh seen edge-on.
+        let d = d.max(r * 1e-2);
+        Self::looking_at(mesh, centre + dir * d)
+    }
+}
+
+/// `n` seeded directions, uniform on the unit sphere (z uniform in [-1, 1], angle uniform).
+pub fn random_directions(n: usize, seed: u64) -> Vec<Vec3> {
+    let mut state = seed;
+    let mut unit = || {
+        state = crate::mesh::generate::splitmix64(state);
+        (state >> 11) as f32 / (1u64 << 53) as f32
+    };
+    (0..n)
+        .map(|_| {
+            let z = 2.0 * unit() - 1.0;
+            let a = std::f32::consts::TAU * unit();
+            let s = (1.0 - z * z).max(0.0).sqrt();
+            Vec3::new(s * a.cos(), z, s * a.sin())
+        })
+        .collect()
 }
 
 include!(concat!(env!("OUT_DIR"), "/shaders.rs"));

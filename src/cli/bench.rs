@@ -1,0 +1,301 @@
+//! `meshletlab bench ...`: the benchmarks that write results/.
+
+use super::{default_meshes_dir, load, spinner, StrategyArgs};
+use crate::bench;
+use crate::meshlet::Limits;
+use anyhow::{bail, Result};
+use clap::Subcommand;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// Benchmarks.
+#[derive(Subcommand, Debug)]
+pub enum BenchCommand {
+    /// Every mesh x strategy: time (median), meshlet count, fills, culling, radius -> build.md, build.csv.
+    Build {
+        /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Builds per mesh and strategy (>= 5 for reported numbers).
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+        runs: u32,
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Only these strategies (repeatable; default all but the slow kmedoids-paper).
+        #[arg(short, long)]
+        strategy: Vec<String>,
+        #[command(flatten)]
+        args: StrategyArgs,
+    },
+    /// GPU kernels against their CPU references (bunny, igea, dragon, dragon x4 and x16) -> gpu.md.
+    Gpu {
+        /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Meshlet limits.
+        #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
+        limits: Limits,
+        /// Above this many triangles, skip the GPU and one-thread k-medoids (rayon still runs).
+        #[arg(long, default_value_t = 4_000_000)]
+        kmedoids_gpu_max: usize,
+        /// Leave out the subdivided dragons (3.5 M and 14 M triangles).
+        #[arg(long)]
+        quick: bool,
+    },
+    /// Mesh shaders against the vertex pipeline on every shared mesh: ms per frame with and without
+    /// task-shader culling, culled shares, ns per triangle, bunny images -> render.md.
+    Render {
+        /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Meshlet limits.
+        #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
+        limits: Limits,
+        /// Strategies (comma-separated).
+        #[arg(short, long, value_delimiter = ',', default_values_t = bench::render::DEFAULT_STRATEGIES.iter().map(|s| s.to_string()))]
+        strategy: Vec<String>,
+        /// Strategies of the experiments: the four descriptor layouts, meshlets ordered by
+        /// primitive count, triangle order inside meshlets (comma-separated; empty: none).
+        #[arg(long, value_delimiter = ',', default_values_t = bench::render::DEFAULT_EXPERIMENT_STRATEGIES.iter().map(|s| s.to_string()))]
+        experiment_strategy: Vec<String>,
+        /// Views per mesh (sized for lavapipe; the paper used 100,000 frames on a GPU).
+        #[arg(long, default_value_t = 10)]
+        views: usize,
+        /// Seed of the view sequence.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Camera distance from the mesh centre in bounding radii (every view sees the whole mesh).
+        #[arg(long, default_value_t = 2.5)]
+        distance: f32,
+        /// Distance of the close views for the culling shares (inside the bounding sphere, so the
+        /// frustum culls).
+        #[arg(long, default_value_t = 0.9)]
+        near_distance: f32,
+    },
+    /// GPU/CPU agreement and conservative bounds on a mesh translated, scaled, flattened, with
+    /// duplicate vertices and a huge coordinate range -> stability.md.
+    Stability {
+        /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Base mesh (file stem in the folder).
+        #[arg(long, default_value = "stanford_bunny")]
+        mesh: String,
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Meshlet limits.
+        #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
+        limits: Limits,
+    },
+    /// k-medoids at scale (fast and paper modes, every mesh) and a run-time-vs-error sweep -> kmedoids.md.
+    Kmedoids {
+        /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Meshlet limits.
+        #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
+        limits: Limits,
+        /// Seconds paper mode may spend per mesh before finishing the fast way.
+        #[arg(long, default_value_t = 60.0)]
+        paper_budget: f64,
+        /// Run only the fast mode.
+        #[arg(long)]
+        skip_paper: bool,
+        /// Mesh (file stem) for the iteration/threshold sweep.
+        #[arg(long, default_value = "stanford_bunny")]
+        sweep_mesh: String,
+    },
+    /// Mutation fuzzer over every file reader (PLY ASCII/LE/BE, OBJ, glTF, GLB, .zst, meshlet
+    /// files): >= 1 M seeded cases in child processes; panics, hangs and allocations over the bound
+    /// are counted -> robustness.md, robustness.csv. Exit 1 if any case is a defect.
+    Robustness {
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Number of cases.
+        #[arg(long, default_value_t = 1_000_000)]
+        cases: u64,
+        /// Run seed (case k of seed s is always the same file).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Worker processes (default: one per core).
+        #[arg(long)]
+        workers: Option<usize>,
+        /// Write case K's file to -o instead of running (to reproduce a reported case).
+        #[arg(long, value_name = "K")]
+        dump: Option<u64>,
+        /// Folder for --dump.
+        #[arg(short, long, default_value = ".")]
+        output: PathBuf,
+    },
+}
+
+pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
+    match cmd {
+        BenchCommand::Stability {
+            meshes,
+            mesh,
+            out,
+            limits,
+        } => {
+            let path = meshes
+                .unwrap_or_else(default_meshes_dir)
+                .join(format!("{mesh}.ply.zst"));
+            let m = load(&path, q)?;
+            let pb = spinner(q, format!("stress variants of {mesh}"));
+            let reports = bench::stability::run(&mesh, &m, limits, &out)?;
+            pb.finish_and_clear();
+            let bad: Vec<_> = reports.iter().filter(|r| !r.ok()).map(|r| r.name).collect();
+            println!("wrote {}", out.join("stability.md").display());
+            if !bad.is_empty() {
+                bail!("stability checks failed for: {}", bad.join(", "));
+            }
+            Ok(())
+        }
+        BenchCommand::Gpu {
+            meshes,
+            out,
+            limits,
+            kmedoids_gpu_max,
+            quick,
+        } => {
+            let cfg = bench::gpu::Config {
+                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                out,
+                limits,
+                kmedoids_gpu_max,
+                quick,
+                quiet: q,
+            };
+            bench::gpu::run(&cfg)?;
+            println!("wrote {}", cfg.out.join("gpu.md").display());
+            Ok(())
+        }
+        BenchCommand::Render {
+            meshes,
+            out,
+            limits,
+            strategy,
+            experiment_strategy,
+            views,
+            seed,
+            distance,
+            near_distance,
+        } => {
+            let cfg = bench::render::Config {
+                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                out,
+                limits,
+                strategies: strategy,
+                experiment_strategies: experiment_strategy
+                    .into_iter()
+                    .filter(|s| !s.is_empty())
+                    .collect(),
+                views,
+                seed,
+                distance,
+                near_distance,
+                quiet: q,
+            };
+            bench::render::run(&cfg)?;
+            println!("wrote {}", cfg.out.join("render.md").display());
+            Ok(())
+        }
+        BenchCommand::Kmedoids {
+            meshes,
+            out,
+            limits,
+            paper_budget,
+            skip_paper,
+            sweep_mesh,
+        } => {
+            let cfg = bench::kmedoids::Config {
+                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                out,
+                limits,
+                paper_budget: Duration::from_secs_f64(paper_budget.max(0.0)),
+                skip_paper,
+                sweep_mesh,
+                quiet: q,
+            };
+            bench::kmedoids::run(&cfg)?;
+            println!("wrote {}", cfg.out.join("kmedoids.md").display());
+            Ok(())
+        }
+        BenchCommand::Build {
+            meshes,
+            runs,
+            out,
+            strategy,
+            args,
+        } => {
+            let cfg = bench::build::Config {
+                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                runs: runs as usize,
+                out,
+                limits: args.limits,
+                strategies: strategy,
+                options: args.options(),
+                quiet: q,
+            };
+            let rows = bench::build::run(&cfg)?;
+            println!(
+                "wrote {} and {} ({} rows)",
+                cfg.out.join("build.md").display(),
+                cfg.out.join("build.csv").display(),
+                rows.len()
+            );
+            Ok(())
+        }
+        BenchCommand::Robustness {
+            out,
+            cases,
+            seed,
+            workers,
+            dump,
+            output,
+        } => {
+            if let Some(k) = dump {
+                let p = crate::fuzz::harness::dump(seed, k, &output)?;
+                println!("case {k} of seed {seed} -> {}", p.display());
+                return Ok(());
+            }
+            let cfg = bench::robustness::Config {
+                out,
+                cases,
+                seed,
+                workers: workers.unwrap_or_else(rayon::current_num_threads),
+                quiet: q,
+            };
+            let report = bench::robustness::run(&cfg)?;
+            let t = report.totals();
+            println!(
+                "{} cases in {:.0} s: {} valid, {} typed errors, {} defects; wrote {}",
+                report.cases,
+                report.seconds,
+                t.get(crate::fuzz::harness::Verdict::Valid),
+                t.get(crate::fuzz::harness::Verdict::Error),
+                t.defects(),
+                cfg.out.join("robustness.md").display()
+            );
+            if t.defects() > 0 {
+                bail!(
+                    "{} fuzz cases were defects (see robustness.md)",
+                    t.defects()
+                );
+            }
+            Ok(())
+        }
+    }
+}

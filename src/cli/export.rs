@@ -1,0 +1,42 @@
+//! `meshletlab export`: meshlets as a glTF binary with one flat colour per meshlet.
+
+use super::{build_validated, load, StrategyArgs};
+use anyhow::{Context, Result};
+use clap::Args;
+use std::path::PathBuf;
+
+/// Arguments of `export`.
+#[derive(Args, Debug)]
+pub struct ExportArgs {
+    /// Mesh file.
+    mesh: PathBuf,
+    /// Strategy name.
+    #[arg(short, long, default_value = "meshopt")]
+    strategy: String,
+    /// Output .glb file.
+    #[arg(short, long)]
+    output: PathBuf,
+    #[command(flatten)]
+    args: StrategyArgs,
+}
+
+pub(super) fn run(a: ExportArgs, quiet: bool) -> Result<()> {
+    crate::strategy::by_name(&a.strategy, &a.args.options())?;
+    let m = load(&a.mesh, quiet)?;
+    let ml = build_validated(&m, &a.mesh, &a.strategy, &a.args)?;
+    let glb = crate::meshlet::export::glb(&m, &ml);
+    std::fs::write(&a.output, &glb)
+        .with_context(|| format!("cannot write {}", a.output.display()))?;
+    println!(
+        "{}: {} meshlets ({}, {}) -> {} ({} triangles, {} vertices after splitting at meshlet borders, {:.1} KiB)",
+        a.mesh.display(),
+        ml.len(),
+        a.strategy,
+        a.args.limits,
+        a.output.display(),
+        m.triangle_count(),
+        ml.vertices.len(),
+        glb.len() as f64 / 1024.0
+    );
+    Ok(())
+}

@@ -1,0 +1,677 @@
+//! The seed files the mutations start from: small valid files of every format, written here with the
+//! offsets of their structure (line and record boundaries, header numbers, float fields) so that
+//! mutations can aim at them. Every seed loads as a valid mesh (a unit test checks it).
+
+use super::Target;
+use crate::mesh::Mesh;
+use crate::meshlet::io::MeshletFile;
+use serde_json::{json, Value};
+
+/// Where a number or float sits in a seed.
+#[derive(Clone, Copy, Debug)]
+pub enum Field {
+    /// Bytes `start..end` of a text file hold the number's characters.
+    Text {
+        /// First byte.
+        start: usize,
+        /// One past the last byte.
+        end: usize,
+    },
+    /// A binary number of `width` bytes at `at`, big-endian if `be`.
+    Bin {
+        /// First byte.
+        at: usize,
+        /// Width in bytes (1, 2, 4 or 8).
+        width: u8,
+        /// Big-endian.
+        be: bool,
+    },
+}
+
+/// The parts of a glTF seed, so JSON-aware mutations can edit the document and re-assemble it.
+#[derive(Clone, Debug)]
+pub struct GltfParts {
+    /// The JSON document (buffer 0 has no URI; [`GltfParts::assemble`] adds a data URI for .gltf).
+    pub json: Value,
+    /// Buffer 0's bytes.
+    pub bin: Vec<u8>,
+    /// Offsets of the position floats in `bin`.
+    pub floats: Vec<usize>,
+    /// GLB container (else .gltf with a base64 data URI).
+    pub glb: bool,
+}
+
+impl GltfParts {
+    /// The file bytes for `json` text and `bin` (pretty JSON, so whitespace separates tokens).
+    pub fn assemble_text(&self, json_text: &[u8], bin: &[u8]) -> Vec<u8> {
+        if self.glb {
+            crate::mesh::gltf_io::write_glb(json_text, bin)
+        } else {
+            json_text.to_vec()
+        }
+    }
+
+    /// JSON text of `json` with buffer 0 pointing at `bin` the way the container needs.
+    pub fn json_text(&self, json: &Value, bin: &[u8]) -> Vec<u8> {
+        use base64::Engine as _;
+        let mut j = json.clone();
+        if !self.glb {
+            if let Some(b) = j.pointer_mut("/buffers/0") {
+                if let Some(o) = b.as_object_mut() {
+                    o.insert(
+                        "uri".into(),
+                        Value::String(format!(
+                            "data:application/octet-stream;base64,{}",
+                            base64::engine::general_purpose::STANDARD.encode(bin)
+                        )),
+                    );
+                }
+            }
+        }
+        serde_json::to_vec_pretty(&j).expect("a Value always serialises")
+    }
+
+    /// The whole file for a (possibly edited) document and buffer.
+    pub fn assemble(&self, json: &Value, bin: &[u8]) -> Vec<u8> {
+        self.assemble_text(&self.json_text(json, bin), bin)
+    }
+}
+
+/// One seed file.
+#[derive(Clone, Debug)]
+pub struct Seed {
+    /// Short label ("ply-le/normals-strips").
+    pub name: String,
+    /// Its format.
+    pub target: Target,
+    /// The file.
+    pub bytes: Vec<u8>,
+    /// Structural offsets (line ends, record starts, chunk edges) where truncation is interesting.
+    pub boundaries: Vec<usize>,
+    /// Header numbers and counts.
+    pub numbers: Vec<Field>,
+    /// Float fields (coordinates).
+    pub floats: Vec<Field>,
+    /// Bytes `..text_end` are text (the whole file for text formats, the header for binary PLY).
+    pub text_end: usize,
+    /// glTF parts, for glTF and GLB seeds.
+    pub gltf: Option<GltfParts>,
+}
+
+/// Every seed, and the mesh the meshlet-file seeds were built from.
+pub struct Corpus {
+    /// The seeds, grouped by target in [`Target::ALL`] order.
+    pub seeds: Vec<Seed>,
+    /// Source mesh of the meshlet-file seeds (what `check` validates them against).
+    pub meshlet_source: Mesh,
+}
+
+impl Corpus {
+    /// Builds the corpus (deterministic; a few milliseconds).
+    pub fn new() -> Self {
+        let (pos, quads) = grid(5, 4);
+        let mut seeds = Vec::new();
+        for (t, enc) in [
+            (Target::PlyAscii, Enc::Ascii),
+            (Target::PlyLe, Enc::Le),
+            (Target::PlyBe, Enc::Be),
+        ] {
+            for spec in [
+                PlySpec::default(),
+                PlySpec {
+                    normals: true,
+                    colours: true,
+                    double: true,
+                    polygons: true,
+                    count: "uint8",
+                    item: "uint32",
+                    strips: true,
+                    extra: true,
+                },
+            ] {
+                seeds.push(ply(t, enc, &spec, &pos, &quads));
+            }
+        }
+        seeds.push(obj(&pos, &quads, false));
+        seeds.push(obj(&pos, &quads, true));
+        for glb in [false, true] {
+            seeds.push(gltf(&pos, &quads, glb));
+        }
+        let meshlet_source = Mesh {
+            positions: pos.clone(),
+            indices: quads
+                .iter()
+                .flat_map(|q| [q[0], q[1], q[2], q[0], q[2], q[3]])
+                .collect(),
+        };
+        for (strategy, limits) in [("nvidia", (8u32, 6u32)), ("meshopt", (16, 12))] {
+            seeds.push(meshlet_seed(&meshlet_source, strategy, limits));
+        }
+        Self {
+            seeds,
+            meshlet_source,
+        }
+    }
+
+    /// The seeds of one target (for [`Target::Zst`]: the seeds that are compressed).
+    pub fn of(&self, t: Target) -> Vec<&Seed> {
+        let inner = |s: &&Seed| match t {
+            Target::Zst => matches!(
+                s.target,
+                Target::PlyAscii | Target::PlyLe | Target::Obj | Target::Glb
+            ),
+            _ => s.target == t,
+        };
+        self.seeds.iter().filter(inner).collect()
+    }
+}
+
+impl Default for Corpus {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// An `n` x `n` height field: positions and counter-clockwise quads.
+fn grid(n: u32, seed: u64) -> (Vec<[f32; 3]>, Vec<[u32; 4]>) {
+    let mut pos = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let h = crate::mesh::generate::splitmix64(seed ^ (j * n + i) as u64);
+            pos.push([i as f32, j as f32, (h >> 40) as f32 / (1u64 << 24) as f32]);
+        }
+    }
+    let mut quads = Vec::new();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let v = j * n + i;
+            quads.push([v, v + 1, v + 1 + n, v + n]);
+        }
+    }
+    (pos, quads)
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Enc {
+    Ascii,
+    Le,
+    Be,
+}
+
+struct PlySpec {
+    normals: bool,
+    colours: bool,
+    double: bool,
+    polygons: bool,
+    count: &'static str,
+    item: &'static str,
+    strips: bool,
+    extra: bool,
+}
+
+impl Default for PlySpec {
+    fn default() -> Self {
+        Self {
+            normals: false,
+            colours: false,
+            double: false,
+            polygons: false,
+            count: "uchar",
+            item: "int",
+            strips: false,
+            extra: false,
+        }
+    }
+}
+
+/// Appends text or a binary scalar, noting where it went.
+struct Writer {
+    out: Vec<u8>,
+    enc: Enc,
+    boundaries: Vec<usize>,
+    numbers: Vec<Field>,
+    floats: Vec<Field>,
+}
+
+impl Writer {
+    fn text(&mut self, s: &str) {
+        self.out.extend_from_slice(s.as_bytes());
+    }
+    fn line(&mut self, s: &str) {
+        self.text(s);
+        self.text("\n");
+        self.boundaries.push(self.out.len());
+    }
+    /// A header line whose last token is a number.
+    fn header_count(&mut self, prefix: &str, n: usize) {
+        self.text(prefix);
+        let start = self.out.len();
+        self.text(&n.to_string());
+        self.numbers.push(Field::Text {
+            start,
+            end: self.out.len(),
+        });
+        self.line("");
+    }
+    /// One body value of PLY type `ty`; `float` marks coordinates, `number` list counts.
+    fn value(&mut self, ty: &str, v: f64, float: bool, number: bool) {
+        let start = self.out.len();
+        let width: u8 = match ty {
+            "uchar" | "uint8" | "char" | "int8" => 1,
+            "ushort" | "uint16" | "short" | "int16" => 2,
+            "double" | "float64" => 8,
+            _ => 4,
+        };
+        match self.enc {
+            Enc::Ascii => {
+                if self.out.last().is_some_and(|&c| c != b'\n') {
+                    self.text(" ");
+                }
+                let start = self.out.len();
+                self.text(&if float {
+                    format!("{v}")
+                } else {
+                    format!("{}", v as i64)
+                });
+                let f = Field::Text {
+                    start,
+                    end: self.out.len(),
+                };
+                if float {
+                    self.floats.push(f);
+                }
+                if number {
+                    self.numbers.push(f);
+                }
+            }
+            Enc::Le | Enc::Be => {
+                let be = self.enc == Enc::Be;
+                let bytes: Vec<u8> = match ty {
+                    "float" | "float32" => {
+                        let b = (v as f32).to_le_bytes();
+                        b.to_vec()
+                    }
+                    "double" | "float64" => v.to_le_bytes().to_vec(),
+                    _ => (v as i64).to_le_bytes()[..width as usize].to_vec(),
+                };
+                let mut bytes = bytes;
+                if be {
+                    bytes.reverse();
+                }
+                self.out.extend_from_slice(&bytes);
+                let f = Field::Bin {
+                    at: start,
+                    width,
+                    be,
+                };
+                if float && ty.starts_with('f') {
+                    self.floats.push(f);
+                }
+                if number {
+                    self.numbers.push(f);
+                }
+            }
+        }
+    }
+    fn end_record(&mut self) {
+        if self.enc == Enc::Ascii {
+            self.text("\n");
+        }
+        self.boundaries.push(self.out.len());
+    }
+}
+
+fn ply(t: Target, enc: Enc, s: &PlySpec, pos: &[[f32; 3]], quads: &[[u32; 4]]) -> Seed {
+    let mut w = Writer {
+        out: Vec::new(),
+        enc,
+        boundaries: Vec::new(),
+        numbers: Vec::new(),
+        floats: Vec::new(),
+    };
+    w.line("ply");
+    w.line(match enc {
+        Enc::Ascii => "format ascii 1.0",
+        Enc::Le => "format binary_little_endian 1.0",
+        Enc::Be => "format binary_big_endian 1.0",
+    });
+    w.line("comment meshletlab fuzz seed");
+    let coord = if s.double { "double" } else { "float" };
+    w.header_count("element vertex ", pos.len());
+    for c in ["x", "y", "z"] {
+        w.line(&format!("property {coord} {c}"));
+    }
+    if s.normals {
+        for c in ["nx", "ny", "nz"] {
+            w.line(&format!("property float {c}"));
+        }
+    }
+    if s.colours {
+        for c in ["red", "green", "blue"] {
+            w.line(&format!("property uchar {c}"));
+        }
+    }
+    // Polygons: quads as they are, or each split into two triangles.
+    let faces: Vec<Vec<u32>> = if s.polygons {
+        quads.iter().map(|q| q.to_vec()).collect()
+    } else {
+        quads
+            .iter()
+            .flat_map(|q| [vec![q[0], q[1], q[2]], vec![q[0], q[2], q[3]]])
+            .collect()
+    };
+    // With strips, the last row of quads goes into one strip instead of faces.
+    let (faces, strip): (Vec<Vec<u32>>, Vec<i64>) = if s.strips {
+        let keep = faces.len() - faces.len() / 4;
+        let strip = vec![0, 5, 1, 6, 2, 7, -1, 3, 8, 4, 9];
+        (faces[..keep].to_vec(), strip)
+    } else {
+        (faces, Vec::new())
+    };
+    w.header_count("element face ", faces.len());
+    w.line(&format!(
+        "property list {} {} vertex_indices",
+        s.count, s.item
+    ));
+    if s.strips {
+        w.header_count("element tristrips ", 1);
+        w.line("property list int int vertex_indices");
+    }
+    if s.extra {
+        w.header_count("element material ", 2);
+        w.line("property uchar id");
+        w.line("property list uchar float weights");
+    }
+    w.line("end_header");
+    let body = w.out.len();
+    for (v, p) in pos.iter().enumerate() {
+        for c in p {
+            w.value(coord, *c as f64, true, false);
+        }
+        if s.normals {
+            for c in [0.0, 0.0, 1.0] {
+                w.value("float", c, true, false);
+            }
+        }
+        if s.colours {
+            for c in [v * 7, v * 13, v * 29] {
+                w.value("uchar", (c % 256) as f64, false, false);
+            }
+        }
+        w.end_record();
+    }
+    for f in &faces {
+        w.value(s.count, f.len() as f64, false, true);
+        for &i in f {
+            w.value(s.item, i as f64, false, false);
+        }
+        w.end_record();
+    }
+    if s.strips {
+        w.value("int", strip.len() as f64, false, true);
+        for &i in &strip {
+            w.value("int", i as f64, false, false);
+        }
+        w.end_record();
+    }
+    if s.extra {
+        for m in 0..2 {
+            w.value("uchar", m as f64, false, false);
+            w.value("uchar", 2.0, false, true);
+            w.value("float", 0.5, true, false);
+            w.value("float", 0.25, true, false);
+            w.end_record();
+        }
+    }
+    let text_end = if enc == Enc::Ascii { w.out.len() } else { body };
+    Seed {
+        name: format!(
+            "{}/{}",
+            t.name(),
+            if s.normals {
+                "props-polygons-strips"
+            } else {
+                "plain"
+            }
+        ),
+        target: t,
+        bytes: w.out,
+        boundaries: w.boundaries,
+        numbers: w.numbers,
+        floats: w.floats,
+        text_end,
+        gltf: None,
+    }
+}
+
+fn obj(pos: &[[f32; 3]], quads: &[[u32; 4]], rich: bool) -> Seed {
+    let mut w = Writer {
+        out: Vec::new(),
+        enc: Enc::Ascii,
+        boundaries: Vec::new(),
+        numbers: Vec::new(),
+        floats: Vec::new(),
+    };
+    w.line("# meshletlab fuzz seed");
+    if rich {
+        w.line("mtllib none.mtl");
+        w.line("o first");
+    }
+    for p in pos {
+        w.text("v");
+        for c in p {
+            w.value("float", *c as f64, true, false);
+        }
+        w.end_record();
+        if rich {
+            w.line("vn 0 0 1");
+            w.line("vt 0.5 0.5");
+        }
+    }
+    let n = pos.len() as i64;
+    for (k, q) in quads.iter().enumerate() {
+        if rich && k == quads.len() / 2 {
+            w.line("g second");
+            w.line("usemtl none");
+            w.line("s 1");
+        }
+        w.text("f");
+        for &i in q {
+            // Rich: negative (relative) indices for every other face, and v/vt/vn triples.
+            let idx = if rich && k % 2 == 1 {
+                i as i64 - n
+            } else {
+                i as i64 + 1
+            };
+            w.value("int", idx as f64, false, true);
+            if rich {
+                w.text(&format!("/{idx}/{idx}"));
+            }
+        }
+        w.end_record();
+    }
+    Seed {
+        name: format!(
+            "obj/{}",
+            if rich {
+                "groups-normals-negative"
+            } else {
+                "plain"
+            }
+        ),
+        target: Target::Obj,
+        text_end: w.out.len(),
+        bytes: w.out,
+        boundaries: w.boundaries,
+        numbers: w.numbers,
+        floats: w.floats,
+        gltf: None,
+    }
+}
+
+/// A glTF scene: node 0 (rotated) has children 1 (mesh 0, indexed u16 triangles) and 2 (mesh 1, a
+/// mirrored u8-indexed strip); positions are interleaved with a pad (stride 16).
+fn gltf(pos: &[[f32; 3]], quads: &[[u32; 4]], glb: bool) -> Seed {
+    let mut bin = Vec::new();
+    let mut floats = Vec::new();
+    for p in pos {
+        for c in p {
+            floats.push(bin.len());
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+        bin.extend_from_slice(&[0u8; 4]);
+    }
+    let pos_len = bin.len();
+    let tris: Vec<u16> = quads
+        .iter()
+        .flat_map(|q| [q[0], q[1], q[2], q[0], q[2], q[3]])
+        .map(|i| i as u16)
+        .collect();
+    for t in &tris {
+        bin.extend_from_slice(&t.to_le_bytes());
+    }
+    let tri_len = bin.len() - pos_len;
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let strip_at = bin.len();
+    let strip: [u8; 6] = [0, 5, 1, 6, 2, 7];
+    bin.extend_from_slice(&strip);
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let (lo, hi) = pos
+        .iter()
+        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(mut lo, mut hi), p| {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+            (lo, hi)
+        });
+    let doc = json!({
+        "asset": {"version": "2.0", "generator": "meshletlab fuzz seed"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [
+            {"children": [1, 2], "rotation": [0.0, 0.38268343, 0.0, 0.9238795]},
+            {"mesh": 0, "translation": [1.0, 2.0, 3.0]},
+            {"mesh": 1, "scale": [-1.0, 1.0, 1.0]}
+        ],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "mode": 4}]},
+            {"primitives": [{"attributes": {"POSITION": 0}, "indices": 2, "mode": 5}]}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": pos.len(), "type": "VEC3", "min": lo, "max": hi},
+            {"bufferView": 1, "componentType": 5123, "count": tris.len(), "type": "SCALAR"},
+            {"bufferView": 2, "componentType": 5121, "count": strip.len(), "type": "SCALAR"}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": pos_len, "byteStride": 16},
+            {"buffer": 0, "byteOffset": pos_len, "byteLength": tri_len},
+            {"buffer": 0, "byteOffset": strip_at, "byteLength": strip.len()}
+        ],
+        "buffers": [{"byteLength": bin.len()}]
+    });
+    let parts = GltfParts {
+        json: doc,
+        bin,
+        floats,
+        glb,
+    };
+    let text = parts.json_text(&parts.json, &parts.bin);
+    let bytes = parts.assemble_text(&text, &parts.bin);
+    let mut boundaries: Vec<usize> = Vec::new();
+    let json_at = if glb { 20 } else { 0 };
+    boundaries.extend(
+        text.iter()
+            .enumerate()
+            .filter(|(_, &c)| c == b'\n')
+            .map(|(i, _)| json_at + i + 1),
+    );
+    let mut numbers = Vec::new();
+    if glb {
+        let bin_at = 20 + text.len().div_ceil(4) * 4;
+        boundaries.extend([
+            4,
+            8,
+            12,
+            16,
+            20,
+            bin_at,
+            bin_at + 4,
+            bin_at + 8,
+            bytes.len(),
+        ]);
+        for at in [8, 12, bin_at] {
+            numbers.push(Field::Bin {
+                at,
+                width: 4,
+                be: false,
+            });
+        }
+    }
+    Seed {
+        name: format!("{}/scene", if glb { "glb" } else { "gltf" }),
+        target: if glb { Target::Glb } else { Target::Gltf },
+        text_end: if glb { 0 } else { bytes.len() },
+        bytes,
+        boundaries,
+        numbers,
+        floats: Vec::new(),
+        gltf: Some(parts),
+    }
+}
+
+fn meshlet_seed(m: &Mesh, strategy: &str, (v, t): (u32, u32)) -> Seed {
+    let limits = crate::meshlet::Limits::new(v, t).expect("valid seed limits");
+    let s = crate::strategy::by_name(strategy, &Default::default()).expect("known strategy");
+    let f = MeshletFile {
+        limits,
+        source_vertices: m.vertex_count() as u32,
+        source_triangles: m.triangle_count() as u32,
+        fingerprint: m.fingerprint(),
+        strategy: strategy.to_string(),
+        meshlets: s.build(m, limits),
+    };
+    let bytes = f.to_bytes();
+    let u32f = |at: usize| Field::Bin {
+        at,
+        width: 4,
+        be: false,
+    };
+    // Header: limits, source counts, name length, then the three array counts after the name.
+    let after_name = 36 + strategy.len();
+    let mut numbers: Vec<Field> = [
+        8,
+        12,
+        16,
+        20,
+        32,
+        after_name,
+        after_name + 4,
+        after_name + 8,
+    ]
+    .into_iter()
+    .map(u32f)
+    .collect();
+    let records = after_name + 12;
+    let mut boundaries = vec![8, 16, 24, 32, 36, after_name, records];
+    for k in 0..f.meshlets.meshlets.len() {
+        boundaries.push(records + 16 * k);
+        numbers.extend((0..4).map(|j| u32f(records + 16 * k + 4 * j)));
+    }
+    let verts = records + 16 * f.meshlets.meshlets.len();
+    boundaries.extend([verts, verts + 4 * f.meshlets.vertices.len(), bytes.len()]);
+    Seed {
+        name: format!("meshlet/{strategy}"),
+        target: Target::Meshlet,
+        bytes,
+        boundaries,
+        numbers,
+        floats: Vec::new(),
+        text_end: 0,
+        gltf: None,
+    }
+}
