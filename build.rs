@@ -47,6 +47,9 @@ fn shaders() -> Vec<(String, &'static str, String, Vec<String>)> {
 
 fn main() {
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
+    // results/ headers name the build: custom profiles (fuzz) are told apart by their settings.
+    let opt = std::env::var("OPT_LEVEL").unwrap_or_default();
+    println!("cargo:rustc-env=MESHLETLAB_OPT_LEVEL={opt}");
     let glsl = Path::new("glsl");
     println!("cargo:rerun-if-changed=glsl");
     let mut missing = false;

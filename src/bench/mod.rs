@@ -109,10 +109,10 @@ pub fn machine_note() -> String {
                 .map(|l| l[12..].trim_matches('"').to_string())
         })
         .unwrap_or_else(|| std::env::consts::OS.into());
-    let profile = if cfg!(debug_assertions) {
-        "debug build"
-    } else {
-        "release build"
+    let profile = match (env!("MESHLETLAB_OPT_LEVEL"), cfg!(debug_assertions)) {
+        ("0", _) => "debug build".to_string(),
+        (o, false) => format!("release build, opt-level {o}"),
+        (o, true) => format!("optimised build, opt-level {o}, with debug assertions"),
     };
     format!(
         "{cpu}, {cores} cores ({} rayon threads), {os}; meshletlab {} ({profile}), meshoptimizer 1.3 via meshopt 0.7",

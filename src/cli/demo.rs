@@ -133,7 +133,7 @@ fn render(name: &str, m: &Mesh, a: &DemoArgs, quiet: bool) -> Result<()> {
     let _ = quiet;
     let pass = Pass::new(&ctx, m, &ml)?;
     let aspect = WIDTH as f32 / HEIGHT as f32;
-    let cam = Camera::framed_views(m, 1, 1, aspect, super::render::FILL)[0];
+    let cam = Camera::framed_views(m, 1, 1, aspect, crate::render::FRAME_FILL)[0];
     let cull = Pipeline::Mesh {
         frustum: true,
         cone: true,

@@ -7,9 +7,6 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use std::path::PathBuf;
 
-/// How much of the image's half-height (or half-width) a framed mesh may fill.
-pub const FILL: f32 = 0.92;
-
 /// Arguments of `render`.
 #[derive(Args, Debug)]
 pub struct RenderArgs {
@@ -89,7 +86,7 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
     let aspect = WIDTH as f32 / HEIGHT as f32;
     let views = match a.distance {
         Some(d) => Camera::random_views(&m, a.views, a.seed, d),
-        None => Camera::framed_views(&m, a.views, a.seed, aspect, FILL),
+        None => Camera::framed_views(&m, a.views, a.seed, aspect, crate::render::FRAME_FILL),
     };
     let (lo, hi) = m.bounding_box();
     let radius = ((hi - lo).length() * 0.5).max(1e-6);

@@ -41,6 +41,9 @@ pub(crate) fn vk_err(what: &'static str) -> impl Fn(ash::vk::Result) -> RenderEr
     move |e| RenderError::Vulkan(what, e)
 }
 
+/// How much of the image's half-height (or half-width) a framed mesh fills ([`Camera::framed`]).
+pub const FRAME_FILL: f32 = 0.92;
+
 /// A perspective camera looking at a point (60 degree vertical field of view, depth 0..1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
