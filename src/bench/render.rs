@@ -15,9 +15,7 @@ use crate::meshlet::order::{
     local_miss_rate, optimize_triangle_order, order_meshlets, MeshletOrder,
 };
 use crate::meshlet::{validate, Limits, Meshlets};
-use crate::render::{
-    write_png, Camera, Context, Pass, Pipeline, RenderError, Shading, HEIGHT, WIDTH,
-};
+use crate::render::{Camera, Context, Pass, Pipeline, RenderError, Shading, HEIGHT, WIDTH};
 use crate::strategy::{self, Options};
 use anyhow::{Context as _, Result};
 use indicatif::ProgressBar;
@@ -251,21 +249,12 @@ fn strategy_row(
             WIDTH as f32 / HEIGHT as f32,
             crate::render::FRAME_FILL,
         );
-        let img = pass.render(
+        crate::render::write_meshlet_png(
+            &pass,
             &fig,
-            Pipeline::Mesh {
-                frustum: true,
-                cone: true,
-                colour_ids: true,
-            },
-            Shading::Lit,
-        )?;
-        write_png(
+            true,
             &cfg.out
                 .join(format!("render_bunny_{}.png", s.replace('+', "_"))),
-            WIDTH,
-            HEIGHT,
-            &img.pixels,
         )?;
     }
     let n = views.len() as f64;

@@ -171,17 +171,7 @@ fn render(name: &str, m: &Mesh, a: &DemoArgs, quiet: bool) -> Result<()> {
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("cannot create {}", a.out.display()))?;
     let png = a.out.join(format!("{name}_{STRATEGY}.png"));
-    let img = pass.render(
-        &cam,
-        Pipeline::Mesh {
-            frustum: true,
-            cone: true,
-            colour_ids: true,
-        },
-        Shading::Lit,
-    )?;
-    crate::render::write_png(&png, WIDTH, HEIGHT, &img.pixels)
-        .with_context(|| format!("cannot write {}", png.display()))?;
+    crate::render::write_meshlet_png(&pass, &cam, true, &png)?;
     let glb = a.out.join(format!("{name}_{STRATEGY}.glb"));
     std::fs::write(&glb, crate::meshlet::export::glb(m, &ml))
         .with_context(|| format!("cannot write {}", glb.display()))?;

@@ -122,17 +122,7 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
         rows.push(row);
         if i == 0 {
             if let Some(p) = &a.output {
-                let img = pass.render(
-                    cam,
-                    Pipeline::Mesh {
-                        frustum: cull,
-                        cone: cull,
-                        colour_ids: true,
-                    },
-                    Shading::Lit,
-                )?;
-                crate::render::write_png(p, WIDTH, HEIGHT, &img.pixels)
-                    .with_context(|| format!("cannot write {}", p.display()))?;
+                crate::render::write_meshlet_png(&pass, cam, cull, p)?;
             }
         }
     }

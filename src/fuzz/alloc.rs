@@ -5,7 +5,8 @@
 //! and refuses (returns null) any request that would take them past the limit: Rust then aborts
 //! with "memory allocation of N bytes failed", and the parent process reports the case as an
 //! over-limit allocation. Refusing instead of serving means a header that asks for 48 GB never
-//! touches the machine's memory.
+//! touches the machine's memory. Blocks allocated before [`arm`] and freed during a case count as
+//! freed, which can only loosen the cap by what was live before the case (a few kilobytes here).
 //!
 //! Install it in a binary with `#[global_allocator] static A: LimitAlloc = LimitAlloc;`.
 
@@ -62,17 +63,27 @@ fn release(n: usize) {
 // (allowed: it means allocation failure). The counters never affect the memory handed out.
 unsafe impl GlobalAlloc for LimitAlloc {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if ARMED.load(Relaxed) && !charge(layout.size()) {
+        let armed = ARMED.load(Relaxed);
+        if armed && !charge(layout.size()) {
             return std::ptr::null_mut();
         }
-        unsafe { System.alloc(layout) }
+        let p = unsafe { System.alloc(layout) };
+        if armed && p.is_null() {
+            release(layout.size());
+        }
+        p
     }
 
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        if ARMED.load(Relaxed) && !charge(layout.size()) {
+        let armed = ARMED.load(Relaxed);
+        if armed && !charge(layout.size()) {
             return std::ptr::null_mut();
         }
-        unsafe { System.alloc_zeroed(layout) }
+        let p = unsafe { System.alloc_zeroed(layout) };
+        if armed && p.is_null() {
+            release(layout.size());
+        }
+        p
     }
 
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
@@ -83,15 +94,20 @@ unsafe impl GlobalAlloc for LimitAlloc {
     }
 
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if ARMED.load(Relaxed) {
-            if new_size > layout.size() {
-                if !charge(new_size - layout.size()) {
-                    return std::ptr::null_mut();
-                }
+        let armed = ARMED.load(Relaxed);
+        let grow = new_size.saturating_sub(layout.size());
+        if armed && grow > 0 && !charge(grow) {
+            return std::ptr::null_mut();
+        }
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if armed {
+            if p.is_null() {
+                // The old block stays as it was.
+                release(grow);
             } else {
-                release(layout.size() - new_size);
+                release(layout.size().saturating_sub(new_size));
             }
         }
-        unsafe { System.realloc(ptr, layout, new_size) }
+        p
     }
 }

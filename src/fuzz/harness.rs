@@ -177,7 +177,7 @@ pub enum SelfTest {
     Panic,
     /// Case 1 never returns.
     Hang,
-    /// Case 1 asks for 1 TiB.
+    /// Case 1 asks for 1 MiB more than its bound (an amount the system would grant).
     Alloc,
 }
 
@@ -297,8 +297,22 @@ fn drive(
         }
         let status = child.wait()?;
         let _ = reader.join();
+        // A line that arrived as the stall fired still counts: the hang is the case after it.
+        for line in rx.try_iter() {
+            if let Some(k) = take_line(&line, &mut rep) {
+                next = k + 1;
+                done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            }
+        }
         let stderr = err_reader.join().unwrap_or_default();
-        if next >= to && status.success() {
+        if next >= to {
+            if !status.success() && !stalled {
+                // Every case answered, then the worker failed: not a case's defect, the harness's.
+                return Err(std::io::Error::other(format!(
+                    "fuzz worker for cases {from}..{to} exited with {status} after its last case: {}",
+                    stderr.trim()
+                )));
+            }
             break;
         }
         // The case in flight killed or stalled the worker.
@@ -400,7 +414,8 @@ pub fn worker(seed: u64, from: u64, to: u64, selftest: Option<SelfTest>) -> std:
                 std::thread::sleep(Duration::from_secs(1));
             },
             (Some(SelfTest::Alloc), 1) => {
-                std::hint::black_box(Vec::<u8>::with_capacity(1 << 40));
+                // Just past the bound: the system would grant it, only LimitAlloc refuses.
+                std::hint::black_box(Vec::<u8>::with_capacity(memory_bound(input) + (1 << 20)));
                 Ok(Outcome::Valid)
             }
             _ => read(&c, &corpus),

@@ -38,28 +38,8 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 /// Parses a .gltf or .glb file; `base` resolves external buffer URIs.
 pub fn parse(data: &[u8], base: Option<&Path>) -> Result<(Vec<[f32; 3]>, Vec<u32>), MeshErrorKind> {
     let doc = Document::parse(data, base)?;
-    let budget = (data.len() as u64)
-        .saturating_mul(MAX_EXPANSION)
-        .saturating_add(EXPANSION_SLACK);
     let instances = doc.instances()?;
-    // Sizes first, so nothing is allocated for output that the budget would refuse.
-    let mut out_bytes = 0u64;
-    for (mesh, _) in &instances {
-        for p in &doc.root.meshes[*mesh].primitives {
-            if let Some((v, i)) = doc.primitive_size(p)? {
-                out_bytes = out_bytes
-                    .saturating_add(v.saturating_mul(12))
-                    .saturating_add(i.saturating_mul(4));
-            }
-        }
-        if out_bytes > budget {
-            return Err(MeshErrorKind::TooLarge(format!(
-                "meshes and node instancing expand to more than {budget} bytes of vertices and \
-                 indices ({MAX_EXPANSION}x the file plus {} MiB)",
-                EXPANSION_SLACK >> 20
-            )));
-        }
-    }
+    doc.check_budget(&instances)?;
     let mut positions = Vec::new();
     let mut indices = Vec::new();
     for (mesh, world) in instances {
@@ -73,18 +53,26 @@ pub fn parse(data: &[u8], base: Option<&Path>) -> Result<(Vec<[f32; 3]>, Vec<u32
 /// is an error: this is for files whose colours matter, such as `meshletlab export`'s.
 pub fn colours(data: &[u8], base: Option<&Path>) -> Result<Vec<[f32; 4]>, MeshErrorKind> {
     let doc = Document::parse(data, base)?;
+    let instances = doc.instances()?;
+    doc.check_budget(&instances)?;
     let mut out = Vec::new();
-    for (mesh, _) in doc.instances()? {
+    for (mesh, _) in instances {
         for (pi, p) in doc.root.meshes[mesh].primitives.iter().enumerate() {
-            if doc.primitive_size(p)?.is_none() {
+            let Some((vertices, _)) = doc.primitive_size(p)? else {
                 continue;
-            }
+            };
             let loc = format!("mesh {mesh} primitive {pi}");
             let a = p
                 .attributes
                 .get(&Checked::Valid(json::mesh::Semantic::Colors(0)))
                 .ok_or_else(|| parse_err(&loc, "no COLOR_0"))?;
             let acc = doc.accessor(a.value(), &loc)?;
+            if acc.count as u64 != vertices {
+                return Err(parse_err(
+                    &loc,
+                    format!("COLOR_0 has {} entries for {vertices} vertices", acc.count),
+                ));
+            }
             let n = match acc.ty {
                 Type::Vec3 => 3,
                 Type::Vec4 => 4,
@@ -186,6 +174,8 @@ struct Document {
     /// Buffer bytes, loaded up front (each checked against its declared length). Shared, so a
     /// file whose buffers all name the GLB chunk or one external file holds its bytes once.
     buffers: Vec<Rc<[u8]>>,
+    /// Bytes read: the file and each distinct external buffer file (what the budget scales with).
+    input_bytes: u64,
 }
 
 /// An accessor checked for range against its buffer view: element `i` starts at `data[i * stride]`.
@@ -268,6 +258,33 @@ impl Accessor<'_> {
 }
 
 impl Document {
+    /// Refuses instancing that would bake more than [`MAX_EXPANSION`] times the input (the file and
+    /// its external buffers) plus [`EXPANSION_SLACK`]; sizes are summed before anything is allocated.
+    fn check_budget(&self, instances: &[(usize, Mat4)]) -> Result<(), MeshErrorKind> {
+        let budget = self
+            .input_bytes
+            .saturating_mul(MAX_EXPANSION)
+            .saturating_add(EXPANSION_SLACK);
+        let mut out_bytes = 0u64;
+        for (mesh, _) in instances {
+            for p in &self.root.meshes[*mesh].primitives {
+                if let Some((v, i)) = self.primitive_size(p)? {
+                    out_bytes = out_bytes
+                        .saturating_add(v.saturating_mul(12))
+                        .saturating_add(i.saturating_mul(4));
+                }
+            }
+            if out_bytes > budget {
+                return Err(MeshErrorKind::TooLarge(format!(
+                    "meshes and node instancing expand to more than {budget} bytes of vertices and \
+                     indices ({MAX_EXPANSION}x the input plus {} MiB)",
+                    EXPANSION_SLACK >> 20
+                )));
+            }
+        }
+        Ok(())
+    }
+
     fn parse(data: &[u8], base: Option<&Path>) -> Result<Self, MeshErrorKind> {
         let (json_bytes, blob) = if data.starts_with(GLB_MAGIC) {
             split_glb(data)?
@@ -284,7 +301,12 @@ impl Document {
             .enumerate()
             .map(|(i, b)| load_buffer(i, b, blob.as_ref(), base, &mut files))
             .collect::<Result<_, _>>()?;
-        Ok(Self { root, buffers })
+        let external: u64 = files.values().map(|f| f.len() as u64).sum();
+        Ok(Self {
+            root,
+            buffers,
+            input_bytes: data.len() as u64 + external,
+        })
     }
 
     /// Mesh instances to bake: (mesh index, world transform), in a fixed order.
@@ -307,7 +329,8 @@ impl Document {
         let mut out = Vec::new();
         let mut instanced = vec![false; r.meshes.len()];
         for s in scenes {
-            // Roots listed twice (or in two scenes) are drawn once.
+            // A root already drawn from an earlier scene is skipped; one listed twice in the same
+            // scene is reached twice below, which the spec forbids.
             let mut stack: Vec<(usize, Mat4)> = Vec::new();
             for n in r.scenes[s].nodes.iter().rev() {
                 let n = self.node_index(n.value(), &format!("scene {s}"))?;

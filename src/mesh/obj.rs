@@ -45,49 +45,34 @@ pub fn parse(data: &[u8]) -> Result<(Vec<[f32; 3]>, Vec<u32>), MeshErrorKind> {
     Ok((positions, indices))
 }
 
-/// `data` with `vt`/`vn` lines blanked and every face corner `v/vt/vn` cut to `v` (logical lines:
-/// a trailing backslash continues a line, as tobj reads it).
+/// `data` with `vt`/`vn` lines blanked and every face corner `v/vt/vn` cut to `v`, line by line as
+/// tobj reads it (its first token split by Unicode whitespace, like tobj's `split_whitespace`; no
+/// line continuation). A line that is not UTF-8 passes unchanged: tobj rejects it.
 fn positions_and_faces(data: &[u8]) -> Vec<u8> {
     let mut out = Vec::with_capacity(data.len());
-    let mut logical: Vec<u8> = Vec::new();
-    let mut newlines = 0;
-    let flush = |logical: &mut Vec<u8>, newlines: &mut usize, out: &mut Vec<u8>| {
-        let mut words = logical
-            .split(|c| c.is_ascii_whitespace())
-            .filter(|w| !w.is_empty());
+    for line in data.split_inclusive(|&c| c == b'\n') {
+        let Ok(text) = std::str::from_utf8(line) else {
+            out.extend_from_slice(line);
+            continue;
+        };
+        let mut words = text.split_whitespace();
         match words.next() {
-            Some(b"vt") | Some(b"vn") => {}
-            Some(b"f") => {
+            Some("vt") | Some("vn") => {}
+            Some("f") => {
                 out.push(b'f');
                 for w in words {
                     out.push(b' ');
-                    out.extend_from_slice(w.split(|&c| c == b'/').next().unwrap_or(w));
+                    out.extend_from_slice(w.split('/').next().unwrap_or(w).as_bytes());
                 }
             }
-            _ => out.extend_from_slice(logical),
-        }
-        // Keep line numbers: one newline per physical line consumed.
-        out.extend(std::iter::repeat_n(b'\n', *newlines));
-        logical.clear();
-        *newlines = 0;
-    };
-    for line in data.split_inclusive(|&c| c == b'\n') {
-        let body = line.strip_suffix(b"\n").unwrap_or(line);
-        let body = body.strip_suffix(b"\r").unwrap_or(body);
-        newlines += line.ends_with(b"\n") as usize;
-        match body.strip_suffix(b"\\") {
-            Some(cont) => {
-                logical.extend_from_slice(cont);
-                logical.push(b' ');
-            }
-            None => {
-                logical.extend_from_slice(body);
-                flush(&mut logical, &mut newlines, &mut out);
+            _ => {
+                out.extend_from_slice(line.strip_suffix(b"\n").unwrap_or(line));
             }
         }
-    }
-    if !logical.is_empty() || newlines > 0 {
-        flush(&mut logical, &mut newlines, &mut out);
+        // Keep line numbers.
+        if line.ends_with(b"\n") {
+            out.push(b'\n');
+        }
     }
     out
 }
@@ -108,8 +93,9 @@ mod tests {
 
     #[test]
     fn texture_and_normal_indices_are_ignored_even_when_absurd() {
-        let src = "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvn 0 0 1\n\
-                   f 1/1/1 2/9223372036854775807/1 \\\n 3//-9223372036854775808\n";
+        // Vertical tab and no-break space separate tokens for tobj too.
+        let src = "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvn\u{b}0 0 1\n\
+                   f\u{a0}1/1/1 2/9223372036854775807/1 3//-9223372036854775808\r\n";
         let (p, i) = parse(src.as_bytes()).unwrap();
         assert_eq!((p.len(), i), (3, vec![0, 1, 2]));
     }

@@ -56,7 +56,8 @@ pub fn glb(mesh: &Mesh, ml: &Meshlets) -> Vec<u8> {
         }
         indices.extend(ml.meshlet_triangles(i).iter().map(|&l| base + l as u32));
     }
-    let short = nv <= u16::MAX as usize + 1;
+    // 65535 is the primitive-restart value, which glTF forbids in u16 indices.
+    let short = nv <= u16::MAX as usize;
     let mut bin = positions;
     let colour_at = bin.len();
     bin.extend_from_slice(&colours);

@@ -61,11 +61,7 @@ impl Camera {
     /// View and projection for an image of `aspect` (width / height). The y axis is flipped for
     /// Vulkan's downward framebuffer y, so the image is upright and counter-clockwise stays front.
     pub fn view_proj(&self, aspect: f32) -> Mat4 {
-        let up = if (self.target - self.eye).cross(Vec3::Y).length_squared() > 1e-12 {
-            Vec3::Y
-        } else {
-            Vec3::Z
-        };
+        let up = up_for((self.target - self.eye).normalize_or(Vec3::NEG_Z));
         let view = Mat4::look_at_rh(self.eye, self.target, up);
         let proj = Mat4::perspective_rh(60f32.to_radians(), aspect, self.near, self.far);
         Mat4::from_scale(Vec3::new(1.0, -1.0, 1.0)) * proj * view
@@ -119,11 +115,7 @@ impl Camera {
         let r = ((hi - lo).length() * 0.5).max(1e-6);
         let dir = dir.normalize_or(Vec3::Z);
         // The same frame view_proj builds for a camera looking along -dir.
-        let up = if dir.cross(Vec3::Y).length_squared() > 1e-12 {
-            Vec3::Y
-        } else {
-            Vec3::Z
-        };
+        let up = up_for(-dir);
         let right = (-dir).cross(up).normalize();
         let cam_up = right.cross(-dir);
         let tan_v = 30f32.to_radians().tan() * fill.clamp(0.05, 1.0);
@@ -136,9 +128,24 @@ impl Camera {
                 .max(z + q.dot(right).abs() / tan_h)
                 .max(z + q.dot(cam_up).abs() / tan_v);
         }
-        // Off the centre even for a flat mesh seen edge-on.
-        let d = d.max(r * 1e-2);
+        // In front of every vertex (a thin mesh seen end-on needs only d > its nearest tip).
+        let z_max = mesh
+            .positions
+            .iter()
+            .map(|p| (Vec3::from_array(*p) - centre).dot(dir))
+            .fold(f32::MIN, f32::max);
+        let d = d.max(z_max + r * 0.05).max(r * 1e-2);
         Self::looking_at(mesh, centre + dir * d)
+    }
+}
+
+/// The up vector for a camera looking along unit `forward`: +Y, or +Z when looking (almost)
+/// straight up or down.
+fn up_for(forward: Vec3) -> Vec3 {
+    if forward.cross(Vec3::Y).length_squared() > 1e-12 {
+        Vec3::Y
+    } else {
+        Vec3::Z
     }
 }
 
@@ -176,6 +183,25 @@ pub fn max_channel_difference(a: &[u8], b: &[u8]) -> u8 {
         .map(|(x, y)| x.abs_diff(*y))
         .max()
         .unwrap_or(0)
+}
+
+/// Renders `cam`'s view through the mesh shaders coloured by meshlet (the paper's Figure 1; with
+/// task-shader culling when `cull`, so culled meshlets are absent) and writes it as a PNG.
+pub fn write_meshlet_png(
+    pass: &Pass,
+    cam: &Camera,
+    cull: bool,
+    path: &std::path::Path,
+) -> anyhow::Result<()> {
+    use anyhow::Context as _;
+    let how = Pipeline::Mesh {
+        frustum: cull,
+        cone: cull,
+        colour_ids: true,
+    };
+    let img = pass.render(cam, how, Shading::Lit)?;
+    write_png(path, WIDTH, HEIGHT, &img.pixels)
+        .with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Writes RGBA8 `pixels` of a `width` x `height` image as a PNG.
