@@ -10,6 +10,7 @@ pub mod bench;
 pub mod cli;
 pub mod fuzz;
 pub mod gpu;
+pub mod lod;
 pub mod mesh;
 pub mod meshlet;
 pub mod render;

@@ -287,3 +287,39 @@ fn parity_and_render_print_json() {
     let fill = ((x1 - x0) as f64 / w as f64).max((y1 - y0) as f64 / h as f64);
     assert!(fill > 0.8, "the mesh spans {fill:.2} of the frame");
 }
+
+#[test]
+fn lod_builds_a_dag_and_lod_check_validates_it() {
+    let dir = common::scratch("lod-cli");
+    let mesh = common::meshes_dir().join("stellarium_gaspra.ply.zst");
+    let m = mesh.to_str().unwrap();
+    let file = dir.join("gaspra.lod");
+    let f = file.to_str().unwrap();
+    let v: serde_json::Value =
+        serde_json::from_str(&ok(&["lod", "-q", m, "-o", f, "--json"])).unwrap();
+    let levels = v["levels"].as_array().unwrap();
+    assert!(levels.len() >= 6, "{v}");
+    assert_eq!(levels[0]["triangles"], 32040);
+    assert_eq!(v["roots"], 1);
+    assert_eq!(v["stuck_groups"], 0);
+    let out = ok(&["lod-check", "-q", m, f, "--views", "50"]);
+    assert!(
+        out.contains("valid") && out.contains("exactly one meshlet per DAG path"),
+        "{out}"
+    );
+    // Another mesh, and a corrupted file: one error line naming the file.
+    let other = common::meshes_dir().join("fandisk.ply.zst");
+    let out = cli(&["lod-check", "-q", other.to_str().unwrap(), f]);
+    assert!(!out.status.success());
+    let mut bytes = std::fs::read(&file).unwrap();
+    let n = bytes.len();
+    bytes.truncate(n - 3);
+    std::fs::write(&file, &bytes).unwrap();
+    let out = cli(&["lod-check", "-q", m, f]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("gaspra.lod") && err.lines().count() == 1,
+        "{err}"
+    );
+}

@@ -7,6 +7,8 @@ mod check;
 mod demo;
 mod export;
 mod fuzz_worker;
+mod lod;
+mod lod_check;
 mod parity;
 mod render;
 mod stats;
@@ -126,6 +128,14 @@ pub enum Command {
     /// Writes MESH's meshlets as a binary glTF (.glb) with one flat colour per meshlet (COLOR_0;
     /// vertices split where meshlets meet), so any glTF viewer shows them.
     Export(export::ExportArgs),
+    /// Builds the cluster-LOD DAG (Clustered Meshlet Optimizer): level 0 = a strategy's meshlets,
+    /// then groups of meshlets merged, simplified to half with shared borders locked, and split again,
+    /// level after level; writes the LOD file.
+    Lod(lod::LodArgs),
+    /// Validates a LOD file against its mesh: level 0 through the validator, limits on every level,
+    /// monotonic errors and bounds, and one meshlet per DAG path for random views and every
+    /// streaming prefix (exit 1 on any violation).
+    LodCheck(lod_check::LodCheckArgs),
     /// Benchmarks that write results/.
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -171,6 +181,8 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
         Command::Parity(a) => parity::run(a, q),
         Command::Render(a) => render::run(a, q),
         Command::Export(a) => export::run(a, q),
+        Command::Lod(a) => lod::run(a, q),
+        Command::LodCheck(a) => lod_check::run(a, q),
         Command::Bench(b) => bench::run(b, q),
         Command::FuzzWorker(a) => fuzz_worker::run(a),
     }

@@ -147,6 +147,7 @@ impl Corpus {
         for (strategy, limits) in [("nvidia", (8u32, 6u32)), ("meshopt", (16, 12))] {
             seeds.push(meshlet_seed(&meshlet_source, strategy, limits));
         }
+        seeds.push(lod_seed(&meshlet_source));
         Self {
             seeds,
             meshlet_source,
@@ -671,6 +672,78 @@ fn meshlet_seed(m: &Mesh, strategy: &str, (v, t): (u32, u32)) -> Seed {
         boundaries,
         numbers,
         floats: Vec::new(),
+        text_end: 0,
+        gltf: None,
+    }
+}
+
+/// A LOD file of the grid at 8/8 (several levels), with its header and level fields marked.
+fn lod_seed(m: &Mesh) -> Seed {
+    use crate::lod::{self, io::LodFile};
+    let limits = crate::meshlet::Limits::new(8, 8).expect("valid seed limits");
+    let s = crate::strategy::by_name("meshopt", &Default::default()).expect("known strategy");
+    let cfg = lod::Config {
+        group_size: 4,
+        ..Default::default()
+    };
+    let f = LodFile {
+        source_vertices: m.vertex_count() as u32,
+        source_triangles: m.triangle_count() as u32,
+        fingerprint: m.fingerprint(),
+        lod: lod::build(m, s.as_ref(), limits, &cfg),
+    };
+    let bytes = f.to_bytes();
+    let u32f = |at: usize| Field::Bin {
+        at,
+        width: 4,
+        be: false,
+    };
+    let name = 36 + f.lod.strategy.len();
+    let mut numbers: Vec<Field> = [8, 12, 16, 20, 32, name, name + 4]
+        .into_iter()
+        .map(u32f)
+        .collect();
+    let groups = name + 8;
+    let mut boundaries = vec![8, 16, 24, 32, 36, name, groups];
+    let mut at = groups + 24 * f.lod.groups.len();
+    numbers.extend((groups..at).step_by(4).map(u32f));
+    for l in f.lod.levels.iter().rev() {
+        boundaries.push(at);
+        numbers.extend((0..6).map(|k| u32f(at + 4 * k)));
+        let ml = &l.meshlets;
+        let meshlets = at + 24;
+        let info = meshlets + 16 * ml.len();
+        numbers.extend((meshlets..info).step_by(4).map(u32f));
+        // Group references inside the LOD data.
+        numbers.extend((0..ml.len()).map(|k| u32f(info + 44 * k + 40)));
+        at = info + 44 * ml.len() + 4 * ml.vertices.len() + ml.triangles.len();
+        boundaries.extend([meshlets, info, info + 44 * ml.len()]);
+    }
+    boundaries.push(bytes.len());
+    // Floats: every LOD record's bounds and errors.
+    let mut floats = Vec::new();
+    let mut at = groups + 24 * f.lod.groups.len();
+    for l in f.lod.levels.iter().rev() {
+        let info = at + 24 + 16 * l.meshlets.len();
+        for k in 0..l.meshlets.len() {
+            floats.extend((0..10).map(|j| Field::Bin {
+                at: info + 44 * k + 4 * j,
+                width: 4,
+                be: false,
+            }));
+        }
+        at = info
+            + 44 * l.meshlets.len()
+            + 4 * l.meshlets.vertices.len()
+            + l.meshlets.triangles.len();
+    }
+    Seed {
+        name: "lod/meshopt-8-8".into(),
+        target: Target::Lod,
+        bytes,
+        boundaries,
+        numbers,
+        floats,
         text_end: 0,
         gltf: None,
     }

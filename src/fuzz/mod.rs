@@ -1,5 +1,5 @@
 //! A seeded mutation fuzzer over every file reader: PLY (ASCII, binary little and big endian), OBJ,
-//! glTF, GLB, zstd-compressed files and the meshlet file (`check`).
+//! glTF, GLB, zstd-compressed files, the meshlet file (`check`) and the LOD file (`lod-check`).
 //!
 //! Case `k` of a run with seed `s` is a pure function of `(s, k)`: a target format, a seed file of
 //! that format ([`corpus`]) and a mutation ([`mutate`]): bit flips, truncation at structural
@@ -61,11 +61,13 @@ pub enum Target {
     Zst,
     /// The meshlet file, read and checked against its mesh (`meshletlab check`).
     Meshlet,
+    /// The cluster-LOD file, read and checked against its mesh (`meshletlab lod-check`).
+    Lod,
 }
 
 impl Target {
     /// Every target, in report order.
-    pub const ALL: [Target; 8] = [
+    pub const ALL: [Target; 9] = [
         Target::PlyAscii,
         Target::PlyLe,
         Target::PlyBe,
@@ -74,6 +76,7 @@ impl Target {
         Target::Glb,
         Target::Zst,
         Target::Meshlet,
+        Target::Lod,
     ];
 
     /// Short name.
@@ -87,6 +90,7 @@ impl Target {
             Target::Glb => "glb",
             Target::Zst => "zst",
             Target::Meshlet => "meshlet",
+            Target::Lod => "lod",
         }
     }
 
@@ -98,6 +102,7 @@ impl Target {
             Target::Glb => "glb",
             Target::Zst => "zst",
             Target::Meshlet => "mlt",
+            Target::Lod => "lod",
         }
     }
 }
@@ -172,7 +177,9 @@ impl Mutation {
         match self {
             Mutation::JsonIndex | Mutation::JsonType | Mutation::JsonCycle => gltf,
             // Text exists in every format but the meshlet file (binary PLY: its header; GLB: JSON).
-            Mutation::TokenDelete | Mutation::TokenRepeat => t != Target::Meshlet,
+            Mutation::TokenDelete | Mutation::TokenRepeat => {
+                !matches!(t, Target::Meshlet | Target::Lod)
+            }
             Mutation::FloatSpecial => t != Target::Meshlet,
             _ => true,
         }
@@ -295,6 +302,14 @@ pub fn read(case: &Case, corpus: &Corpus) -> Result<Outcome, String> {
             Err(format!("error does not name the file: {msg}"))
         }
     };
+    if case.target == Target::Lod {
+        return match crate::lod::io::LodFile::from_bytes(&case.bytes, path)
+            .and_then(|f| f.check(&corpus.meshlet_source, path))
+        {
+            Ok(()) => Ok(Outcome::Valid),
+            Err(e) => named(e.to_string()).map(|_| Outcome::Error("lod-file")),
+        };
+    }
     if case.target == Target::Meshlet {
         return match MeshletFile::from_bytes(&case.bytes, path)
             .and_then(|f| f.check(&corpus.meshlet_source, path))
