@@ -249,3 +249,35 @@ fn lod_file_round_trips_and_rejects_corruption() {
         .to_string()
         .contains("parent error"));
 }
+
+#[test]
+fn the_checks_catch_a_broken_cut() {
+    let m = common::load("fandisk");
+    let lod = build(&m);
+    let remap = lod::weld(&m);
+    // Far enough that coarse levels are drawn, near enough that several meshlets are.
+    let (lo, hi) = m.bounding_box();
+    let (c, r) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
+    let v = &select::View::new(c + Vec3::new(0.6, 0.0, 0.8) * r * 6.0, 720.0, 1.0, 1.0);
+    let sel = select::select(&lod, v, 0);
+    assert!(!sel[0].iter().any(|&b| b), "level 0 is not drawn from 6 radii");
+    select::check_cut(&lod, &sel, 0).unwrap();
+    let (l, k) = sel
+        .iter()
+        .enumerate()
+        .find_map(|(l, s)| s.iter().position(|&b| b).map(|k| (l, k)))
+        .unwrap();
+    // One meshlet dropped: a hole (paths selecting nothing) and open edges on a closed source.
+    let mut hole = sel.clone();
+    hole[l][k] = false;
+    assert!(select::check_cut(&lod, &hole, 0).is_err());
+    let open = select::cut_edges(&lod, &hole, &remap)
+        .values()
+        .filter(|&&(u, _)| u == 1)
+        .count();
+    assert!(open > 0, "dropping a meshlet must open edges");
+    // A meshlet drawn with one of its parents: some path selects two.
+    let mut twice = sel.clone();
+    twice[0][0] = true;
+    assert!(select::check_cut(&lod, &twice, 0).is_err());
+}
