@@ -59,12 +59,9 @@ fn views(m: &Mesh, n: usize, seed: u64) -> Vec<select::View> {
         s = generate::splitmix64(s);
         (s >> 11) as f32 / (1u64 << 53) as f32
     };
-    (0..n)
-        .map(|_| {
-            let z = 2.0 * unit() - 1.0;
-            let a = std::f32::consts::TAU * unit();
-            let q = (1.0 - z * z).max(0.0).sqrt();
-            let dir = Vec3::new(q * a.cos(), z, q * a.sin());
+    meshletlab::render::random_directions(n, seed ^ 0x5eed)
+        .into_iter()
+        .map(|dir| {
             let dist = 0.5 * 128f32.powf(unit());
             let px = 0.25 * 32f32.powf(unit());
             select::View::new(c + dir * r * dist, 720.0, 60f32.to_radians(), px)
@@ -260,7 +257,10 @@ fn the_checks_catch_a_broken_cut() {
     let (c, r) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
     let v = &select::View::new(c + Vec3::new(0.6, 0.0, 0.8) * r * 6.0, 720.0, 1.0, 1.0);
     let sel = select::select(&lod, v, 0);
-    assert!(!sel[0].iter().any(|&b| b), "level 0 is not drawn from 6 radii");
+    assert!(
+        !sel[0].iter().any(|&b| b),
+        "level 0 is not drawn from 6 radii"
+    );
     select::check_cut(&lod, &sel, 0).unwrap();
     let (l, k) = sel
         .iter()

@@ -23,6 +23,7 @@
 
 use super::{Group, Level, Lod, LodInfo, NO_GROUP};
 use crate::meshlet::bounds::Sphere;
+use crate::meshlet::io::Reader;
 use crate::meshlet::{Limits, Meshlet, Meshlets};
 use std::path::Path;
 use thiserror::Error;
@@ -382,26 +383,4 @@ pub fn new_vertices(lod: &Lod) -> Vec<u32> {
             .count() as u32;
     }
     out
-}
-
-struct Reader<'a> {
-    data: &'a [u8],
-    pos: usize,
-}
-
-impl<'a> Reader<'a> {
-    fn remaining(&self) -> usize {
-        self.data.len() - self.pos
-    }
-    fn bytes(&mut self, n: usize) -> Option<&'a [u8]> {
-        let s = self.data.get(self.pos..self.pos.checked_add(n)?)?;
-        self.pos += n;
-        Some(s)
-    }
-    fn u32(&mut self) -> Option<u32> {
-        Some(u32::from_le_bytes(self.bytes(4)?.try_into().ok()?))
-    }
-    fn u64(&mut self) -> Option<u64> {
-        Some(u64::from_le_bytes(self.bytes(8)?.try_into().ok()?))
-    }
 }
