@@ -59,31 +59,29 @@ fn release(n: usize) {
     LIVE.fetch_sub(n.min(isize::MAX as usize) as isize, Relaxed);
 }
 
+/// Charges `size` (when armed) and allocates with `f`; refuses with null past the limit and undoes
+/// the charge when the system allocator fails.
+fn counted(size: usize, f: impl FnOnce() -> *mut u8) -> *mut u8 {
+    let armed = ARMED.load(Relaxed);
+    if armed && !charge(size) {
+        return std::ptr::null_mut();
+    }
+    let p = f();
+    if armed && p.is_null() {
+        release(size);
+    }
+    p
+}
+
 // SAFETY: every call is forwarded to `System` with the caller's layout, or answered with null
 // (allowed: it means allocation failure). The counters never affect the memory handed out.
 unsafe impl GlobalAlloc for LimitAlloc {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let armed = ARMED.load(Relaxed);
-        if armed && !charge(layout.size()) {
-            return std::ptr::null_mut();
-        }
-        let p = unsafe { System.alloc(layout) };
-        if armed && p.is_null() {
-            release(layout.size());
-        }
-        p
+        counted(layout.size(), || unsafe { System.alloc(layout) })
     }
 
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        let armed = ARMED.load(Relaxed);
-        if armed && !charge(layout.size()) {
-            return std::ptr::null_mut();
-        }
-        let p = unsafe { System.alloc_zeroed(layout) };
-        if armed && p.is_null() {
-            release(layout.size());
-        }
-        p
+        counted(layout.size(), || unsafe { System.alloc_zeroed(layout) })
     }
 
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {

@@ -293,22 +293,21 @@ impl LodFile {
         })
     }
 
-    /// `meshletlab lod-check`: the file was built from `mesh`; level 0 passes the validator against
-    /// it; every level's meshlets respect the limits; errors and bounds are monotonic; and the
-    /// selection over `views` random views forms a cut (one meshlet per DAG path).
+    /// The checks of `meshletlab lod-check` that need no view: the file was built from `mesh`;
+    /// level 0 passes the validator against it; every level's meshlets respect the limits; errors
+    /// and bounds are monotonic. (`lod-check` then tests cuts over random views.)
     pub fn check(&self, mesh: &crate::mesh::Mesh, path: &Path) -> Result<(), LodFileError> {
         let err = |m: String| LodFileError {
             path: path.to_path_buf(),
             message: m,
         };
-        if self.source_vertices as usize != mesh.vertex_count()
-            || self.source_triangles as usize != mesh.triangle_count()
-            || self.fingerprint != mesh.fingerprint()
-        {
-            return Err(err(
-                "built from a different mesh (counts or fingerprint differ)".into(),
-            ));
-        }
+        crate::meshlet::io::same_source(
+            mesh,
+            self.source_vertices,
+            self.source_triangles,
+            self.fingerprint,
+        )
+        .map_err(err)?;
         let lod = &self.lod;
         if lod.levels.is_empty() {
             return Err(err("no levels".into()));

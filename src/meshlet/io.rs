@@ -159,22 +159,13 @@ impl MeshletFile {
             path: path.to_path_buf(),
             message: m,
         };
-        if self.source_vertices as usize != mesh.vertex_count()
-            || self.source_triangles as usize != mesh.triangle_count()
-        {
-            return Err(err(format!(
-                "built from a mesh with {} vertices / {} triangles, but this mesh has {} / {}",
-                self.source_vertices,
-                self.source_triangles,
-                mesh.vertex_count(),
-                mesh.triangle_count()
-            )));
-        }
-        if self.fingerprint != mesh.fingerprint() {
-            return Err(err(
-                "built from a different mesh (fingerprint differs)".into()
-            ));
-        }
+        same_source(
+            mesh,
+            self.source_vertices,
+            self.source_triangles,
+            self.fingerprint,
+        )
+        .map_err(err)?;
         super::validate(mesh, &self.meshlets, self.limits).map_err(|e| err(format!("invalid: {e}")))
     }
 
@@ -194,6 +185,27 @@ impl MeshletFile {
         })?;
         Self::from_bytes(&data, path)
     }
+}
+
+/// Whether a file's recorded source (vertex and triangle counts, fingerprint) is `mesh`; the
+/// message says what differs. Shared by the meshlet and LOD files.
+pub(crate) fn same_source(
+    mesh: &crate::mesh::Mesh,
+    vertices: u32,
+    triangles: u32,
+    fingerprint: u64,
+) -> Result<(), String> {
+    if vertices as usize != mesh.vertex_count() || triangles as usize != mesh.triangle_count() {
+        return Err(format!(
+            "built from a mesh with {vertices} vertices / {triangles} triangles, but this mesh has {} / {}",
+            mesh.vertex_count(),
+            mesh.triangle_count()
+        ));
+    }
+    if fingerprint != mesh.fingerprint() {
+        return Err("built from a different mesh (fingerprint differs)".into());
+    }
+    Ok(())
 }
 
 /// A bounds-checked little-endian reader over a byte slice (shared by the file formats).
