@@ -39,6 +39,13 @@ fn shaders() -> Vec<(String, &'static str, String, Vec<String>)> {
             ));
         }
     }
+    // The cluster-LOD task shader (split layout only: LOD passes always upload split).
+    list.push((
+        "meshlet.task (split, lod)".to_string(),
+        "meshlet.task",
+        "meshlet_split_lod.task.spv".to_string(),
+        vec!["-DDESC=0".to_string(), "-DLOD=1".to_string()],
+    ));
     for src in ["baseline.vert", "shade.frag", "meshlet_id.frag"] {
         list.push((src.to_string(), src, format!("{src}.spv"), vec![]));
     }

@@ -4,6 +4,7 @@
 mod common;
 
 use glam::Vec3;
+use meshletlab::lod::flat::{self, Flat, Query};
 use meshletlab::lod::{self, io::LodFile, select, Lod};
 use meshletlab::mesh::{generate, Mesh};
 use meshletlab::meshlet::Limits;
@@ -83,17 +84,43 @@ struct Tally {
 /// One cut: exactly one meshlet per DAG path, and no crack: on a closed source every edge is used
 /// as often in one direction as in the other (watertight); on an open manifold source every
 /// once-used edge joins two source boundary vertices. Non-manifold sources are counted.
-fn check_view(
-    lod: &Lod,
-    remap: &[u32],
-    shape: &Shape,
-    v: &select::View,
-    finest: usize,
-    name: &str,
-    t: &mut Tally,
-) {
+/// One mesh's DAG and what the crack test compares it with.
+struct Subject<'a> {
+    lod: &'a Lod,
+    flat: &'a Flat,
+    remap: &'a [u32],
+    shape: &'a Shape,
+}
+
+fn check_view(s: &Subject, v: &select::View, finest: usize, name: &str, t: &mut Tally) {
+    let Subject {
+        lod,
+        flat,
+        remap,
+        shape,
+    } = *s;
     let sel = select::select(lod, v, finest);
     select::check_cut(lod, &sel, finest).unwrap_or_else(|e| panic!("{name}: {e}"));
+    // The flattened selection the kernel and the task shader mirror picks the same meshlets.
+    let q = Query {
+        view: *v,
+        finest,
+        frustum: None,
+        cone: false,
+    };
+    let flat_sel: Vec<u32> = flat::select(flat, &q);
+    let per_level: Vec<u32> = (0..lod.levels.len())
+        .rev()
+        .flat_map(|l| {
+            let start = flat.starts[l];
+            sel[l]
+                .iter()
+                .enumerate()
+                .filter(|(_, &s)| s)
+                .map(move |(m, _)| start + m as u32)
+        })
+        .collect();
+    assert_eq!(flat_sel, per_level, "{name}: flat selection differs");
     for (&(a, b), &(uses, forward)) in &select::cut_edges(lod, &sel, remap) {
         if uses == 1 && !(shape.boundary.contains(&a) && shape.boundary.contains(&b)) {
             assert!(
@@ -117,6 +144,13 @@ fn dag_checks(name: &str, m: &Mesh, views_per_mesh: usize) {
     let lod = build(m);
     let remap = lod::weld(m);
     let shape = source_shape(m, &remap);
+    let flat = Flat::new(m, &lod);
+    let subject = Subject {
+        lod: &lod,
+        flat: &flat,
+        remap: &remap,
+        shape: &shape,
+    };
     // Level 0 is the strategy's meshlets of the source: the validator checks them; the file's
     // check adds limits on every level and monotonic errors and bounds.
     let file = LodFile {
@@ -143,12 +177,12 @@ fn dag_checks(name: &str, m: &Mesh, views_per_mesh: usize) {
     let vs = views(m, views_per_mesh, 7);
     let mut t = Tally::default();
     for v in &vs {
-        check_view(&lod, &remap, &shape, v, 0, name, &mut t);
+        check_view(&subject, v, 0, name, &mut t);
     }
     // Streaming: every prefix of levels, coarsest first, with the streamed rule.
     for finest in 1..lod.levels.len() {
         for v in vs.iter().step_by(50) {
-            check_view(&lod, &remap, &shape, v, finest, name, &mut t);
+            check_view(&subject, v, finest, name, &mut t);
         }
     }
     println!(

@@ -215,3 +215,76 @@ fn random_views_are_seeded_and_look_at_the_mesh() {
         assert!(c.near > 0.0 && c.far > c.near);
     }
 }
+
+/// Cluster LOD in the task shader: at a sub-pixel threshold the cut looks like full detail; the
+/// task shader's drawn meshlets are exactly the CPU reference's (LOD rule, frustum, cone), for
+/// every view and streaming prefix; far views draw far fewer triangles.
+#[test]
+fn lod_task_shader_matches_the_cpu_cut_and_full_detail_at_sub_pixel_threshold() {
+    use meshletlab::lod::{self, flat};
+    let ctx = Context::new(true).expect("lavapipe with VK_EXT_mesh_shader (make setup)");
+    for name in ["stanford_bunny", "fandisk"] {
+        let m = common::load(name);
+        let s = strategy::by_name("meshopt", &Options::default()).unwrap();
+        let dag = lod::build(&m, s.as_ref(), Limits::DEFAULT, &Default::default());
+        let fl = flat::Flat::new(&m, &dag);
+        let pass = Pass::with_lod(&ctx, &m, &fl).unwrap();
+        let full = Pass::new(&ctx, &m, &dag.levels[0].meshlets).unwrap();
+        let aspect = meshletlab::render::WIDTH as f32 / meshletlab::render::HEIGHT as f32;
+        let mut views = Camera::framed_views(&m, 3, 5, aspect, meshletlab::render::FRAME_FILL);
+        views.extend(Camera::random_views(&m, 2, 9, 0.6));
+        let mut coarse = 0;
+        for (i, cam) in views.iter().enumerate() {
+            let q = cam.lod_query(0.5, 0, true);
+            let a = pass.render_lod(cam, &q, false, Shading::Unlit).unwrap();
+            let b = full.render(cam, MESH_CULL, Shading::Unlit).unwrap();
+            let cpu = flat::select(&fl, &q);
+            assert_eq!(a.drawn as usize, cpu.len(), "{name} view {i}");
+            coarse += cpu
+                .iter()
+                .filter(|&&m| fl.records[m as usize].level > 0)
+                .count();
+            assert_eq!(
+                a.not_selected + a.culled_frustum + a.culled_cone + a.drawn,
+                fl.meshlets.len() as u32
+            );
+            // Coverage within half a pixel of the source's silhouette: only edge pixels change.
+            let covered = b.pixels.chunks_exact(4).filter(|p| p[0] > 0x40).count();
+            let n = differing_pixels(&a.pixels, &b.pixels);
+            println!("{name} view {i}: {n} of {covered} covered pixels differ at 0.5 px");
+            assert!(covered > 1000, "{name} view {i}: mesh barely visible");
+            // Stated tolerance: 1 % of the covered pixels (measured: at most 0.2 %).
+            assert!(
+                n * 100 <= covered,
+                "{name} view {i}: {n} pixels differ from full detail (of {covered})"
+            );
+        }
+        assert!(
+            coarse > 0,
+            "{name}: no coarser level drawn: the test compares nothing"
+        );
+        // Far away with a coarse threshold: the cut is coarse, and streaming prefixes too agree
+        // with the CPU.
+        let far = Camera::random_views(&m, 2, 3, 24.0);
+        for cam in &far {
+            for finest in 0..fl.levels() {
+                let q = cam.lod_query(2.0, finest, true);
+                let a = pass.render_lod(cam, &q, false, Shading::Lit).unwrap();
+                assert_eq!(a.drawn as usize, flat::select(&fl, &q).len());
+                assert_eq!(
+                    a.not_selected + a.culled_frustum + a.culled_cone + a.drawn,
+                    fl.loaded(finest) as u32
+                );
+            }
+            let q = cam.lod_query(2.0, 0, false);
+            let a = pass.render_lod(cam, &q, false, Shading::Lit).unwrap();
+            let prims = a.queries.expect("mesh queries").primitives as usize;
+            assert!(
+                prims * 8 < m.triangle_count(),
+                "{name}: {prims} triangles drawn from 24 radii"
+            );
+        }
+    }
+    let (errors, first) = ctx.validation.as_ref().unwrap().errors();
+    assert_eq!(errors, 0, "validation layer errors: {first:#?}");
+}

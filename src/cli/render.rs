@@ -1,6 +1,7 @@
 //! `meshletlab render`: task + mesh shaders beside the vertex pipeline from seeded random views.
 
 use super::{build_validated, load, StrategyArgs};
+use crate::lod::flat::Flat;
 use crate::meshlet::descriptor::Format;
 use crate::render::{Camera, Context, Pass, Pipeline, Shading, HEIGHT, WIDTH};
 use anyhow::{bail, Context as _, Result};
@@ -35,6 +36,19 @@ pub struct RenderArgs {
     /// Write the first view, coloured by meshlet (the paper's Figure 1), to this PNG.
     #[arg(short, long = "output", visible_alias = "png", value_name = "PNG")]
     output: Option<PathBuf>,
+    /// Cluster LOD: build the meshlet DAG with the strategy and let the task shader draw, per
+    /// view, the crack-free cut whose simplification error stays under `--threshold` pixels
+    /// (with frustum and cone culling unless `--no-cull`). Each view's drawn meshlets are checked
+    /// against the CPU reference selection.
+    #[arg(long)]
+    lod: bool,
+    /// LOD error threshold in pixels (at 1280x720, 60 degree vertical field of view).
+    #[arg(long, default_value_t = 1.0, requires = "lod", value_name = "PX")]
+    threshold: f32,
+    /// Streaming: only the N coarsest levels are loaded (default: all); a meshlet of the finest
+    /// loaded level is drawn where finer detail would be wanted.
+    #[arg(long, requires = "lod", value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    levels: Option<u32>,
     /// Enable the Khronos validation layer and fail on any error it reports.
     #[arg(long)]
     validate: bool,
@@ -59,6 +73,9 @@ struct ViewRow {
 }
 
 pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
+    if a.lod {
+        return run_lod(a, quiet);
+    }
     let name = &a.strategy;
     crate::strategy::by_name(name, &a.args.options())?;
     let m = load(&a.mesh, quiet)?;
@@ -146,6 +163,155 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
     }
     if let (Some(p), false) = (&a.output, a.json) {
         println!("wrote {}", p.display());
+    }
+    if let Some((errors, first)) = validation_errors {
+        if errors > 0 {
+            bail!("the validation layer reported {errors} errors, first: {first:#?}");
+        }
+        if !a.json {
+            println!("validation layer: no errors");
+        }
+    }
+    Ok(())
+}
+
+/// One LOD view's measurements.
+#[derive(serde::Serialize)]
+struct LodRow {
+    view: usize,
+    distance_radii: f32,
+    lod_ms: f64,
+    full_detail_ms: f64,
+    meshlets_not_selected: u32,
+    meshlets_culled_frustum: u32,
+    meshlets_culled_backface: u32,
+    meshlets_drawn: u32,
+    cpu_reference_drawn: usize,
+    mesh_primitives_generated: Option<u64>,
+    source_triangles: usize,
+}
+
+/// `render --lod`: the task shader selects the LOD cut per view.
+fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
+    if a.descriptor != Format::Split {
+        bail!("--lod draws the split descriptor layout only");
+    }
+    if !(a.threshold > 0.0 && a.threshold.is_finite()) {
+        bail!("--threshold must be a positive number of pixels");
+    }
+    let name = &a.strategy;
+    let s = crate::strategy::by_name(name, &a.args.options())?;
+    let m = load(&a.mesh, quiet)?;
+    let pb = super::spinner(quiet || a.json, format!("building the LOD DAG with {name}"));
+    let lod = crate::lod::build(&m, s.as_ref(), a.args.limits, &Default::default());
+    let flat = Flat::new(&m, &lod);
+    pb.finish_and_clear();
+    let levels = flat.levels();
+    let loaded_levels = a.levels.map_or(levels, |n| (n as usize).min(levels));
+    let finest = levels - loaded_levels;
+    let ctx = Context::new(a.validate)?;
+    let pass = Pass::with_lod(&ctx, &m, &flat)
+        .with_context(|| format!("{}: {name} LOD", a.mesh.display()))?;
+    // Full detail through the same strategy's meshlets, for the time comparison.
+    let full = Pass::new(&ctx, &m, &lod.levels[0].meshlets)?;
+    if !a.json {
+        println!(
+            "{}: {} triangles, {name} LOD DAG: {levels} levels ({loaded_levels} loaded), {} meshlets; threshold {} px; device: {}",
+            a.mesh.display(),
+            m.triangle_count(),
+            flat.meshlets.len(),
+            a.threshold,
+            ctx.name
+        );
+    }
+    let cull = !a.no_cull;
+    let aspect = WIDTH as f32 / HEIGHT as f32;
+    let views = match a.distance {
+        Some(d) => Camera::random_views(&m, a.views, a.seed, d),
+        None => Camera::framed_views(&m, a.views, a.seed, aspect, crate::render::FRAME_FILL),
+    };
+    let (lo, hi) = m.bounding_box();
+    let radius = ((hi - lo).length() * 0.5).max(1e-6);
+    let mut rows = Vec::new();
+    for (i, cam) in views.iter().enumerate() {
+        let q = cam.lod_query(a.threshold, finest, cull);
+        let f = pass.render_lod(cam, &q, false, Shading::Lit)?;
+        let how = Pipeline::Mesh {
+            frustum: cull,
+            cone: cull,
+            colour_ids: false,
+        };
+        let full_frame = full.render(cam, how, Shading::Lit)?;
+        let cpu = crate::lod::flat::select(&flat, &q).len();
+        let row = LodRow {
+            view: i,
+            distance_radii: (cam.eye - cam.target).length() / radius,
+            lod_ms: f.gpu_ns * 1e-6,
+            full_detail_ms: full_frame.gpu_ns * 1e-6,
+            meshlets_not_selected: f.not_selected,
+            meshlets_culled_frustum: f.culled_frustum,
+            meshlets_culled_backface: f.culled_cone,
+            meshlets_drawn: f.drawn,
+            cpu_reference_drawn: cpu,
+            mesh_primitives_generated: f.queries.map(|q| q.primitives),
+            source_triangles: m.triangle_count(),
+        };
+        if !a.json {
+            let prims = row
+                .mesh_primitives_generated
+                .map(|p| format!("  {p} triangles drawn"))
+                .unwrap_or_default();
+            println!(
+                "view {i} ({:.2} radii): LOD {:8.3} ms  full detail {:8.3} ms  meshlets drawn {} (CPU reference {}), culled: frustum {} backface {}{prims}",
+                row.distance_radii,
+                row.lod_ms,
+                row.full_detail_ms,
+                f.drawn,
+                cpu,
+                f.culled_frustum,
+                f.culled_cone,
+            );
+        }
+        rows.push(row);
+        if i == 0 {
+            if let Some(p) = &a.output {
+                let img = pass.render_lod(cam, &q, true, Shading::Lit)?;
+                crate::render::write_png(p, WIDTH, HEIGHT, &img.pixels)
+                    .with_context(|| format!("cannot write {}", p.display()))?;
+            }
+        }
+    }
+    let mismatch = rows
+        .iter()
+        .find(|r| r.meshlets_drawn as usize != r.cpu_reference_drawn);
+    let validation_errors = ctx.validation.as_ref().map(|v| v.errors());
+    if a.json {
+        let out = serde_json::json!({
+            "mesh": a.mesh.display().to_string(),
+            "triangles": m.triangle_count(),
+            "strategy": name,
+            "limits": a.args.limits.to_string(),
+            "levels": levels,
+            "levels_loaded": loaded_levels,
+            "meshlets": flat.meshlets.len(),
+            "threshold_px": a.threshold,
+            "device": ctx.name,
+            "culling": cull,
+            "png": a.output.as_ref().map(|p| p.display().to_string()),
+            "validation_errors": validation_errors.as_ref().map(|e| e.0),
+            "views": rows,
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else if let Some(p) = &a.output {
+        println!("wrote {} (coloured by meshlet)", p.display());
+    }
+    if let Some(r) = mismatch {
+        bail!(
+            "view {}: the task shader drew {} meshlets, the CPU reference selects {}",
+            r.view,
+            r.meshlets_drawn,
+            r.cpu_reference_drawn
+        );
     }
     if let Some((errors, first)) = validation_errors {
         if errors > 0 {

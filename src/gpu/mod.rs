@@ -17,6 +17,7 @@ pub mod grow;
 pub mod kmedoids;
 pub mod parity;
 mod scan;
+pub mod select;
 
 use bytemuck::Pod;
 use std::time::Instant;

@@ -3,8 +3,10 @@
 //! the tolerance stated where they are compared).
 
 use super::bounds::SphereF32;
+use super::select::{Selector, ViewData};
 use super::{timed, Gpu, GpuError};
 use crate::adjacency::{dual_graph, side_flags, vertex_triangles, EdgeTable};
+use crate::lod::flat::{select, Flat, Query};
 use crate::mesh::Mesh;
 use crate::meshlet::{validate, Limits, Meshlets};
 use crate::strategy::kmedoids::{self, Config};
@@ -201,10 +203,77 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
         ))
         .collect(),
     ));
+    // LOD selection over a DAG built on the k-medoids strategy's peer (meshopt, the LOD default).
+    out.push(lod_selection(gpu, mesh, limits, LOD_VIEWS, 0x10d)?);
     Ok(Parity {
         checks: out,
         meshlets: km.meshlets,
         gpu_spheres: gs,
         cpu_spheres,
     })
+}
+
+/// Views per mesh in the LOD selection check.
+pub const LOD_VIEWS: usize = 1000;
+
+/// `n` seeded selection queries around `mesh`: random directions at 1.5 to 48 bounding radii
+/// (log-uniform), thresholds of 0.25 to 16 pixels at 720 rows and 60 degrees, a random finest loaded
+/// level, and frustum and cone culling each on in half the views.
+pub fn lod_queries(mesh: &Mesh, flat: &Flat, n: usize, seed: u64) -> Vec<Query> {
+    let (lo, hi) = mesh.bounding_box();
+    let centre = (lo + hi) * 0.5;
+    let r = ((hi - lo).length() * 0.5).max(1e-6);
+    let mut state = seed;
+    let mut unit = || {
+        state = crate::mesh::generate::splitmix64(state);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    crate::render::random_directions(n, seed)
+        .into_iter()
+        .map(|dir| {
+            let dist = (1.5 * 32f64.powf(unit())) as f32;
+            let pixels = (0.25 * 64f64.powf(unit())) as f32;
+            let finest = ((unit() * flat.levels() as f64) as usize).min(flat.levels() - 1);
+            let cam = crate::render::Camera::looking_at(mesh, centre + dir * r * dist);
+            let mut q = cam.lod_query(pixels, finest, unit() < 0.5);
+            q.cone = unit() < 0.5;
+            q
+        })
+        .collect()
+}
+
+/// Builds the LOD DAG of `mesh` (meshoptimizer's splitter at `limits`), selects for `views` seeded
+/// queries on the CPU ([`crate::lod::flat::select`]) and with the kernel, and compares the drawn
+/// sets exactly.
+pub fn lod_selection(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    limits: Limits,
+    views: usize,
+    seed: u64,
+) -> Result<Check, GpuError> {
+    let strategy = crate::strategy::by_name("meshopt", &Default::default())
+        .expect("the meshopt strategy exists");
+    let lod = crate::lod::build(mesh, strategy.as_ref(), limits, &Default::default());
+    let flat = Flat::new(mesh, &lod);
+    let queries = lod_queries(mesh, &flat, views, seed);
+    let (cpu, cpu_s) = timed(|| queries.iter().map(|q| select(&flat, q)).collect::<Vec<_>>());
+    let data: Vec<ViewData> = queries
+        .iter()
+        .map(|q| ViewData::new(q, flat.loaded(q.finest)))
+        .collect();
+    let (g, gpu_s) = timed(|| Selector::new(gpu, &flat).select(&data));
+    let (g, _) = g?;
+    let drawn: usize = cpu.iter().map(Vec::len).sum();
+    let diff = (0..queries.len())
+        .find_map(|v| first_difference(&format!("view {v}: drawn meshlets"), &g[v], &cpu[v]));
+    Ok(check(
+        "LOD selection: drawn meshlets (streamed LOD rule, frustum, cone) identical",
+        cpu_s,
+        gpu_s,
+        vec![
+            diff,
+            (drawn == 0).then(|| format!("{views} views drew nothing: the check tests nothing")),
+        ],
+    ))
 }

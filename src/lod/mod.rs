@@ -32,6 +32,7 @@
 //! partitioner, simplifier and strategies are deterministic, so the output is identical for any
 //! thread count.
 
+pub mod flat;
 pub mod io;
 pub mod select;
 
@@ -330,10 +331,11 @@ fn reduce(
         .iter()
         .flat_map(|&c| clusters[c].tris.iter().flatten().copied())
         .collect();
-    let children_error = members
+    // Padded so the cut-bit selection test stays monotonic (select::PAD).
+    let children_error = pad(members
         .iter()
         .map(|&c| clusters[c].error)
-        .fold(0.0f32, f32::max);
+        .fold(0.0f32, f32::max));
     let adapter = meshopt::VertexDataAdapter::new(mesh.position_bytes(), 12, 0)
         .expect("stride 12 over f32x3 positions is valid");
     let target = (merged.len() / 3 / 2) * 3;
@@ -516,7 +518,7 @@ fn sphere_of(mesh: &Mesh, vs: impl Iterator<Item = u32>) -> Sphere {
 
 /// A sphere around the group's vertices that also encloses every child sphere: centre of the
 /// vertices' minimal sphere, radius the largest `|centre - c_i| + r_i` in f64, rounded up to f32
-/// with a relative margin so the f32 selection test stays monotonic.
+/// with the relative margin [`select::PAD`] so the cut-bit selection test stays monotonic.
 fn enclosing(mesh: &Mesh, idx: &[u32], children: impl Iterator<Item = Sphere>) -> Sphere {
     let s = sphere_of(mesh, idx.iter().copied());
     let c = DVec3::from_array(s.center.map(f64::from));
@@ -525,6 +527,15 @@ fn enclosing(mesh: &Mesh, idx: &[u32], children: impl Iterator<Item = Sphere>) -
         .fold(s.radius as f64, f64::max);
     Sphere {
         center: s.center,
-        radius: ((r * (1.0 + 1e-6)) as f32).next_up(),
+        radius: pad(r as f32).max(((r * (1.0 + select::PAD)) as f32).next_up()),
+    }
+}
+
+/// `x * (1 + select::PAD)`, rounded up (0 stays 0).
+fn pad(x: f32) -> f32 {
+    if x > 0.0 {
+        ((x as f64 * (1.0 + select::PAD)) as f32).next_up()
+    } else {
+        x
     }
 }

@@ -31,6 +31,9 @@ pub enum RenderError {
     /// The meshlets do not fit the chosen descriptor layout.
     #[error(transparent)]
     Descriptor(#[from] crate::meshlet::descriptor::DescriptorError),
+    /// `render_lod` on a pass built without a LOD DAG.
+    #[error("this render pass holds no LOD DAG (build it with Pass::with_lod)")]
+    NotLod,
     /// A Vulkan call failed.
     #[error("Vulkan call failed: {0}: {1}")]
     Vulkan(&'static str, ash::vk::Result),
@@ -43,6 +46,9 @@ pub(crate) fn vk_err(what: &'static str) -> impl Fn(ash::vk::Result) -> RenderEr
 
 /// How much of the image's half-height (or half-width) a framed mesh fills ([`Camera::framed`]).
 pub const FRAME_FILL: f32 = 0.92;
+
+/// Vertical field of view of every camera, degrees.
+pub const FOV_Y: f32 = 60.0;
 
 /// A perspective camera looking at a point (60 degree vertical field of view, depth 0..1).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -63,8 +69,27 @@ impl Camera {
     pub fn view_proj(&self, aspect: f32) -> Mat4 {
         let up = up_for((self.target - self.eye).normalize_or(Vec3::NEG_Z));
         let view = Mat4::look_at_rh(self.eye, self.target, up);
-        let proj = Mat4::perspective_rh(60f32.to_radians(), aspect, self.near, self.far);
+        let proj = Mat4::perspective_rh(FOV_Y.to_radians(), aspect, self.near, self.far);
         Mat4::from_scale(Vec3::new(1.0, -1.0, 1.0)) * proj * view
+    }
+
+    /// The LOD selection query of this camera: its eye, the pass's image height and field of view,
+    /// a threshold of `pixels`, levels `finest..` loaded, and its frustum and normal-cone culling
+    /// when `cull`.
+    pub fn lod_query(&self, pixels: f32, finest: usize, cull: bool) -> crate::lod::flat::Query {
+        crate::lod::flat::Query {
+            view: crate::lod::select::View::new(
+                self.eye,
+                HEIGHT as f32,
+                FOV_Y.to_radians(),
+                pixels,
+            ),
+            finest,
+            frustum: cull.then(|| {
+                crate::lod::flat::frustum_planes(&self.view_proj(WIDTH as f32 / HEIGHT as f32))
+            }),
+            cone: cull,
+        }
     }
 
     /// A camera at `eye` looking at `mesh`'s bounding-sphere centre, with planes that enclose it.

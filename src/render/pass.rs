@@ -4,6 +4,7 @@
 
 use super::context::{Buffer, Context};
 use super::{vk_err, Camera, RenderError};
+use crate::lod::flat::{loaded, Flat, Query, ViewData};
 use crate::mesh::Mesh;
 use crate::meshlet::descriptor::{self, Format};
 use crate::meshlet::{Limits, Meshlets};
@@ -59,6 +60,8 @@ pub struct Frame {
     pub drawn: u32,
     /// Triangles in the meshlets culled by the frustum and by the normal cone.
     pub culled_triangles: [u32; 2],
+    /// LOD passes: loaded meshlets not on the cut for the view (0 otherwise).
+    pub not_selected: u32,
     /// Mesh-pipeline queries, when the device has `meshShaderQueries` (lavapipe does).
     pub queries: Option<MeshQueries>,
 }
@@ -85,6 +88,18 @@ struct Push {
     flags: u32,
 }
 
+/// Where each level starts in a flattened DAG (see [`Flat`]).
+struct LodLayout {
+    starts: Vec<u32>,
+    total: usize,
+}
+
+impl LodLayout {
+    fn loaded(&self, finest: usize) -> usize {
+        loaded(&self.starts, self.total, finest)
+    }
+}
+
 struct Target {
     image: vk::Image,
     memory: vk::DeviceMemory,
@@ -109,6 +124,8 @@ pub struct Pass<'a> {
     mesh_shade: vk::Pipeline,
     mesh_ids: vk::Pipeline,
     vertex: vk::Pipeline,
+    /// For a LOD pass: the DAG's level layout and the (shaded, meshlet-id) LOD pipelines.
+    lod: Option<(LodLayout, (vk::Pipeline, vk::Pipeline))>,
     targets: [Target; 3],
     queries: vk::QueryPool,
     /// Pipeline statistics (task, mesh invocations) and mesh primitives generated.
@@ -144,6 +161,23 @@ impl<'a> Pass<'a> {
         mesh: &Mesh,
         ml: &Meshlets,
         format: Format,
+    ) -> Result<Self, RenderError> {
+        Self::build(ctx, mesh, ml, format, None)
+    }
+
+    /// Uploads a flattened LOD DAG over its source `mesh` (split layout) with its LOD records, for
+    /// [`Pass::render_lod`]; [`Pass::render`] then draws every level at once, which is only
+    /// useful for debugging.
+    pub fn with_lod(ctx: &'a Context, mesh: &Mesh, flat: &Flat) -> Result<Self, RenderError> {
+        Self::build(ctx, mesh, &flat.meshlets, Format::Split, Some(flat))
+    }
+
+    fn build(
+        ctx: &'a Context,
+        mesh: &Mesh,
+        ml: &Meshlets,
+        format: Format,
+        lod: Option<&Flat>,
     ) -> Result<Self, RenderError> {
         let limits = ml.meshlets.iter().fold((0, 0), |(v, t), m| {
             (v.max(m.vertex_count), t.max(m.triangle_count))
@@ -182,6 +216,11 @@ impl<'a> Pass<'a> {
             ctx.upload(&words(&packed.triangles), storage)?,
             ctx.upload(&task, storage)?,
             ctx.upload(&mesh.indices, vk::BufferUsageFlags::INDEX_BUFFER)?,
+            match lod {
+                Some(f) if !f.records.is_empty() => ctx.upload(&f.records, storage)?,
+                _ => ctx.upload(&[0u32; 4], storage)?,
+            },
+            ctx.buffer(std::mem::size_of::<ViewData>() as u64, storage)?,
         ];
         let counters = ctx.buffer(32, storage)?;
         let readback = ctx.buffer(
@@ -193,7 +232,7 @@ impl<'a> Pass<'a> {
             | vk::ShaderStageFlags::MESH_EXT
             | vk::ShaderStageFlags::VERTEX
             | vk::ShaderStageFlags::FRAGMENT;
-        let bindings: Vec<_> = (0..6)
+        let bindings: Vec<_> = (0..8)
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)
@@ -211,7 +250,7 @@ impl<'a> Pass<'a> {
         .map_err(vk_err("descriptor set layout"))?;
         let sizes = [vk::DescriptorPoolSize::default()
             .ty(vk::DescriptorType::STORAGE_BUFFER)
-            .descriptor_count(6)];
+            .descriptor_count(8)];
         let pool = unsafe {
             d.create_descriptor_pool(
                 &vk::DescriptorPoolCreateInfo::default()
@@ -230,9 +269,10 @@ impl<'a> Pass<'a> {
             )
         }
         .map_err(vk_err("descriptor set"))?[0];
+        // Bindings 0-4: positions and the packed meshlets; 5: counters; 6, 7: LOD records, view.
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers[..5]
             .iter()
-            .chain(std::iter::once(&counters))
+            .chain([&counters, &buffers[6], &buffers[7]])
             .map(|b| {
                 [vk::DescriptorBufferInfo::default()
                     .buffer(b.buf)
@@ -275,6 +315,10 @@ impl<'a> Pass<'a> {
         let vert = module(shader("baseline.vert"))?;
         let shade = module(shader("shade.frag"))?;
         let ids = module(shader("meshlet_id.frag"))?;
+        let lod_task = match lod {
+            Some(_) => Some(module(shader("meshlet.task (split, lod)"))?),
+            None => None,
+        };
         let build = |mods: &[(vk::ShaderStageFlags, vk::ShaderModule)], vertex_input: bool| {
             pipeline(d, layout, mods, vertex_input)
         };
@@ -301,7 +345,28 @@ impl<'a> Pass<'a> {
             ],
             true,
         )?;
-        for m in [task, meshm, vert, shade, ids] {
+        let lod_pipelines = match lod_task {
+            Some(t) => Some((
+                build(
+                    &[
+                        (vk::ShaderStageFlags::TASK_EXT, t),
+                        (vk::ShaderStageFlags::MESH_EXT, meshm),
+                        (vk::ShaderStageFlags::FRAGMENT, shade),
+                    ],
+                    false,
+                )?,
+                build(
+                    &[
+                        (vk::ShaderStageFlags::TASK_EXT, t),
+                        (vk::ShaderStageFlags::MESH_EXT, meshm),
+                        (vk::ShaderStageFlags::FRAGMENT, ids),
+                    ],
+                    false,
+                )?,
+            )),
+            None => None,
+        };
+        for m in [task, meshm, vert, shade, ids].into_iter().chain(lod_task) {
             unsafe { d.destroy_shader_module(m, None) };
         }
         let targets = [
@@ -372,6 +437,13 @@ impl<'a> Pass<'a> {
             mesh_shade,
             mesh_ids,
             vertex,
+            lod: lod.zip(lod_pipelines).map(|(f, p)| {
+                let layout = LodLayout {
+                    starts: f.starts.clone(),
+                    total: f.records.len(),
+                };
+                (layout, p)
+            }),
             targets,
             queries,
             mesh_queries,
@@ -395,9 +467,6 @@ impl<'a> Pass<'a> {
         how: Pipeline,
         shading: Shading,
     ) -> Result<Frame, RenderError> {
-        let ctx = self.ctx;
-        let d = &ctx.device;
-        self.counters.write(&[0u8; 32]);
         let (pipeline, flags) = match how {
             Pipeline::Mesh {
                 frustum,
@@ -413,6 +482,39 @@ impl<'a> Pass<'a> {
             ),
             Pipeline::Vertex => (self.vertex, 0),
         };
+        let mesh = matches!(how, Pipeline::Mesh { .. });
+        self.frame(camera, pipeline, flags, shading, self.meshlet_count, mesh)
+    }
+
+    /// Draws one frame of a LOD pass ([`Pass::with_lod`]) from `camera`: the task shader selects
+    /// the cut for `q` (its view, threshold, loaded levels and culling; `q.view.eye` should be the
+    /// camera's eye) and draws it, coloured by meshlet id when `colour_ids`.
+    pub fn render_lod(
+        &self,
+        camera: &Camera,
+        q: &Query,
+        colour_ids: bool,
+        shading: Shading,
+    ) -> Result<Frame, RenderError> {
+        let (layout, (shade, ids)) = self.lod.as_ref().ok_or(RenderError::NotLod)?;
+        let view = ViewData::new(q, layout.loaded(q.finest));
+        self.buffers[7].write(bytemuck::bytes_of(&view));
+        let pipeline = if colour_ids { *ids } else { *shade };
+        self.frame(camera, pipeline, 0, shading, view.loaded, true)
+    }
+
+    fn frame(
+        &self,
+        camera: &Camera,
+        pipeline: vk::Pipeline,
+        flags: u32,
+        shading: Shading,
+        meshlet_count: u32,
+        mesh: bool,
+    ) -> Result<Frame, RenderError> {
+        let ctx = self.ctx;
+        let d = &ctx.device;
+        self.counters.write(&[0u8; 32]);
         let push = Push {
             view_proj: camera
                 .view_proj(WIDTH as f32 / HEIGHT as f32)
@@ -430,7 +532,7 @@ impl<'a> Pass<'a> {
                 self.object.step[2],
                 0.0,
             ],
-            meshlet_count: self.meshlet_count,
+            meshlet_count,
             flags: flags | u32::from(shading == Shading::Unlit) << 2,
         };
         let [msaa, resolve, depth] = &self.targets;
@@ -527,10 +629,7 @@ impl<'a> Pass<'a> {
             });
             d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, self.queries, 0);
             // Queries span the whole rendering (lavapipe left them unavailable when begun inside).
-            let mesh_queries = match how {
-                Pipeline::Mesh { .. } => self.mesh_queries,
-                Pipeline::Vertex => None,
-            };
+            let mesh_queries = if mesh { self.mesh_queries } else { None };
             if let Some((stats, prims)) = mesh_queries {
                 d.cmd_begin_query(cmd, stats, 0, vk::QueryControlFlags::empty());
                 d.cmd_begin_query(cmd, prims, 0, vk::QueryControlFlags::empty());
@@ -571,20 +670,13 @@ impl<'a> Pass<'a> {
                 0,
                 bytemuck::bytes_of(&push),
             );
-            match how {
-                Pipeline::Mesh { .. } => {
-                    ctx.mesh.cmd_draw_mesh_tasks(
-                        cmd,
-                        self.meshlet_count.div_ceil(TASK_GROUP),
-                        1,
-                        1,
-                    );
-                }
-                Pipeline::Vertex => {
-                    d.cmd_bind_vertex_buffers(cmd, 0, &[self.buffers[0].buf], &[0]);
-                    d.cmd_bind_index_buffer(cmd, self.buffers[5].buf, 0, vk::IndexType::UINT32);
-                    d.cmd_draw_indexed(cmd, self.index_count, 1, 0, 0, 0);
-                }
+            if mesh {
+                ctx.mesh
+                    .cmd_draw_mesh_tasks(cmd, meshlet_count.div_ceil(TASK_GROUP), 1, 1);
+            } else {
+                d.cmd_bind_vertex_buffers(cmd, 0, &[self.buffers[0].buf], &[0]);
+                d.cmd_bind_index_buffer(cmd, self.buffers[5].buf, 0, vk::IndexType::UINT32);
+                d.cmd_draw_indexed(cmd, self.index_count, 1, 0, 0, 0);
             }
             d.cmd_end_rendering(cmd);
             if let Some((stats, prims)) = mesh_queries {
@@ -645,9 +737,9 @@ impl<'a> Pass<'a> {
             )
         }
         .map_err(vk_err("timestamps"))?;
-        let c: Vec<u32> = bytemuck::cast_slice(&self.counters.read(20)).to_vec();
-        let queries = match (how, self.mesh_queries) {
-            (Pipeline::Mesh { .. }, Some((stats, prims))) => {
+        let c: Vec<u32> = bytemuck::cast_slice(&self.counters.read(24)).to_vec();
+        let queries = match (mesh, self.mesh_queries) {
+            (true, Some((stats, prims))) => {
                 // In ash the slice length is the number of queries: one query, two statistics.
                 let mut s = [[0u64; 2]];
                 let mut p = [0u64];
@@ -673,6 +765,7 @@ impl<'a> Pass<'a> {
             culled_cone: c[1],
             drawn: c[2],
             culled_triangles: [c[3], c[4]],
+            not_selected: c[5],
             queries,
         })
     }
@@ -696,6 +789,10 @@ impl Drop for Pass<'_> {
             }
             for p in [self.mesh_shade, self.mesh_ids, self.vertex] {
                 d.destroy_pipeline(p, None);
+            }
+            if let Some((_, (a, b))) = &self.lod {
+                d.destroy_pipeline(*a, None);
+                d.destroy_pipeline(*b, None);
             }
             d.destroy_pipeline_layout(self.layout, None);
             d.destroy_descriptor_pool(self.pool, None);
