@@ -4,6 +4,7 @@
 pub mod build;
 pub mod gpu;
 pub mod kmedoids;
+pub mod lod;
 pub mod paper;
 pub mod plot;
 pub mod render;

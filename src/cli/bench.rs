@@ -116,6 +116,46 @@ pub enum BenchCommand {
         #[arg(long, default_value = "stanford_bunny")]
         sweep_mesh: String,
     },
+    /// Cluster LOD: our DAG beside meshoptimizer's clod_build(clod_default_config(128)) on every
+    /// shared mesh: build time on 1 and 2 threads, levels, roots, stuck groups, per-level ratios,
+    /// triangles selected and frame time against camera distance at a 1-pixel threshold, the best
+    /// level-0 strategy, the dragon at 14 M triangles -> lod.md, lod.csv, lod_levels.csv,
+    /// lod_curve.csv, plots.
+    Lod {
+        /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Interleaved build runs per configuration (median reported).
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+        runs: u32,
+        /// Random directions per camera distance for the triangle counts.
+        #[arg(long, default_value_t = 16)]
+        select_views: usize,
+        /// Views per camera distance for frame times (0: do not render).
+        #[arg(long, default_value_t = 3)]
+        render_views: usize,
+        /// LOD threshold in pixels.
+        #[arg(long, default_value_t = 1.0)]
+        threshold: f32,
+        /// Level-0 strategies to compare (comma-separated).
+        #[arg(short, long, value_delimiter = ',', default_values_t = bench::lod::DEFAULT_STRATEGIES.iter().map(|s| s.to_string()))]
+        strategy: Vec<String>,
+        /// Largest mesh (triangles) of the level-0 strategy comparison.
+        #[arg(long, default_value_t = 400_000)]
+        strategy_max_triangles: usize,
+        /// Leave out the dragon subdivided to 14 M triangles.
+        #[arg(long)]
+        quick: bool,
+        /// Our DAG: target meshlets per group.
+        #[arg(long, default_value_t = crate::lod::Config::default().group_size as u32, value_parser = clap::value_parser!(u32).range(2..=64))]
+        group_size: u32,
+        /// Our DAG: permissive simplification (as clod).
+        #[arg(long)]
+        permissive: bool,
+    },
     /// Mutation fuzzer over every file reader (PLY ASCII/LE/BE, OBJ, glTF, GLB, .zst, meshlet
     /// files): >= 1 M seeded cases in child processes; panics, hangs and allocations over the bound
     /// are counted -> robustness.md, robustness.csv. Exit 1 if any case is a defect.
@@ -256,6 +296,44 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
                 cfg.out.join("build.csv").display(),
                 rows.len()
             );
+            Ok(())
+        }
+        BenchCommand::Lod {
+            meshes,
+            out,
+            runs,
+            select_views,
+            render_views,
+            threshold,
+            strategy,
+            strategy_max_triangles,
+            quick,
+            group_size,
+            permissive,
+        } => {
+            if !(threshold > 0.0 && threshold.is_finite()) {
+                bail!("--threshold must be a positive number of pixels");
+            }
+            let cfg = bench::lod::Config {
+                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                out,
+                runs: runs as usize,
+                distances: bench::lod::DISTANCES.to_vec(),
+                select_views: select_views.max(1),
+                render_views,
+                threshold,
+                strategies: strategy,
+                strategy_max_triangles,
+                quick,
+                lod: crate::lod::Config {
+                    group_size: group_size as usize,
+                    permissive,
+                    ..Default::default()
+                },
+                quiet: q,
+            };
+            bench::lod::run(&cfg)?;
+            println!("wrote {}", cfg.out.join("lod.md").display());
             Ok(())
         }
         BenchCommand::Robustness {
