@@ -17,7 +17,7 @@ use super::build::{mesh_files, mesh_name};
 use super::plot::{line_chart, Axes, Series};
 use super::{machine_note, median, today};
 use crate::lod::flat::{self, Flat};
-use crate::lod::{self, Level, LodInfo, NO_GROUP};
+use crate::lod::{self, Grouping, Level, LodInfo, NO_GROUP};
 use crate::mesh::{self, Mesh};
 use crate::meshlet::bounds::Sphere;
 use crate::meshlet::{Limits, Meshlet, Meshlets};
@@ -255,15 +255,18 @@ struct MeshResult {
     full_ms: Vec<f64>,
 }
 
-/// The configurations compared per mesh: (label, ours? (strategy, limits) or clod(128)).
-fn configs() -> Vec<(&'static str, Option<Limits>)> {
+/// The configurations compared per mesh, in table order (the ratio columns use 1 over 2):
+/// (label, ours? (limits, grouping) or clod(128)).
+fn configs() -> Vec<(&'static str, Option<(Limits, Grouping)>)> {
+    let l128 = Limits::new(128, 128).expect("128/128 is valid");
     vec![
-        ("ours 64/126", Some(Limits::DEFAULT)),
-        (
-            "ours 128/128",
-            Some(Limits::new(128, 128).expect("128/128 is valid")),
-        ),
+        ("ours 64/126", Some((Limits::DEFAULT, Grouping::Partition))),
+        ("ours 128/128", Some((l128, Grouping::Partition))),
         ("clod 128", None),
+        (
+            "ours 128/128 k-medoids groups",
+            Some((l128, Grouping::KMedoids)),
+        ),
     ]
 }
 
@@ -282,9 +285,13 @@ fn bench_mesh(
         for (k, (label, limits)) in confs.iter().enumerate() {
             pb.set_message(format!("{name}: building {label}"));
             match limits {
-                Some(l) => {
-                    let (levels, stuck, t2) = ours(m, "meshopt", *l, 2, &cfg.lod)?;
-                    let (levels1, _, t1) = ours(m, "meshopt", *l, 1, &cfg.lod)?;
+                Some((l, grouping)) => {
+                    let lc = lod::Config {
+                        grouping: *grouping,
+                        ..cfg.lod
+                    };
+                    let (levels, stuck, t2) = ours(m, "meshopt", *l, 2, &lc)?;
+                    let (levels1, _, t1) = ours(m, "meshopt", *l, 1, &lc)?;
                     anyhow::ensure!(
                         levels1 == levels,
                         "{name} {label}: 1 and 2 threads built different DAGs"
@@ -405,6 +412,27 @@ fn strategy_curve(cfg: &Config, m: &Mesh, strategy: &str) -> Result<(Vec<f64>, u
         })
         .collect();
     Ok((curve, total, secs))
+}
+
+/// Points (distance, y).
+fn along(distances: &[f32], ys: &[f64]) -> Vec<(f64, f64)> {
+    distances
+        .iter()
+        .map(|&x| x as f64)
+        .zip(ys.iter().copied())
+        .collect()
+}
+
+/// One line per DAG of `r` against camera distance, from `per_dag[k]` (values per distance).
+fn dag_series(cfg: &Config, r: &MeshResult, per_dag: &[Vec<f64>]) -> Vec<Series> {
+    r.dags
+        .iter()
+        .zip(per_dag)
+        .map(|(d, ys)| Series {
+            label: d.label.clone(),
+            points: along(&cfg.distances, ys),
+        })
+        .collect()
 }
 
 /// Level ratios are reported over levels whose lower level has at least this many triangles: the
@@ -573,7 +601,7 @@ fn write_results(
         machine_note(),
         device.as_deref().unwrap_or("not rendered")
     )?;
-    writeln!(md, "Ours: `meshletlab::lod::build` with meshoptimizer's splitter (`meshopt` strategy) at 64/126 and at clod's 128/128, groups of 8 (partition_clusters), simplify_with_locks to half. Peer: meshoptimizer 1.3 `clod_build(clod_default_config(128))`, single-threaded by design. Build times: median of {} interleaved runs; ours on 1 and 2 rayon threads (the same DAG on both, checked).\n", cfg.runs)?;
+    writeln!(md, "Ours: `meshletlab::lod::build` with meshoptimizer's splitter (`meshopt` strategy) at 64/126 and at clod's 128/128, groups of 8 (meshoptimizer's partition_clusters; the last row per mesh groups by our k-medoids on the meshlet graph instead, `lod::group`), simplify_with_locks to half. Peer: meshoptimizer 1.3 `clod_build(clod_default_config(128))`, single-threaded by design. Build times: median of {} interleaved runs; ours on 1 and 2 rayon threads (the same DAG on both, checked).\n", cfg.runs)?;
     writeln!(md, "## Builds\n")?;
     writeln!(md, "| mesh | triangles | DAG | build s (1 thr) | build s (2 thr) | M tri/s (best) | levels | roots | stuck | monotonic violations | meshlets | all levels / source | tri/meshlet | level ratios |")?;
     writeln!(
@@ -688,12 +716,7 @@ fn write_results(
         writeln!(md, "| {} | ratio | {} |", r.name, cells.join(" | "))?;
         ratio_series.push(Series {
             label: r.name.clone(),
-            points: cfg
-                .distances
-                .iter()
-                .map(|&d| d as f64)
-                .zip(ratios)
-                .collect(),
+            points: along(&cfg.distances, &ratios),
         });
     }
     let cells: Vec<f64> = ratio_series
@@ -723,20 +746,7 @@ fn write_results(
         },
     )?;
     if let Some(r) = results.iter().find(|r| r.name.contains("dragon")) {
-        let series: Vec<Series> = r
-            .dags
-            .iter()
-            .enumerate()
-            .map(|(k, d)| Series {
-                label: d.label.clone(),
-                points: cfg
-                    .distances
-                    .iter()
-                    .map(|&x| x as f64)
-                    .zip(r.curve[k].iter().copied())
-                    .collect(),
-            })
-            .collect();
+        let series = dag_series(cfg, r, &r.curve);
         line_chart(
             &cfg.out.join("lod_dragon_triangles.svg"),
             &format!("{}: triangles selected at {} px", r.name, cfg.threshold),
@@ -768,28 +778,10 @@ fn write_results(
             .iter()
             .find(|r| r.name.contains("dragon") && !r.frame_ms.is_empty())
         {
-            let mut series: Vec<Series> = r
-                .dags
-                .iter()
-                .enumerate()
-                .map(|(k, d)| Series {
-                    label: d.label.clone(),
-                    points: cfg
-                        .distances
-                        .iter()
-                        .map(|&x| x as f64)
-                        .zip(r.frame_ms[k].iter().copied())
-                        .collect(),
-                })
-                .collect();
+            let mut series = dag_series(cfg, r, &r.frame_ms);
             series.push(Series {
                 label: "full detail".into(),
-                points: cfg
-                    .distances
-                    .iter()
-                    .map(|&x| x as f64)
-                    .zip(r.full_ms.iter().copied())
-                    .collect(),
+                points: along(&cfg.distances, &r.full_ms),
             });
             line_chart(
                 &cfg.out.join("lod_dragon_frame_time.svg"),

@@ -100,13 +100,7 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
         cone: cull,
         colour_ids: false,
     };
-    let aspect = WIDTH as f32 / HEIGHT as f32;
-    let views = match a.distance {
-        Some(d) => Camera::random_views(&m, a.views, a.seed, d),
-        None => Camera::framed_views(&m, a.views, a.seed, aspect, crate::render::FRAME_FILL),
-    };
-    let (lo, hi) = m.bounding_box();
-    let radius = ((hi - lo).length() * 0.5).max(1e-6);
+    let (views, radius) = cameras(&a, &m);
     let mut rows = Vec::new();
     for (i, cam) in views.iter().enumerate() {
         let f = pass.render(cam, how, Shading::Lit)?;
@@ -225,13 +219,7 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
         );
     }
     let cull = !a.no_cull;
-    let aspect = WIDTH as f32 / HEIGHT as f32;
-    let views = match a.distance {
-        Some(d) => Camera::random_views(&m, a.views, a.seed, d),
-        None => Camera::framed_views(&m, a.views, a.seed, aspect, crate::render::FRAME_FILL),
-    };
-    let (lo, hi) = m.bounding_box();
-    let radius = ((hi - lo).length() * 0.5).max(1e-6);
+    let (views, radius) = cameras(&a, &m);
     let mut rows = Vec::new();
     for (i, cam) in views.iter().enumerate() {
         let q = cam.lod_query(a.threshold, finest, cull);
@@ -322,4 +310,16 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The views of `render` (seeded random directions, framed unless `--distance`) and the mesh's
+/// bounding radius (half the box diagonal) to express distances in.
+fn cameras(a: &RenderArgs, m: &crate::mesh::Mesh) -> (Vec<Camera>, f32) {
+    let aspect = WIDTH as f32 / HEIGHT as f32;
+    let views = match a.distance {
+        Some(d) => Camera::random_views(m, a.views, a.seed, d),
+        None => Camera::framed_views(m, a.views, a.seed, aspect, crate::render::FRAME_FILL),
+    };
+    let (lo, hi) = m.bounding_box();
+    (views, ((hi - lo).length() * 0.5).max(1e-6))
 }

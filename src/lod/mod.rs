@@ -34,6 +34,7 @@
 //! thread count.
 
 pub mod flat;
+pub mod group;
 pub mod io;
 pub mod select;
 
@@ -45,9 +46,21 @@ use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
+/// How the meshlets of a level are grouped.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Grouping {
+    /// meshoptimizer's `partition_clusters` over welded vertices and positions.
+    #[default]
+    Partition,
+    /// Our k-medoids on the meshlet graph ([`group::kmedoids`]).
+    KMedoids,
+}
+
 /// Build settings.
 #[derive(Clone, Copy, Debug)]
 pub struct Config {
+    /// How meshlets are grouped.
+    pub grouping: Grouping,
     /// Target meshlets per group (meshoptimizer's clusterlod uses 16 at 128 triangles; 8 keeps
     /// groups near 500 triangles at 64/126, which simplify well and keep locked borders short).
     pub group_size: usize,
@@ -71,6 +84,7 @@ impl Default for Config {
         Self {
             group_size: 8,
             stuck_ratio: 0.85,
+            grouping: Grouping::Partition,
             max_levels: 32,
             min_root_triangles: 8,
             level0_chunk: 1 << 17,
@@ -177,10 +191,10 @@ pub fn weld(mesh: &Mesh) -> Vec<u32> {
 }
 
 /// A meshlet under construction: welded triangles and LOD data.
-struct Cluster {
-    tris: Vec<[u32; 3]>,
-    bounds: Sphere,
-    error: f32,
+pub(crate) struct Cluster {
+    pub(crate) tris: Vec<[u32; 3]>,
+    pub(crate) bounds: Sphere,
+    pub(crate) error: f32,
 }
 
 /// Builds the DAG over `mesh` with `strategy` at `limits`.
@@ -224,7 +238,10 @@ pub fn build(mesh: &Mesh, strategy: &dyn Strategy, limits: Limits, cfg: &Config)
                 error: cur.info[i].error,
             })
             .collect();
-        let parts = partition(mesh, &clusters, cfg.group_size);
+        let parts = match cfg.grouping {
+            Grouping::Partition => partition(mesh, &clusters, cfg.group_size),
+            Grouping::KMedoids => group::kmedoids(mesh.vertex_count(), &clusters, cfg.group_size),
+        };
         let locked = shared_vertices(mesh.vertex_count(), &clusters, &parts);
         let level = (levels.len() - 1) as u32;
         let built: Vec<Reduced> = parts
