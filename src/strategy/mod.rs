@@ -11,6 +11,7 @@ pub mod kmedoids;
 mod meshopt;
 mod nvidia;
 pub mod parallel;
+pub mod qem;
 pub mod tipsify;
 
 pub use self::meshopt::{Meshopt, MeshoptScan, MeshoptSpatial};
@@ -81,6 +82,7 @@ pub const NAMES: &[&str] = &[
     "meshopt",
     "meshopt-scan",
     "meshopt-spatial",
+    "qem",
 ];
 
 /// Referenced vertices sorted along the mesh's longest bounding-box axis, low to high (ties by
@@ -203,6 +205,7 @@ fn base_by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, Unknown
         "meshopt-spatial" => Box::new(MeshoptSpatial {
             fill_weight: opts.fill_weight,
         }),
+        "qem" => Box::new(qem::Qem),
         _ => return Err(UnknownStrategy(name.to_string())),
     })
 }
