@@ -2,12 +2,14 @@
 //! GPU mesh shaders).
 //!
 //! Data flows one way: [`mesh`] (load, validate, generate) -> [`adjacency`] -> [`strategy`] ->
-//! [`meshlet`] (model, validator, bounds, metrics) -> [`gpu`] / [`render`] -> [`bench`] results.
+//! [`meshlet`] (model, validator, bounds, metrics) -> [`lod`] / [`compress`] -> [`gpu`] /
+//! [`render`] -> [`bench`] results.
 //! [`fuzz`] feeds mutated files to every reader.
 
 pub mod adjacency;
 pub mod bench;
 pub mod cli;
+pub mod compress;
 pub mod fuzz;
 pub mod gpu;
 pub mod lod;

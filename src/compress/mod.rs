@@ -1,0 +1,158 @@
+//! Compressed meshlets (Mlakar, Steinberger, Schmalstieg, "End-to-End Compressed Meshlet
+//! Rendering", CGF 43(1), 2024), one file per format family. First slice: the shared position
+//! grid, the size accounting every format reports, and the strongest public peer,
+//! meshoptimizer's meshlet codec with anchored positions ([`meshopt_codec`]). Laced wires and the
+//! paper's TS/IX/SC/GI formats come next.
+//!
+//! **Positions.** Every format quantises on one global power-of-two grid anchored at the mesh's
+//! bounding-box minimum `o`: step `2^e`, the largest with `step / 2 <= tolerance`, so every decoded
+//! position lies within the tolerance of the original, and a vertex shared by several meshlets
+//! decodes to the same bits from each (crack-free by construction). A grid coordinate `q` decodes
+//! as `o + q * 2^e` with one rounding to f32 (`q * 2^e` is exact). Anchoring at `o` keeps `q`
+//! small for a mesh far from the origin (1e6 away, a 14-bit grid still needs 15 bits, not 35), and
+//! where the grid is finer than f32's spacing at that distance the rounding lands back on the
+//! original value exactly, so f32 never adds error beyond the tolerance.
+
+pub mod meshopt_codec;
+
+use crate::mesh::Mesh;
+use thiserror::Error;
+
+/// A corrupt or truncated encoded buffer.
+#[derive(Debug, Error, PartialEq, Eq)]
+pub enum DecodeError {
+    /// The buffer ends before the data it announces.
+    #[error("encoded meshlet {meshlet}: truncated ({what})")]
+    Truncated {
+        /// Meshlet index.
+        meshlet: usize,
+        /// Which part.
+        what: &'static str,
+    },
+    /// A field holds an impossible value.
+    #[error("encoded meshlet {meshlet}: {what}")]
+    Invalid {
+        /// Meshlet index.
+        meshlet: usize,
+        /// What is wrong.
+        what: String,
+    },
+    /// No such meshlet.
+    #[error("meshlet {0} out of range")]
+    OutOfRange(usize),
+}
+
+/// The paper's default tolerance: the error of 14-bit quantisation of the mesh's bounding box
+/// (half a step of 2^14 steps over its largest extent).
+pub fn paper_tolerance(mesh: &Mesh) -> f64 {
+    let (lo, hi) = mesh.bounding_box();
+    let extent = (hi - lo).max_element() as f64;
+    (extent / 16384.0 / 2.0).max(f64::MIN_POSITIVE)
+}
+
+/// The global grid for a tolerance: exponent `e` of the step `2^e`, the largest step whose
+/// half is within `tolerance`.
+pub fn grid_exponent(tolerance: f64) -> i32 {
+    (2.0 * tolerance).log2().floor() as i32
+}
+
+/// Grid coordinate of a position component relative to the grid origin `o`.
+pub fn quantise(x: f32, o: f32, e: i32) -> i64 {
+    ((x as f64 - o as f64) * (-e as f64).exp2()).round() as i64
+}
+
+/// Position component of a grid coordinate (one rounding to f32).
+pub fn dequantise(q: i64, o: f32, e: i32) -> f32 {
+    (o as f64 + q as f64 * (e as f64).exp2()) as f32
+}
+
+/// Bytes of an encoding, by what they hold (the paper reports these separately).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Sizes {
+    /// Triangle connectivity and vertex references.
+    pub connectivity: usize,
+    /// Vertex positions.
+    pub positions: usize,
+    /// Per-meshlet headers and the random-access offset table.
+    pub headers: usize,
+    /// Alignment padding.
+    pub padding: usize,
+}
+
+impl Sizes {
+    /// All bytes.
+    pub fn total(&self) -> usize {
+        self.connectivity + self.positions + self.headers + self.padding
+    }
+}
+
+/// Reads `bits` bits (<= 32) at bit offset `at` of `data` (little-endian bit order), or `None`
+/// past the end.
+pub(crate) fn read_bits(data: &[u8], at: usize, bits: u32) -> Option<u32> {
+    if bits == 0 {
+        return Some(0);
+    }
+    let end = at.checked_add(bits as usize)?;
+    if end > data.len() * 8 {
+        return None;
+    }
+    let mut v = 0u64;
+    let first = at / 8;
+    let last = (end - 1) / 8;
+    for (k, &b) in data[first..=last].iter().enumerate() {
+        v |= (b as u64) << (8 * k);
+    }
+    Some(((v >> (at % 8)) & ((1u64 << bits) - 1)) as u32)
+}
+
+/// Appends `bits` bits of `v` at bit offset `at` (the buffer grows as needed).
+pub(crate) fn write_bits(data: &mut Vec<u8>, at: usize, bits: u32, v: u32) {
+    let end = at + bits as usize;
+    data.resize(data.len().max(end.div_ceil(8)), 0);
+    for k in 0..bits as usize {
+        if v >> k & 1 == 1 {
+            data[(at + k) / 8] |= 1 << ((at + k) % 8);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bits_round_trip() {
+        let mut d = Vec::new();
+        let vals = [
+            (3u32, 5u32),
+            (0, 0),
+            (17, 99_999),
+            (1, 1),
+            (32, u32::MAX),
+            (9, 300),
+        ];
+        let mut at = 0;
+        for &(b, v) in &vals {
+            write_bits(&mut d, at, b, v);
+            at += b as usize;
+        }
+        let mut at = 0;
+        for &(b, v) in &vals {
+            assert_eq!(read_bits(&d, at, b), Some(v));
+            at += b as usize;
+        }
+        assert_eq!(read_bits(&d, at, 64), None);
+    }
+
+    #[test]
+    fn the_grid_meets_the_tolerance() {
+        for t in [1e-6, 3e-4, 0.5, 7.0] {
+            let e = grid_exponent(t);
+            assert!((e as f64).exp2() / 2.0 <= t && ((e + 1) as f64).exp2() / 2.0 > t);
+            for x in [0.1f32, -3.7, 123.456, 1e3] {
+                let err = (dequantise(quantise(x, -5.0, e), -5.0, e) as f64 - x as f64).abs();
+                assert!(err <= t + (x.abs() as f64) * 1e-7, "{x} at {t}: {err}");
+            }
+        }
+    }
+}
