@@ -56,6 +56,44 @@ fn build_then_check_round_trips_and_check_catches_mismatches() {
 }
 
 #[test]
+fn compress_then_check_round_trips_and_check_catches_damage() {
+    let dir = common::scratch("compress-check");
+    let mesh = common::meshes_dir().join("stellarium_gaspra.ply.zst");
+    let other = common::meshes_dir().join("fandisk.ply.zst");
+    let (mesh, other) = (mesh.to_str().unwrap(), other.to_str().unwrap());
+    let file = dir.join("gaspra.cmp");
+    let f = file.to_str().unwrap();
+    let out = ok(&[
+        "compress", "-q", mesh, "-o", f, "--json", "--limits", "128/128",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let bpt = v["bytes_per_triangle"].as_f64().unwrap();
+    assert!(bpt > 1.0 && bpt < 8.0, "{out}");
+    assert!(v["max_error"].as_f64().unwrap() <= v["tolerance"].as_f64().unwrap());
+    let out = ok(&["check", "-q", mesh, f]);
+    assert!(out.contains("valid") && out.contains("compressed"), "{out}");
+    // Against another mesh: refused, naming the file.
+    let out = cli(&["check", "-q", other, f]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("gaspra.cmp"));
+    // A position bit flipped in the last record: decoded beyond the tolerance, or other triangles.
+    let mut bytes = std::fs::read(&file).unwrap();
+    let n = bytes.len();
+    bytes[n - 5] ^= 0x10;
+    std::fs::write(&file, &bytes).unwrap();
+    let out = cli(&["check", "-q", mesh, f]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("gaspra.cmp") && err.lines().count() == 1,
+        "{err}"
+    );
+    // A bad tolerance is refused before any work.
+    let out = cli(&["compress", "-q", mesh, "-o", f, "--tolerance", "-1"]);
+    assert!(!out.status.success());
+}
+
+#[test]
 fn stats_json_lists_every_strategy_with_metrics() {
     let mesh = common::meshes_dir().join("stellarium_gaspra.ply.zst");
     let out = ok(&[

@@ -1,6 +1,7 @@
-//! `meshletlab check`: validate a meshlet file against its mesh.
+//! `meshletlab check`: validate a meshlet file or a compressed-meshlet file against its mesh.
 
 use super::load;
+use crate::compress::file::CompressedFile;
 use crate::meshlet::io::MeshletFile;
 use anyhow::Result;
 use clap::Args;
@@ -16,7 +17,23 @@ pub struct CheckArgs {
 }
 
 pub(super) fn run(a: CheckArgs, quiet: bool) -> Result<()> {
-    let f = MeshletFile::load(&a.file)?;
+    let data = std::fs::read(&a.file)
+        .map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", a.file.display()))?;
+    if CompressedFile::sniff(&data) {
+        let f = CompressedFile::from_bytes(&data, &a.file)?;
+        let m = load(&a.mesh, quiet)?;
+        let worst = f.check(&m, &a.file)?;
+        println!(
+            "{}: valid — {} compressed meshlets ({:?}), every one of {} triangles exactly once, every position within {:.3e} (largest error {worst:.3e})",
+            a.file.display(),
+            f.encoded.offsets.len(),
+            f.format,
+            m.triangle_count(),
+            f.tolerance
+        );
+        return Ok(());
+    }
+    let f = MeshletFile::from_bytes(&data, &a.file)?;
     let m = load(&a.mesh, quiet)?;
     f.check(&m, &a.file)?;
     println!(

@@ -4,6 +4,7 @@
 mod bench;
 mod build;
 mod check;
+mod compress;
 mod demo;
 mod export;
 mod fuzz_worker;
@@ -110,7 +111,8 @@ pub enum Command {
     Stats(stats::StatsArgs),
     /// Build meshlets and write them to a file (format: see `meshletlab::meshlet::io`).
     Build(build::BuildArgs),
-    /// Validate a meshlet file written by `build` against its mesh.
+    /// Validate a meshlet file written by `build`, or a compressed file written by `compress`
+    /// (every meshlet decoded at random access), against its mesh.
     Check(check::CheckArgs),
     /// The whole pipeline in about a minute on generated meshes: every strategy compared, GPU
     /// adjacency and k-medoids beside their CPU references with the parity verdict, and a
@@ -136,6 +138,10 @@ pub enum Command {
     /// monotonic errors and bounds, and one meshlet per DAG path for random views and every
     /// streaming prefix (exit 1 on any violation).
     LodCheck(lod_check::LodCheckArgs),
+    /// Encodes MESH's meshlets in a compressed format (now: meshoptimizer's meshlet codec with
+    /// anchored positions) within a position tolerance, checks every meshlet decodes back, and
+    /// writes the file; prints bytes per triangle by part and the largest error.
+    Compress(compress::CompressArgs),
     /// Benchmarks that write results/.
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -183,6 +189,7 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
         Command::Export(a) => export::run(a, q),
         Command::Lod(a) => lod::run(a, q),
         Command::LodCheck(a) => lod_check::run(a, q),
+        Command::Compress(a) => compress::run(a, q),
         Command::Bench(b) => bench::run(b, q),
         Command::FuzzWorker(a) => fuzz_worker::run(a),
     }

@@ -13,6 +13,7 @@
 //! where the grid is finer than f32's spacing at that distance the rounding lands back on the
 //! original value exactly, so f32 never adds error beyond the tolerance.
 
+pub mod file;
 pub mod meshopt_codec;
 
 use crate::mesh::Mesh;

@@ -148,6 +148,7 @@ impl Corpus {
             seeds.push(meshlet_seed(&meshlet_source, strategy, limits));
         }
         seeds.push(lod_seed(&meshlet_source));
+        seeds.push(compressed_seed(&meshlet_source));
         Self {
             seeds,
             meshlet_source,
@@ -740,6 +741,70 @@ fn lod_seed(m: &Mesh) -> Seed {
     Seed {
         name: "lod/meshopt-8-8".into(),
         target: Target::Lod,
+        bytes,
+        boundaries,
+        numbers,
+        floats,
+        text_end: 0,
+        gltf: None,
+    }
+}
+
+/// A compressed-meshlet file of the grid (meshoptimizer's codec at 16/12), with its header,
+/// offset table and every record's header fields marked.
+fn compressed_seed(m: &Mesh) -> Seed {
+    use crate::compress::{file, meshopt_codec};
+    let limits = crate::meshlet::Limits::new(16, 12).expect("valid seed limits");
+    let s = crate::strategy::by_name("meshopt", &Default::default()).expect("known strategy");
+    let tolerance = crate::compress::paper_tolerance(m);
+    let encoded = meshopt_codec::encode(m, &s.build(m, limits), tolerance).expect("seed encodes");
+    let f = file::CompressedFile {
+        source_vertices: m.vertex_count() as u32,
+        source_triangles: m.triangle_count() as u32,
+        fingerprint: m.fingerprint(),
+        format: file::Format::Meshopt,
+        tolerance,
+        encoded,
+    };
+    let bytes = f.to_bytes();
+    let u32f = |at: usize| Field::Bin {
+        at,
+        width: 4,
+        be: false,
+    };
+    // Header: magic 0, format 8, counts 12 and 16, fingerprint 20, tolerance 28, exponent 36,
+    // origin 40, meshlet count 52, offsets 56.
+    let count_at = 52;
+    let offsets = count_at + 4;
+    let n = f.encoded.offsets.len();
+    let data = offsets + 4 * n + 4;
+    let mut numbers: Vec<Field> = [8, 12, 16, 36, count_at, data - 4]
+        .into_iter()
+        .map(u32f)
+        .collect();
+    numbers.extend((offsets..data - 4).step_by(4).map(u32f));
+    let mut boundaries = vec![8, 12, 20, 28, 36, 40, count_at, offsets, data - 4, data];
+    let mut floats: Vec<Field> = (0..3).map(|k| u32f(40 + 4 * k)).collect();
+    floats.push(Field::Bin {
+        at: 28,
+        width: 8,
+        be: false,
+    });
+    for &o in &f.encoded.offsets {
+        let r = data + o as usize;
+        boundaries.extend([r, r + 19]);
+        // Counts and bit widths are bytes; the anchor and the connectivity length are numbers.
+        numbers.extend((0..3).map(|k| u32f(r + 5 + 4 * k)));
+        numbers.push(Field::Bin {
+            at: r + 17,
+            width: 2,
+            be: false,
+        });
+    }
+    boundaries.push(bytes.len());
+    Seed {
+        name: "compressed/meshopt-16-12".into(),
+        target: Target::Compressed,
         bytes,
         boundaries,
         numbers,

@@ -1,5 +1,6 @@
 //! A seeded mutation fuzzer over every file reader: PLY (ASCII, binary little and big endian), OBJ,
-//! glTF, GLB, zstd-compressed files, the meshlet file (`check`) and the LOD file (`lod-check`).
+//! glTF, GLB, zstd-compressed files, the meshlet file (`check`), the LOD file (`lod-check`) and the
+//! compressed-meshlet file (`check`).
 //!
 //! Case `k` of a run with seed `s` is a pure function of `(s, k)`: a target format, a seed file of
 //! that format ([`corpus`]) and a mutation ([`mutate`]): bit flips, truncation at structural
@@ -63,11 +64,13 @@ pub enum Target {
     Meshlet,
     /// The cluster-LOD file, read and checked against its mesh (`meshletlab lod-check`).
     Lod,
+    /// The compressed-meshlet file, read and every meshlet decoded (`meshletlab check`).
+    Compressed,
 }
 
 impl Target {
     /// Every target, in report order.
-    pub const ALL: [Target; 9] = [
+    pub const ALL: [Target; 10] = [
         Target::PlyAscii,
         Target::PlyLe,
         Target::PlyBe,
@@ -77,6 +80,7 @@ impl Target {
         Target::Zst,
         Target::Meshlet,
         Target::Lod,
+        Target::Compressed,
     ];
 
     /// Short name.
@@ -91,6 +95,7 @@ impl Target {
             Target::Zst => "zst",
             Target::Meshlet => "meshlet",
             Target::Lod => "lod",
+            Target::Compressed => "compressed",
         }
     }
 
@@ -103,6 +108,7 @@ impl Target {
             Target::Zst => "zst",
             Target::Meshlet => "mlt",
             Target::Lod => "lod",
+            Target::Compressed => "cmp",
         }
     }
 }
@@ -178,7 +184,7 @@ impl Mutation {
             Mutation::JsonIndex | Mutation::JsonType | Mutation::JsonCycle => gltf,
             // Text exists in every format but the meshlet file (binary PLY: its header; GLB: JSON).
             Mutation::TokenDelete | Mutation::TokenRepeat => {
-                !matches!(t, Target::Meshlet | Target::Lod)
+                !matches!(t, Target::Meshlet | Target::Lod | Target::Compressed)
             }
             Mutation::FloatSpecial => t != Target::Meshlet,
             _ => true,
@@ -302,6 +308,15 @@ pub fn read(case: &Case, corpus: &Corpus) -> Result<Outcome, String> {
             Err(format!("error does not name the file: {msg}"))
         }
     };
+    if case.target == Target::Compressed {
+        use crate::compress::file::CompressedFile;
+        return match CompressedFile::from_bytes(&case.bytes, path)
+            .and_then(|f| f.check(&corpus.meshlet_source, path))
+        {
+            Ok(_) => Ok(Outcome::Valid),
+            Err(e) => named(e.to_string()).map(|_| Outcome::Error("compressed-file")),
+        };
+    }
     if case.target == Target::Lod {
         return match crate::lod::io::LodFile::from_bytes(&case.bytes, path)
             .and_then(|f| f.check(&corpus.meshlet_source, path))

@@ -1,0 +1,237 @@
+//! The compressed-meshlet file written by `meshletlab compress` and read by `meshletlab check`.
+//!
+//! All integers little-endian:
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 8 | magic `MLTCMP01` |
+//! | 4 | format: 1 = meshoptimizer's codec with anchored positions ([`super::meshopt_codec`]) |
+//! | 4, 4, 8 | source mesh vertex count, triangle count, fingerprint |
+//! | 8 | tolerance (f64): every decoded position is within it of the source's |
+//! | 4 | grid exponent (i32) |
+//! | 12 | grid origin (3 x f32) |
+//! | 4 | meshlet count M |
+//! | 4 M | byte offset of each meshlet's record in the data |
+//! | 4 | data length D |
+//! | D | the records (layout: [`super::meshopt_codec`]) |
+//!
+//! Readers check every count against the bytes present before allocating, reject NaN and
+//! non-positive tolerances and trailing bytes; `check` decodes every meshlet at random access and
+//! compares it with the mesh.
+
+use super::meshopt_codec::{self, Encoded};
+use crate::mesh::Mesh;
+use crate::meshlet::io::Reader;
+use std::path::Path;
+use thiserror::Error;
+
+const MAGIC: &[u8; 8] = b"MLTCMP01";
+
+/// The formats a file can hold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum Format {
+    /// meshoptimizer's meshlet codec with anchored per-axis positions (the peer).
+    Meshopt,
+}
+
+impl Format {
+    fn id(self) -> u32 {
+        match self {
+            Format::Meshopt => 1,
+        }
+    }
+}
+
+/// A compressed-meshlet file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompressedFile {
+    /// Vertex count of the source mesh.
+    pub source_vertices: u32,
+    /// Triangle count of the source mesh.
+    pub source_triangles: u32,
+    /// Fingerprint of the source mesh.
+    pub fingerprint: u64,
+    /// The format.
+    pub format: Format,
+    /// Position tolerance the encoding guarantees.
+    pub tolerance: f64,
+    /// The encoded meshlets.
+    pub encoded: Encoded,
+}
+
+/// Errors reading or checking a compressed file; the message names the file.
+#[derive(Debug, Error)]
+#[error("{}: {message}", path.display())]
+pub struct CompressedFileError {
+    /// The file.
+    pub path: std::path::PathBuf,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl CompressedFile {
+    /// Whether `data` starts like a compressed-meshlet file.
+    pub fn sniff(data: &[u8]) -> bool {
+        data.starts_with(MAGIC)
+    }
+
+    /// The file's bytes.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let e = &self.encoded;
+        let mut b = Vec::with_capacity(64 + 4 * e.offsets.len() + e.data.len());
+        b.extend_from_slice(MAGIC);
+        b.extend(self.format.id().to_le_bytes());
+        b.extend(self.source_vertices.to_le_bytes());
+        b.extend(self.source_triangles.to_le_bytes());
+        b.extend(self.fingerprint.to_le_bytes());
+        b.extend(self.tolerance.to_le_bytes());
+        b.extend(e.exponent.to_le_bytes());
+        for o in e.origin {
+            b.extend(o.to_le_bytes());
+        }
+        b.extend((e.offsets.len() as u32).to_le_bytes());
+        for o in &e.offsets {
+            b.extend(o.to_le_bytes());
+        }
+        b.extend((e.data.len() as u32).to_le_bytes());
+        b.extend_from_slice(&e.data);
+        b
+    }
+
+    /// Parses a file (structure only; [`CompressedFile::check`] decodes).
+    pub fn from_bytes(data: &[u8], path: &Path) -> Result<Self, CompressedFileError> {
+        let err = |m: String| CompressedFileError {
+            path: path.to_path_buf(),
+            message: m,
+        };
+        let short = || err("truncated compressed-meshlet file".into());
+        let mut r = Reader { data, pos: 0 };
+        if r.bytes(8).ok_or_else(short)? != MAGIC {
+            return Err(err(
+                "not a meshletlab compressed-meshlet file (bad magic)".into()
+            ));
+        }
+        let format = match r.u32().ok_or_else(short)? {
+            1 => Format::Meshopt,
+            f => return Err(err(format!("unknown format {f}"))),
+        };
+        let source_vertices = r.u32().ok_or_else(short)?;
+        let source_triangles = r.u32().ok_or_else(short)?;
+        let fingerprint = r.u64().ok_or_else(short)?;
+        let tolerance = f64::from_bits(r.u64().ok_or_else(short)?);
+        if !(tolerance > 0.0 && tolerance.is_finite()) {
+            return Err(err(format!(
+                "tolerance {tolerance} is not a positive number"
+            )));
+        }
+        let exponent = r.u32().ok_or_else(short)? as i32;
+        if !(-149..=127).contains(&exponent) {
+            return Err(err(format!("grid exponent {exponent} outside f32's range")));
+        }
+        let mut origin = [0f32; 3];
+        for o in &mut origin {
+            *o = f32::from_bits(r.u32().ok_or_else(short)?);
+            if !o.is_finite() {
+                return Err(err("grid origin is not finite".into()));
+            }
+        }
+        let count = r.u32().ok_or_else(short)? as usize;
+        if count > r.remaining() / 4 {
+            return Err(short());
+        }
+        let offsets: Vec<u32> = (0..count)
+            .map(|_| r.u32().ok_or_else(short))
+            .collect::<Result<_, _>>()?;
+        let len = r.u32().ok_or_else(short)? as usize;
+        let bytes = r.bytes(len).ok_or_else(short)?.to_vec();
+        if r.remaining() > 0 {
+            return Err(err(format!("{} trailing bytes", r.remaining())));
+        }
+        if let Some((i, o)) = offsets.iter().enumerate().find(|(_, &o)| o as usize >= len) {
+            return Err(err(format!(
+                "meshlet {i}: record offset {o} beyond {len} data bytes"
+            )));
+        }
+        Ok(Self {
+            source_vertices,
+            source_triangles,
+            fingerprint,
+            format,
+            tolerance,
+            encoded: Encoded {
+                exponent,
+                origin,
+                source_vertices,
+                offsets,
+                data: bytes,
+                sizes: Default::default(),
+            },
+        })
+    }
+
+    /// Decodes every meshlet at random access and checks it against `mesh`: the source's
+    /// triangles, each exactly once over all meshlets (winding kept up to rotation), and every
+    /// position within the tolerance. Returns the largest position error.
+    pub fn check(&self, mesh: &Mesh, path: &Path) -> Result<f64, CompressedFileError> {
+        let err = |m: String| CompressedFileError {
+            path: path.to_path_buf(),
+            message: m,
+        };
+        crate::meshlet::io::same_source(
+            mesh,
+            self.source_vertices,
+            self.source_triangles,
+            self.fingerprint,
+        )
+        .map_err(err)?;
+        let canonical = |t: [u32; 3]| {
+            let k = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
+            [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+        };
+        let mut want: Vec<[u32; 3]> = (0..mesh.triangle_count())
+            .map(|t| canonical(mesh.triangle(t)))
+            .collect();
+        let mut got = Vec::with_capacity(want.len());
+        let mut worst = 0.0f64;
+        for i in 0..self.encoded.offsets.len() {
+            let d = meshopt_codec::decode(&self.encoded, i).map_err(|e| err(e.to_string()))?;
+            for (k, &v) in d.vertices.iter().enumerate() {
+                let o = mesh.positions[v as usize];
+                let e = (0..3)
+                    .map(|a| (d.positions[k][a] as f64 - o[a] as f64).abs())
+                    .fold(0.0, f64::max);
+                if e.is_nan() || e > self.tolerance {
+                    return Err(err(format!(
+                        "meshlet {i}: vertex {v} decodes {e} away, above the tolerance {}",
+                        self.tolerance
+                    )));
+                }
+                worst = worst.max(e);
+            }
+            got.extend(
+                d.triangles
+                    .iter()
+                    .map(|t| canonical(t.map(|c| d.vertices[c as usize]))),
+            );
+        }
+        want.sort_unstable();
+        got.sort_unstable();
+        if got != want {
+            let missing = want.iter().find(|t| got.binary_search(t).is_err());
+            return Err(err(format!(
+                "the decoded triangles are not the mesh's ({} decoded, {} in the mesh; first missing: {missing:?})",
+                got.len(),
+                want.len()
+            )));
+        }
+        Ok(worst)
+    }
+
+    /// Writes the file.
+    pub fn save(&self, path: &Path) -> Result<(), CompressedFileError> {
+        std::fs::write(path, self.to_bytes()).map_err(|e| CompressedFileError {
+            path: path.to_path_buf(),
+            message: format!("cannot write: {e}"),
+        })
+    }
+}
