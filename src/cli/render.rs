@@ -158,15 +158,7 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
     if let (Some(p), false) = (&a.output, a.json) {
         println!("wrote {}", p.display());
     }
-    if let Some((errors, first)) = validation_errors {
-        if errors > 0 {
-            bail!("the validation layer reported {errors} errors, first: {first:#?}");
-        }
-        if !a.json {
-            println!("validation layer: no errors");
-        }
-    }
-    Ok(())
+    report_validation(validation_errors, a.json)
 }
 
 /// One LOD view's measurements.
@@ -301,15 +293,7 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
             r.cpu_reference_drawn
         );
     }
-    if let Some((errors, first)) = validation_errors {
-        if errors > 0 {
-            bail!("the validation layer reported {errors} errors, first: {first:#?}");
-        }
-        if !a.json {
-            println!("validation layer: no errors");
-        }
-    }
-    Ok(())
+    report_validation(validation_errors, a.json)
 }
 
 /// The views of `render` (seeded random directions, framed unless `--distance`) and the mesh's
@@ -322,4 +306,17 @@ fn cameras(a: &RenderArgs, m: &crate::mesh::Mesh) -> (Vec<Camera>, f32) {
     };
     let (lo, hi) = m.bounding_box();
     (views, ((hi - lo).length() * 0.5).max(1e-6))
+}
+
+/// Fails on validation-layer errors (when the layer ran), else says there were none.
+fn report_validation<T: std::fmt::Debug>(errors: Option<(u32, T)>, json: bool) -> Result<()> {
+    if let Some((errors, first)) = errors {
+        if errors > 0 {
+            bail!("the validation layer reported {errors} errors, first: {first:#?}");
+        }
+        if !json {
+            println!("validation layer: no errors");
+        }
+    }
+    Ok(())
 }
