@@ -17,8 +17,7 @@ pub struct CheckArgs {
 }
 
 pub(super) fn run(a: CheckArgs, quiet: bool) -> Result<()> {
-    let data = std::fs::read(&a.file)
-        .map_err(|e| anyhow::anyhow!("{}: cannot read: {e}", a.file.display()))?;
+    let data = crate::meshlet::io::read_file(&a.file)?;
     if CompressedFile::sniff(&data) {
         let f = CompressedFile::from_bytes(&data, &a.file)?;
         let m = load(&a.mesh, quiet)?;

@@ -23,7 +23,6 @@ use super::meshopt_codec::{self, Encoded};
 use crate::mesh::Mesh;
 use crate::meshlet::io::Reader;
 use std::path::Path;
-use thiserror::Error;
 
 const MAGIC: &[u8; 8] = b"MLTCMP01";
 
@@ -60,14 +59,7 @@ pub struct CompressedFile {
 }
 
 /// Errors reading or checking a compressed file; the message names the file.
-#[derive(Debug, Error)]
-#[error("{}: {message}", path.display())]
-pub struct CompressedFileError {
-    /// The file.
-    pub path: std::path::PathBuf,
-    /// What is wrong.
-    pub message: String,
-}
+pub type CompressedFileError = crate::meshlet::io::FileError;
 
 impl CompressedFile {
     /// Whether `data` starts like a compressed-meshlet file.
@@ -229,9 +221,6 @@ impl CompressedFile {
 
     /// Writes the file.
     pub fn save(&self, path: &Path) -> Result<(), CompressedFileError> {
-        std::fs::write(path, self.to_bytes()).map_err(|e| CompressedFileError {
-            path: path.to_path_buf(),
-            message: format!("cannot write: {e}"),
-        })
+        crate::meshlet::io::write_file(path, &self.to_bytes())
     }
 }

@@ -26,7 +26,6 @@ use crate::meshlet::bounds::Sphere;
 use crate::meshlet::io::Reader;
 use crate::meshlet::{Limits, Meshlet, Meshlets};
 use std::path::Path;
-use thiserror::Error;
 
 const MAGIC: &[u8; 8] = b"MLTLOD01";
 
@@ -44,14 +43,7 @@ pub struct LodFile {
 }
 
 /// Errors reading or checking a LOD file; the message names the file.
-#[derive(Debug, Error)]
-#[error("{}: {message}", path.display())]
-pub struct LodFileError {
-    /// The file.
-    pub path: std::path::PathBuf,
-    /// What is wrong.
-    pub message: String,
-}
+pub type LodFileError = crate::meshlet::io::FileError;
 
 fn sphere_bytes(b: &mut Vec<u8>, s: &Sphere) {
     for v in s.center.iter().chain([&s.radius]) {
@@ -329,19 +321,12 @@ impl LodFile {
 
     /// Writes to a file.
     pub fn save(&self, path: &Path) -> Result<(), LodFileError> {
-        std::fs::write(path, self.to_bytes()).map_err(|e| LodFileError {
-            path: path.to_path_buf(),
-            message: format!("cannot write: {e}"),
-        })
+        crate::meshlet::io::write_file(path, &self.to_bytes())
     }
 
     /// Reads from a file.
     pub fn load(path: &Path) -> Result<Self, LodFileError> {
-        let data = std::fs::read(path).map_err(|e| LodFileError {
-            path: path.to_path_buf(),
-            message: format!("cannot read: {e}"),
-        })?;
-        Self::from_bytes(&data, path)
+        Self::from_bytes(&crate::meshlet::io::read_file(path)?, path)
     }
 }
 

@@ -39,14 +39,34 @@ pub struct MeshletFile {
     pub meshlets: Meshlets,
 }
 
-/// Errors reading a meshlet file; the message names the file.
+/// An error reading, writing or checking one of the project's files (meshlet, LOD, compressed);
+/// the message names the file.
 #[derive(Debug, Error)]
 #[error("{}: {message}", path.display())]
-pub struct MeshletFileError {
+pub struct FileError {
     /// The file.
     pub path: std::path::PathBuf,
     /// What is wrong.
     pub message: String,
+}
+
+/// Errors reading a meshlet file.
+pub type MeshletFileError = FileError;
+
+/// Writes `bytes` to `path`.
+pub(crate) fn write_file(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
+    std::fs::write(path, bytes).map_err(|e| FileError {
+        path: path.to_path_buf(),
+        message: format!("cannot write: {e}"),
+    })
+}
+
+/// Reads `path`.
+pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>, FileError> {
+    std::fs::read(path).map_err(|e| FileError {
+        path: path.to_path_buf(),
+        message: format!("cannot read: {e}"),
+    })
 }
 
 impl MeshletFile {
@@ -171,19 +191,12 @@ impl MeshletFile {
 
     /// Writes to a file.
     pub fn save(&self, path: &Path) -> Result<(), MeshletFileError> {
-        std::fs::write(path, self.to_bytes()).map_err(|e| MeshletFileError {
-            path: path.to_path_buf(),
-            message: format!("cannot write: {e}"),
-        })
+        write_file(path, &self.to_bytes())
     }
 
     /// Reads from a file.
     pub fn load(path: &Path) -> Result<Self, MeshletFileError> {
-        let data = std::fs::read(path).map_err(|e| MeshletFileError {
-            path: path.to_path_buf(),
-            message: format!("cannot read: {e}"),
-        })?;
-        Self::from_bytes(&data, path)
+        Self::from_bytes(&read_file(path)?, path)
     }
 }
 
