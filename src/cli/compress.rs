@@ -2,7 +2,7 @@
 
 use super::{build_validated, load, StrategyArgs};
 use crate::compress::file::{CompressedFile, Format};
-use crate::compress::{meshopt_codec, paper_tolerance};
+use crate::compress::paper_tolerance;
 use anyhow::{bail, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -12,7 +12,8 @@ use std::path::PathBuf;
 pub struct CompressArgs {
     /// Mesh file.
     mesh: PathBuf,
-    /// Encoding (laced wires and the paper's TS/IX/SC/GI formats are coming).
+    /// Encoding: meshoptimizer's codec (the peer) or laced wires (needs at most 64 vertices per
+    /// meshlet, e.g. `--strategy qem --limits 64/84`, the paper's setting).
     #[arg(short, long, value_enum, default_value = "meshopt")]
     format: Format,
     /// Strategy that builds the meshlets.
@@ -41,10 +42,10 @@ pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
     };
     let ml = build_validated(&m, &a.mesh, &a.strategy, &a.args)?;
     let t0 = std::time::Instant::now();
-    let encoded = match a.format {
-        Format::Meshopt => meshopt_codec::encode(&m, &ml, tolerance)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", a.mesh.display()))?,
-    };
+    let encoded = a
+        .format
+        .encode(&m, &ml, tolerance)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.mesh.display()))?;
     let seconds = t0.elapsed().as_secs_f64();
     let sizes = encoded.sizes;
     let file = CompressedFile {

@@ -5,7 +5,7 @@
 //! | bytes | field |
 //! |---|---|
 //! | 8 | magic `MLTCMP01` |
-//! | 4 | format: 1 = meshoptimizer's codec with anchored positions ([`super::meshopt_codec`]) |
+//! | 4 | format: 1 = meshoptimizer's codec with anchored positions ([`super::meshopt_codec`]), 2 = laced wires ([`super::laced`]) |
 //! | 4, 4, 8 | source mesh vertex count, triangle count, fingerprint |
 //! | 8 | tolerance (f64): every decoded position is within it of the source's |
 //! | 4 | grid exponent (i32) |
@@ -13,13 +13,18 @@
 //! | 4 | meshlet count M |
 //! | 4 M | byte offset of each meshlet's record in the data |
 //! | 4 | data length D |
-//! | D | the records (layout: [`super::meshopt_codec`]) |
+//! | D | the encoding (layout: [`super::meshopt_codec`], [`super::laced`]) |
+//! | 4, 4 W | laced wires only: wire count W, first stored-vertex id of each wire |
+//! | 4, 4 S | laced wires only: stored-vertex count S, source vertex of each |
+//!
+//! The last two tables are provenance: they let `check` compare decoded vertices with the source
+//! mesh's and are not counted in the format's size.
 //!
 //! Readers check every count against the bytes present before allocating, reject NaN and
 //! non-positive tolerances and trailing bytes; `check` decodes every meshlet at random access and
 //! compares it with the mesh.
 
-use super::meshopt_codec::{self, Encoded};
+use super::{laced, meshopt_codec, DecodeError, Decoded, Encoded};
 use crate::mesh::Mesh;
 use crate::meshlet::io::Reader;
 use std::path::Path;
@@ -31,12 +36,36 @@ const MAGIC: &[u8; 8] = b"MLTCMP01";
 pub enum Format {
     /// meshoptimizer's meshlet codec with anchored per-axis positions (the peer).
     Meshopt,
+    /// Laced wires (Mlakar et al. 2024): every vertex stored once, on its wire.
+    LacedWires,
 }
 
 impl Format {
     fn id(self) -> u32 {
         match self {
             Format::Meshopt => 1,
+            Format::LacedWires => 2,
+        }
+    }
+
+    /// Encodes `ml` (meshlets of `mesh`) in this format with every position within `tolerance`.
+    pub fn encode(
+        self,
+        mesh: &Mesh,
+        ml: &crate::meshlet::Meshlets,
+        tolerance: f64,
+    ) -> Result<Encoded, super::EncodeError> {
+        Ok(match self {
+            Format::Meshopt => meshopt_codec::encode(mesh, ml, tolerance)?,
+            Format::LacedWires => laced::encode(mesh, ml, tolerance)?,
+        })
+    }
+
+    /// Decodes meshlet `i` of an encoding in this format.
+    pub fn decode(self, enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
+        match self {
+            Format::Meshopt => meshopt_codec::decode(enc, i),
+            Format::LacedWires => laced::decode(enc, i),
         }
     }
 }
@@ -87,6 +116,14 @@ impl CompressedFile {
         }
         b.extend((e.data.len() as u32).to_le_bytes());
         b.extend_from_slice(&e.data);
+        if self.format == Format::LacedWires {
+            for table in [&e.wire_base, &e.stored_to_source] {
+                b.extend((table.len() as u32).to_le_bytes());
+                for x in table {
+                    b.extend(x.to_le_bytes());
+                }
+            }
+        }
         b
     }
 
@@ -105,6 +142,7 @@ impl CompressedFile {
         }
         let format = match r.u32().ok_or_else(short)? {
             1 => Format::Meshopt,
+            2 => Format::LacedWires,
             f => return Err(err(format!("unknown format {f}"))),
         };
         let source_vertices = r.u32().ok_or_else(short)?;
@@ -136,6 +174,19 @@ impl CompressedFile {
             .collect::<Result<_, _>>()?;
         let len = r.u32().ok_or_else(short)? as usize;
         let bytes = r.bytes(len).ok_or_else(short)?.to_vec();
+        let mut tables = [Vec::new(), Vec::new()];
+        if format == Format::LacedWires {
+            for t in &mut tables {
+                let n = r.u32().ok_or_else(short)? as usize;
+                if n > r.remaining() / 4 {
+                    return Err(short());
+                }
+                *t = (0..n)
+                    .map(|_| r.u32().ok_or_else(short))
+                    .collect::<Result<_, _>>()?;
+            }
+        }
+        let [wire_base, stored_to_source] = tables;
         if r.remaining() > 0 {
             return Err(err(format!("{} trailing bytes", r.remaining())));
         }
@@ -157,6 +208,8 @@ impl CompressedFile {
                 offsets,
                 data: bytes,
                 sizes: Default::default(),
+                wire_base,
+                stored_to_source,
             },
         })
     }
@@ -186,7 +239,10 @@ impl CompressedFile {
         let mut got = Vec::with_capacity(want.len());
         let mut worst = 0.0f64;
         for i in 0..self.encoded.offsets.len() {
-            let d = meshopt_codec::decode(&self.encoded, i).map_err(|e| err(e.to_string()))?;
+            let d = self
+                .format
+                .decode(&self.encoded, i)
+                .map_err(|e| err(e.to_string()))?;
             for (k, &v) in d.vertices.iter().enumerate() {
                 let o = mesh.positions[v as usize];
                 let e = (0..3)

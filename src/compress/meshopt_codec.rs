@@ -21,38 +21,11 @@
 //! vertex reference.
 
 use super::{dequantise, quantise, read_bits, write_bits, DecodeError, Sizes};
+pub use super::{Decoded, Encoded};
 use crate::mesh::Mesh;
 use crate::meshlet::Meshlets;
 
 const HEADER: usize = 19;
-
-/// An encoded meshlet set.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Encoded {
-    /// Grid step exponent.
-    pub exponent: i32,
-    /// Grid origin (the mesh's bounding-box minimum).
-    pub origin: [f32; 3],
-    /// Vertices of the source mesh (references must stay below).
-    pub source_vertices: u32,
-    /// Byte offset of each meshlet's record.
-    pub offsets: Vec<u32>,
-    /// The records.
-    pub data: Vec<u8>,
-    /// What the bytes hold.
-    pub sizes: Sizes,
-}
-
-/// One decoded meshlet.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Decoded {
-    /// Source vertex indices.
-    pub vertices: Vec<u32>,
-    /// Triangles over `vertices`.
-    pub triangles: Vec<[u8; 3]>,
-    /// Decoded position of each vertex.
-    pub positions: Vec<[f32; 3]>,
-}
 
 /// Why a meshlet set cannot be encoded.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
@@ -154,6 +127,8 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
         offsets,
         data,
         sizes,
+        wire_base: Vec::new(),
+        stored_to_source: Vec::new(),
     })
 }
 

@@ -14,13 +14,25 @@
 //! original value exactly, so f32 never adds error beyond the tolerance.
 
 pub mod file;
+pub mod laced;
 pub mod meshopt_codec;
 
 use crate::mesh::Mesh;
 use thiserror::Error;
 
-/// A corrupt or truncated encoded buffer.
+/// Why a meshlet set cannot be encoded, by format.
 #[derive(Debug, Error, PartialEq, Eq)]
+pub enum EncodeError {
+    /// meshoptimizer's codec.
+    #[error(transparent)]
+    Meshopt(#[from] meshopt_codec::EncodeError),
+    /// Laced wires.
+    #[error(transparent)]
+    Laced(#[from] laced::EncodeError),
+}
+
+/// A corrupt or truncated encoded buffer.
+#[derive(Clone, Debug, Error, PartialEq, Eq)]
 pub enum DecodeError {
     /// The buffer ends before the data it announces.
     #[error("encoded meshlet {meshlet}: truncated ({what})")]
@@ -41,6 +53,39 @@ pub enum DecodeError {
     /// No such meshlet.
     #[error("meshlet {0} out of range")]
     OutOfRange(usize),
+}
+
+/// An encoded meshlet set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Encoded {
+    /// Grid step exponent.
+    pub exponent: i32,
+    /// Grid origin (the mesh's bounding-box minimum).
+    pub origin: [f32; 3],
+    /// Vertices of the source mesh (references must stay below).
+    pub source_vertices: u32,
+    /// Byte offset of each meshlet's record.
+    pub offsets: Vec<u32>,
+    /// The records.
+    pub data: Vec<u8>,
+    /// What the bytes hold.
+    pub sizes: Sizes,
+    /// Laced wires: the first stored-vertex id of each wire (provenance: maps decoded vertices
+    /// to the source mesh's; not part of the format). Empty for the other formats.
+    pub wire_base: Vec<u32>,
+    /// Laced wires: the source vertex of each stored vertex (provenance, as above).
+    pub stored_to_source: Vec<u32>,
+}
+
+/// One decoded meshlet.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Decoded {
+    /// Source vertex indices.
+    pub vertices: Vec<u32>,
+    /// Triangles over `vertices`.
+    pub triangles: Vec<[u8; 3]>,
+    /// Decoded position of each vertex.
+    pub positions: Vec<[f32; 3]>,
 }
 
 /// The paper's default tolerance: the error of 14-bit quantisation of the mesh's bounding box
