@@ -21,8 +21,12 @@ pub struct CompressArgs {
     strategy: String,
     /// Largest allowed position error, in mesh units (default: the paper's, the error of 14-bit
     /// quantisation of the bounding box).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "relative_tolerance")]
     tolerance: Option<f64>,
+    /// Largest allowed position error as a fraction of the bounding-box diagonal (1e-4 is the
+    /// setting of the size comparison with meshoptimizer's codec).
+    #[arg(long)]
+    relative_tolerance: Option<f64>,
     /// Output file (format: see `meshletlab::compress::file`).
     #[arg(short, long)]
     output: PathBuf,
@@ -35,10 +39,12 @@ pub struct CompressArgs {
 
 pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
     let m = load(&a.mesh, quiet)?;
-    let tolerance = match a.tolerance {
-        Some(t) if t > 0.0 && t.is_finite() => t,
-        Some(t) => bail!("--tolerance must be a positive number, not {t}"),
-        None => paper_tolerance(&m),
+    let tolerance = match (a.tolerance, a.relative_tolerance) {
+        (Some(t), _) if t > 0.0 && t.is_finite() => t,
+        (Some(t), _) => bail!("--tolerance must be a positive number, not {t}"),
+        (_, Some(r)) if r > 0.0 && r.is_finite() => r * m.bounding_box_diagonal() as f64,
+        (_, Some(r)) => bail!("--relative-tolerance must be a positive number, not {r}"),
+        (None, None) => paper_tolerance(&m),
     };
     let ml = build_validated(&m, &a.mesh, &a.strategy, &a.args)?;
     let t0 = std::time::Instant::now();

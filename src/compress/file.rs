@@ -14,8 +14,8 @@
 //! | 4 M | byte offset of each meshlet's record in the data |
 //! | 4 | data length D |
 //! | D | the encoding (layout: [`super::meshopt_codec`], [`super::laced`]) |
-//! | 4, 4 W | laced wires only: wire count W, first stored-vertex id of each wire |
-//! | 4, 4 S | laced wires only: stored-vertex count S, source vertex of each |
+//! | 4, 4 W | wire count W (0 but for laced wires), first stored-vertex id of each wire |
+//! | 4, 4 S | stored-vertex count S, source vertex of each |
 //!
 //! The last two tables are provenance: they let `check` compare decoded vertices with the source
 //! mesh's and are not counted in the format's size.
@@ -116,12 +116,10 @@ impl CompressedFile {
         }
         b.extend((e.data.len() as u32).to_le_bytes());
         b.extend_from_slice(&e.data);
-        if self.format == Format::LacedWires {
-            for table in [&e.wire_base, &e.stored_to_source] {
-                b.extend((table.len() as u32).to_le_bytes());
-                for x in table {
-                    b.extend(x.to_le_bytes());
-                }
+        for table in [&e.wire_base, &e.stored_to_source] {
+            b.extend((table.len() as u32).to_le_bytes());
+            for x in table {
+                b.extend(x.to_le_bytes());
             }
         }
         b
@@ -175,16 +173,14 @@ impl CompressedFile {
         let len = r.u32().ok_or_else(short)? as usize;
         let bytes = r.bytes(len).ok_or_else(short)?.to_vec();
         let mut tables = [Vec::new(), Vec::new()];
-        if format == Format::LacedWires {
-            for t in &mut tables {
-                let n = r.u32().ok_or_else(short)? as usize;
-                if n > r.remaining() / 4 {
-                    return Err(short());
-                }
-                *t = (0..n)
-                    .map(|_| r.u32().ok_or_else(short))
-                    .collect::<Result<_, _>>()?;
+        for t in &mut tables {
+            let n = r.u32().ok_or_else(short)? as usize;
+            if n > r.remaining() / 4 {
+                return Err(short());
             }
+            *t = (0..n)
+                .map(|_| r.u32().ok_or_else(short))
+                .collect::<Result<_, _>>()?;
         }
         let [wire_base, stored_to_source] = tables;
         if r.remaining() > 0 {

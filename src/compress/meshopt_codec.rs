@@ -50,6 +50,10 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
         headers: 4 * ml.len(),
         ..Default::default()
     };
+    // Stored vertex ids in order of first use: the codec codes each reference against the one
+    // before, so ids that rise meshlet by meshlet cost a few bits instead of a full index.
+    let mut remap = vec![u32::MAX; mesh.vertex_count()];
+    let mut stored_to_source: Vec<u32> = Vec::new();
     for i in 0..ml.len() {
         let mut vertices = ml.meshlet_vertices(i).to_vec();
         let mut triangles = ml.meshlet_triangles(i).to_vec();
@@ -58,6 +62,14 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
             return Err(EncodeError::Size(i));
         }
         meshopt::optimize_meshlet_level(&mut vertices, &mut triangles, 3);
+        for v in &mut vertices {
+            let r = &mut remap[*v as usize];
+            if *r == u32::MAX {
+                *r = stored_to_source.len() as u32;
+                stored_to_source.push(*v);
+            }
+            *v = *r;
+        }
         let conn = meshopt::encode_meshlet(meshopt::Meshlet {
             vertices: &vertices,
             triangles: &triangles,
@@ -70,7 +82,7 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
         let q: Vec<[i64; 3]> = order
             .iter()
             .map(|&v| {
-                let p = mesh.positions[v as usize];
+                let p = mesh.positions[stored_to_source[v as usize] as usize];
                 [0, 1, 2].map(|a| quantise(p[a], origin[a], e))
             })
             .collect();
@@ -128,7 +140,7 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
         data,
         sizes,
         wire_base: Vec::new(),
-        stored_to_source: Vec::new(),
+        stored_to_source,
     })
 }
 
@@ -157,15 +169,19 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
             meshlet: i,
             what: format!("connectivity: {e:?}"),
         })?;
-    if let Some(&v) = vertices.iter().find(|&&v| v >= enc.source_vertices) {
-        return Err(DecodeError::Invalid {
-            meshlet: i,
-            what: format!(
-                "vertex reference {v} beyond the mesh's {}",
-                enc.source_vertices
-            ),
-        });
-    }
+    let vertices: Vec<u32> = vertices
+        .iter()
+        .map(|&v| {
+            enc.stored_to_source
+                .get(v as usize)
+                .copied()
+                .filter(|&s| s < enc.source_vertices)
+                .ok_or_else(|| DecodeError::Invalid {
+                    meshlet: i,
+                    what: format!("vertex reference {v} beyond the stored vertices"),
+                })
+        })
+        .collect::<Result<_, _>>()?;
     let triangles: Vec<[u8; 3]> = tris[..3 * tc]
         .chunks_exact(3)
         .map(|c| [c[0], c[1], c[2]])

@@ -3,6 +3,7 @@
 //! mutations can aim at them. Every seed loads as a valid mesh (a unit test checks it).
 
 use super::Target;
+use crate::compress::file::Format;
 use crate::mesh::Mesh;
 use crate::meshlet::io::MeshletFile;
 use serde_json::{json, Value};
@@ -148,7 +149,8 @@ impl Corpus {
             seeds.push(meshlet_seed(&meshlet_source, strategy, limits));
         }
         seeds.push(lod_seed(&meshlet_source));
-        seeds.push(compressed_seed(&meshlet_source));
+        seeds.push(compressed_seed(&meshlet_source, Format::Meshopt));
+        seeds.push(compressed_seed(&meshlet_source, Format::LacedWires));
         Self {
             seeds,
             meshlet_source,
@@ -750,19 +752,22 @@ fn lod_seed(m: &Mesh) -> Seed {
     }
 }
 
-/// A compressed-meshlet file of the grid (meshoptimizer's codec at 16/12), with its header,
-/// offset table and every record's header fields marked.
-fn compressed_seed(m: &Mesh) -> Seed {
-    use crate::compress::{file, meshopt_codec};
+/// A compressed-meshlet file of the grid (meshoptimizer's codec or laced wires at 16/12), with
+/// its header, offset table, provenance tables and every record's (or the section's) header
+/// fields marked.
+fn compressed_seed(m: &Mesh, format: Format) -> Seed {
+    use crate::compress::file;
     let limits = crate::meshlet::Limits::new(16, 12).expect("valid seed limits");
     let s = crate::strategy::by_name("meshopt", &Default::default()).expect("known strategy");
     let tolerance = crate::compress::paper_tolerance(m);
-    let encoded = meshopt_codec::encode(m, &s.build(m, limits), tolerance).expect("seed encodes");
+    let encoded = format
+        .encode(m, &s.build(m, limits), tolerance)
+        .expect("seed encodes");
     let f = file::CompressedFile {
         source_vertices: m.vertex_count() as u32,
         source_triangles: m.triangle_count() as u32,
         fingerprint: m.fingerprint(),
-        format: file::Format::Meshopt,
+        format,
         tolerance,
         encoded,
     };
@@ -792,18 +797,35 @@ fn compressed_seed(m: &Mesh) -> Seed {
     });
     for &o in &f.encoded.offsets {
         let r = data + o as usize;
-        boundaries.extend([r, r + 19]);
-        // Counts and bit widths are bytes; the anchor and the connectivity length are numbers.
-        numbers.extend((0..3).map(|k| u32f(r + 5 + 4 * k)));
-        numbers.push(Field::Bin {
-            at: r + 17,
-            width: 2,
-            be: false,
-        });
+        boundaries.push(r);
+        if format == Format::Meshopt {
+            // Counts and bit widths are bytes; the anchor and the connectivity length are numbers.
+            boundaries.push(r + 19);
+            numbers.extend((0..3).map(|k| u32f(r + 5 + 4 * k)));
+            numbers.push(Field::Bin {
+                at: r + 17,
+                width: 2,
+                be: false,
+            });
+        }
     }
+    if format == Format::LacedWires {
+        // Section header: meshlet, wire and corner counts, widths, table and first-wire offsets.
+        numbers.extend([0, 4, 8, 12, 16, 20].map(|k| u32f(data + k)));
+        boundaries.extend([data + 12, data + 16, data + 24]);
+    }
+    // Provenance tables after the data.
+    let tables = data + f.encoded.data.len();
+    let second = tables + 4 + 4 * f.encoded.wire_base.len();
+    numbers.extend([u32f(tables), u32f(second)]);
+    boundaries.extend([tables, tables + 4, second, second + 4]);
     boundaries.push(bytes.len());
+    let name = match format {
+        Format::Meshopt => "compressed/meshopt-16-12",
+        Format::LacedWires => "compressed/laced-wires-16-12",
+    };
     Seed {
-        name: "compressed/meshopt-16-12".into(),
+        name: name.into(),
         target: Target::Compressed,
         bytes,
         boundaries,
