@@ -61,35 +61,61 @@ fn compress_then_check_round_trips_and_check_catches_damage() {
     let mesh = common::meshes_dir().join("stellarium_gaspra.ply.zst");
     let other = common::meshes_dir().join("fandisk.ply.zst");
     let (mesh, other) = (mesh.to_str().unwrap(), other.to_str().unwrap());
-    let file = dir.join("gaspra.cmp");
-    let f = file.to_str().unwrap();
-    let out = ok(&[
-        "compress", "-q", mesh, "-o", f, "--json", "--limits", "128/128",
-    ]);
-    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-    let bpt = v["bytes_per_triangle"].as_f64().unwrap();
-    assert!(bpt > 1.0 && bpt < 8.0, "{out}");
-    assert!(v["max_error"].as_f64().unwrap() <= v["tolerance"].as_f64().unwrap());
-    let out = ok(&["check", "-q", mesh, f]);
-    assert!(out.contains("valid") && out.contains("compressed"), "{out}");
-    // Against another mesh: refused, naming the file.
-    let out = cli(&["check", "-q", other, f]);
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("gaspra.cmp"));
-    // A position bit flipped in the last record: decoded beyond the tolerance, or other triangles.
-    let mut bytes = std::fs::read(&file).unwrap();
-    let n = bytes.len();
-    bytes[n - 5] ^= 0x10;
-    std::fs::write(&file, &bytes).unwrap();
-    let out = cli(&["check", "-q", mesh, f]);
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("gaspra.cmp") && err.lines().count() == 1,
-        "{err}"
-    );
+    for (format, strategy, limits) in [
+        ("meshopt", "meshopt", "128/128"),
+        ("laced-wires", "qem", "64/84"),
+    ] {
+        let file = dir.join(format!("gaspra-{format}.cmp"));
+        let f = file.to_str().unwrap();
+        let out = ok(&[
+            "compress",
+            "-q",
+            mesh,
+            "-o",
+            f,
+            "--json",
+            "--format",
+            format,
+            "--strategy",
+            strategy,
+            "--limits",
+            limits,
+        ]);
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        let bpt = v["bytes_per_triangle"].as_f64().unwrap();
+        assert!(bpt > 1.0 && bpt < 8.0, "{out}");
+        assert!(v["max_error"].as_f64().unwrap() <= v["tolerance"].as_f64().unwrap());
+        let out = ok(&["check", "-q", mesh, f]);
+        assert!(out.contains("valid") && out.contains("compressed"), "{out}");
+        // Against another mesh: refused, naming the file.
+        let out = cli(&["check", "-q", other, f]);
+        assert!(!out.status.success());
+        assert!(String::from_utf8_lossy(&out.stderr).contains("gaspra-"));
+        // A position bit flipped near the end of the encoding (before the provenance tables):
+        // decoded beyond the tolerance, or other triangles.
+        let mut bytes = std::fs::read(&file).unwrap();
+        let parsed = meshletlab::compress::file::CompressedFile::from_bytes(&bytes, &file).unwrap();
+        let tables =
+            8 + 4 * (parsed.encoded.wire_base.len() + parsed.encoded.stored_to_source.len());
+        let n = bytes.len() - tables;
+        bytes[n - 5] ^= 0x10;
+        std::fs::write(&file, &bytes).unwrap();
+        let out = cli(&["check", "-q", mesh, f]);
+        assert!(!out.status.success(), "{format}: damage not caught");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("gaspra-") && err.lines().count() == 1, "{err}");
+    }
     // A bad tolerance is refused before any work.
-    let out = cli(&["compress", "-q", mesh, "-o", f, "--tolerance", "-1"]);
+    let f = dir.join("bad.cmp");
+    let out = cli(&[
+        "compress",
+        "-q",
+        mesh,
+        "-o",
+        f.to_str().unwrap(),
+        "--tolerance",
+        "-1",
+    ]);
     assert!(!out.status.success());
 }
 

@@ -2,6 +2,7 @@
 //! the `bench` commands, plus machine notes and tables for results/.
 
 pub mod build;
+pub mod compress;
 pub mod gpu;
 pub mod kmedoids;
 pub mod lod;

@@ -156,6 +156,22 @@ pub enum BenchCommand {
         #[arg(long)]
         permissive: bool,
     },
+    /// Compressed meshlets: laced wires and meshoptimizer's codec on every shared mesh and a
+    /// multi-mesh scene, at the paper's 14-bit tolerance and at 1e-4 of the diagonal: bytes per
+    /// triangle split by kind, errors, duplication, encode/decode speed on 1 and 2 threads, the
+    /// paper's Figure 8 (bits per vertex against error) -> compress.md, compress.csv,
+    /// compress_fig8.csv, plots.
+    Compress {
+        /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Interleaved timing runs (median reported).
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+        runs: u32,
+    },
     /// Mutation fuzzer over every file reader (PLY ASCII/LE/BE, OBJ, glTF, GLB, .zst, meshlet
     /// files): >= 1 M seeded cases in child processes; panics, hangs and allocations over the bound
     /// are counted -> robustness.md, robustness.csv. Exit 1 if any case is a defect.
@@ -334,6 +350,21 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             };
             bench::lod::run(&cfg)?;
             println!("wrote {}", cfg.out.join("lod.md").display());
+            Ok(())
+        }
+        BenchCommand::Compress { meshes, out, runs } => {
+            let cfg = bench::compress::Config {
+                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                out,
+                runs: runs as usize,
+                quiet: q,
+            };
+            let rows = bench::compress::run(&cfg)?;
+            println!(
+                "wrote {} ({} encodings)",
+                cfg.out.join("compress.md").display(),
+                rows.len()
+            );
             Ok(())
         }
         BenchCommand::Robustness {

@@ -9,12 +9,15 @@
 //! backwards). The internal wire is the paper's greedy spiral: vertices levelled by their edge
 //! distance to the meshlet boundary, the path always steps to the unvisited neighbour of lowest
 //! level (ties: the one that closes a triangle with the last wire edge, then the lower index)
-//! and restarts at the lowest unvisited level when the tip is stuck.
+//! and, when the tip is stuck, restarts beside the most recent path vertex that still has an
+//! unvisited neighbour (the lowest unvisited level if none has).
 //!
 //! **Laces.** A meshlet's *local order* is its internal wire followed by its *boundary items*
 //! (external wires, in their direction, and corners) in the order a counter-clockwise walk of
 //! its boundary meets them: the paper's references into external wires through the meshlet's
-//! boundary ordering. Local positions `k, k + 1` form a *wire edge*. A triangle holding wire edge
+//! boundary ordering. Local positions `k, k + 1` form a *wire edge*, and so does the boundary's
+//! closing pair (last position, first boundary position) when the boundary has three or more
+//! positions (wire edge `n - 1`). A triangle holding wire edge
 //! `k -> k + 1` lies left of it, one holding `k + 1 -> k` right of it: either is a one-reference
 //! triangle (1RT) naming only its third vertex. Left and right laces are separate subsequences of
 //! one-byte symbols (2-bit type, 6-bit value) walking the wire edges: `00 n` skips `n + 1` wire
@@ -36,7 +39,8 @@
 //! three or more meshlets only; the ends of an open boundary run stay on their wire (the run's
 //! owner pair is known, so no corner is needed to delimit it). The restart of the internal wire
 //! is implicit: a jump is a wire edge without triangles, skipped like any other. Per-meshlet
-//! culling bytes are not written yet.
+//! culling bytes are not written yet. Short external wires (at most [`SHORT_WIRE`] vertices)
+//! are stored as corners.
 //!
 //! **Layout** (`data`; all offsets in bytes from its start, integers little-endian):
 //!
@@ -49,8 +53,8 @@
 //! | 4 (M + E + 1) | wire table: byte offset of wire `w` (internal wire of meshlet `i` is `w = i`, external wire `j` is `M + j`, the corner wire `M + E`) |
 //! | .. | wires, each padded to 4 bytes |
 //!
-//! A meshlet record, bit-packed LSB first: internal count (7), item count (7), left symbols (6),
-//! right symbols (6), strip bytes (10), then per item 1 bit (0 = external wire, 1 = corner) and
+//! A meshlet record, bit-packed LSB first: internal count (7), item count (7), left symbols (7),
+//! right symbols (7), strip bytes (10), then per item 1 bit (0 = external wire, 1 = corner) and
 //! the wire id plus a direction bit (1 = backwards), or the corner id; then, byte-aligned, the
 //! left, right and strip symbols. A wire: count, anchor (3 x G), bits per axis (3 x 5), then per
 //! vertex x, y, z.
@@ -72,7 +76,7 @@ const SECTION: usize = 24;
 /// bytes per triangle for 0/1/2/3/4: bunny 4.41/4.36/4.34/4.37/4.43, igea 4.33/4.29/4.27/4.33/4.42,
 /// fandisk 4.24/4.19/4.18/4.20/4.27.
 pub const SHORT_WIRE: usize = 2;
-const HEAD_BITS: usize = 7 + 7 + 6 + 6 + 10;
+const HEAD_BITS: usize = 7 + 7 + 7 + 7 + 10;
 
 /// Why a meshlet set cannot be encoded as laced wires.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
@@ -408,11 +412,20 @@ fn shape(ml: &Meshlets, i: usize, owner: &[Owner], pairs: &[(u32, u32)]) -> Shap
         l = l.saturating_add(1);
     }
     let mut path = Vec::with_capacity(inner.count_ones() as usize);
+    let mut path_local: Vec<usize> = Vec::with_capacity(path.capacity());
     let mut left = inner;
     let mut tip: Option<usize> = None;
     let mut prev: Option<usize> = None;
     while left != 0 {
-        let cands = tip.map_or(0, |t| adj[t] & left);
+        let mut cands = tip.map_or(0, |t| adj[t] & left);
+        if cands == 0 {
+            // Stuck: restart next to the most recent path vertex that has unvisited neighbours,
+            // so the jump stays short and the new run laces against the old one.
+            if let Some(&q) = path_local.iter().rev().find(|&&q| adj[q] & left != 0) {
+                cands = adj[q] & left;
+                tip = Some(q);
+            }
+        }
         let pool = if cands != 0 { cands } else { left };
         let mut best = usize::MAX;
         let mut key = (u8::MAX, true, usize::MAX);
@@ -435,6 +448,7 @@ fn shape(ml: &Meshlets, i: usize, owner: &[Owner], pairs: &[(u32, u32)]) -> Shap
         tip = Some(best);
         left &= !(1 << best);
         path.push(lv[best]);
+        path_local.push(best);
     }
     Shape {
         items,
@@ -516,7 +530,7 @@ fn record(
         .chunks_exact(3)
         .map(|t| [0, 1, 2].map(|k| pos(lv[t[k] as usize])))
         .collect();
-    let (left, right, strips) = laces(n, &tris);
+    let (left, right, strips) = laces(n, s.internal.len(), &tris);
     if strips.len() > 1023 {
         return Err(EncodeError::Strips(i));
     }
@@ -528,8 +542,8 @@ fn record(
     };
     put(&mut out, 7, s.internal.len() as u32);
     put(&mut out, 7, s.items.len() as u32);
-    put(&mut out, 6, left.len() as u32);
-    put(&mut out, 6, right.len() as u32);
+    put(&mut out, 7, left.len() as u32);
+    put(&mut out, 7, right.len() as u32);
     put(&mut out, 10, strips.len() as u32);
     for it in &s.items {
         match *it {
@@ -556,8 +570,9 @@ fn record(
 }
 
 /// The left, right and strip subsequences of a meshlet's triangles (in local positions).
-fn laces(n: usize, tris: &[[u8; 3]]) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
-    let slots = n.saturating_sub(1);
+fn laces(n: usize, ni: usize, tris: &[[u8; 3]]) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
+    let wrap = wraps(n, ni);
+    let slots = n.saturating_sub(1) + wrap as usize;
     let mut left: Vec<Option<u8>> = vec![None; slots];
     let mut right: Vec<Option<u8>> = vec![None; slots];
     // Candidate slots of a triangle: (side, slot, third vertex).
@@ -565,10 +580,11 @@ fn laces(n: usize, tris: &[[u8; 3]]) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
         let mut c = Vec::with_capacity(3);
         for k in 0..3 {
             let (x, y, z) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-            if y == x.wrapping_add(1) {
-                c.push((0, x as usize, z));
-            } else if x == y.wrapping_add(1) {
-                c.push((1, y as usize, z));
+            let (x_, y_) = (x as usize, y as usize);
+            if y_ == x_ + 1 || wrap && x_ == n - 1 && y_ == ni {
+                c.push((0, x_, z));
+            } else if x_ == y_ + 1 || wrap && y_ == n - 1 && x_ == ni {
+                c.push((1, y_, z));
             }
         }
         c
@@ -619,6 +635,13 @@ fn laces(n: usize, tris: &[[u8; 3]]) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
         .map(|(t, _)| *t)
         .collect();
     (lace(&left), lace(&right), strips(&rest))
+}
+
+/// Whether the boundary closes with a wire edge from its last position back to its first
+/// (position `ni`, after the internal wire): it needs three boundary positions, or the closing
+/// edge would be wire edge `ni` reversed.
+fn wraps(n: usize, ni: usize) -> bool {
+    n >= ni + 3
 }
 
 /// Strips of the triangles on no wire edge: `11 a, b, c` starts one, `tt v` continues across
@@ -845,8 +868,8 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
     };
     let internal = get(7)? as usize;
     let items = get(7)? as usize;
-    let nl = get(6)? as usize;
-    let nr = get(6)? as usize;
+    let nl = get(7)? as usize;
+    let nr = get(7)? as usize;
     let ns = get(10)? as usize;
     // Local order as (wire, index in wire).
     let mut order: Vec<(usize, usize)> = (0..internal).map(|k| (i, k)).collect();
@@ -898,11 +921,16 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
             match b >> 6 {
                 0 => k += v as usize + 1,
                 1 => {
-                    if k + 1 >= n {
+                    let wrap = wraps(n, internal) && k == n - 1;
+                    if k + 1 >= n && !wrap {
                         return Err(bad(format!("lace at wire edge {k} of {n} vertices")));
                     }
                     let v = vert(v)?;
-                    let (x, y) = (k as u8, k as u8 + 1);
+                    let (x, y) = if wrap {
+                        (k as u8, internal as u8)
+                    } else {
+                        (k as u8, k as u8 + 1)
+                    };
                     triangles.push(if side == 0 { [x, y, v] } else { [y, x, v] });
                     k += 1;
                 }
