@@ -21,7 +21,8 @@
 //! `k -> k + 1` lies left of it, one holding `k + 1 -> k` right of it: either is a one-reference
 //! triangle (1RT) naming only its third vertex. Left and right laces are separate subsequences of
 //! one-byte symbols (2-bit type, 6-bit value) walking the wire edges: `00 n` skips `n + 1` wire
-//! edges, `01 v` is a 1RT with third vertex `v`. Triangles on no free wire edge (a second
+//! edges, `01 v` is a 1RT with third vertex `v`, and `10 v` (ours, *long laces*) is the triangle
+//! `k, k + 2, v` where the wire bends round a vertex, without moving on. Triangles on no free wire edge (a second
 //! triangle on a non-manifold edge, degenerate and isolated triangles, fans between wires) go to
 //! a third subsequence of strips: `11 a`, `b`, `c` (3RT, three bytes) starts a strip, `tt v` with
 //! `tt` in 0..3 adds the neighbour across edge `tt` of the previous triangle with new vertex `v`
@@ -53,8 +54,8 @@
 //! | 4 (M + E + 1) | wire table: byte offset of wire `w` (internal wire of meshlet `i` is `w = i`, external wire `j` is `M + j`, the corner wire `M + E`) |
 //! | .. | wires, each padded to 4 bytes |
 //!
-//! A meshlet record, bit-packed LSB first: internal count (7), item count (7), left symbols (7),
-//! right symbols (7), strip bytes (10), then per item 1 bit (0 = external wire, 1 = corner) and
+//! A meshlet record, bit-packed LSB first: internal count (7), item count (7), left symbols (8),
+//! right symbols (8), strip bytes (10), then per item 1 bit (0 = external wire, 1 = corner) and
 //! the wire id plus a direction bit (1 = backwards), or the corner id; then, byte-aligned, the
 //! left, right and strip symbols. A wire: count, anchor (3 x G), bits per axis (3 x 5), then per
 //! vertex x, y, z.
@@ -76,7 +77,7 @@ const SECTION: usize = 24;
 /// bytes per triangle for 0/1/2/3/4: bunny 4.41/4.36/4.34/4.37/4.43, igea 4.33/4.29/4.27/4.33/4.42,
 /// fandisk 4.24/4.19/4.18/4.20/4.27.
 pub const SHORT_WIRE: usize = 2;
-const HEAD_BITS: usize = 7 + 7 + 7 + 7 + 10;
+const HEAD_BITS: usize = 7 + 7 + 8 + 8 + 10;
 
 /// Why a meshlet set cannot be encoded as laced wires.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
@@ -542,8 +543,8 @@ fn record(
     };
     put(&mut out, 7, s.internal.len() as u32);
     put(&mut out, 7, s.items.len() as u32);
-    put(&mut out, 7, left.len() as u32);
-    put(&mut out, 7, right.len() as u32);
+    put(&mut out, 8, left.len() as u32);
+    put(&mut out, 8, right.len() as u32);
     put(&mut out, 10, strips.len() as u32);
     for it in &s.items {
         match *it {
@@ -610,18 +611,49 @@ fn laces(n: usize, ni: usize, tris: &[[u8; 3]]) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
             }
         }
     }
-    let lace = |s: &[Option<u8>]| {
+    // Long laces: a triangle left of k -> k + 2 (or right of it) where the wire bends round a
+    // vertex, one per position and side.
+    let mut long_left: Vec<Option<u8>> = vec![None; slots];
+    let mut long_right: Vec<Option<u8>> = vec![None; slots];
+    for (ti, t) in tris.iter().enumerate() {
+        if placed[ti] {
+            continue;
+        }
+        for k in 0..3 {
+            let (x, y, z) = (t[k] as usize, t[(k + 1) % 3] as usize, t[(k + 2) % 3]);
+            let (s, at) = if y == x + 2 {
+                (&mut long_left, x)
+            } else if x == y + 2 {
+                (&mut long_right, y)
+            } else {
+                continue;
+            };
+            if s[at].is_none() {
+                s[at] = Some(z);
+                placed[ti] = true;
+                break;
+            }
+        }
+    }
+    let lace = |s: &[Option<u8>], long: &[Option<u8>]| {
         let mut out = Vec::new();
         let mut run = 0usize;
-        for x in s {
+        let flush = |out: &mut Vec<u8>, run: &mut usize| {
+            while *run > 0 {
+                let r = (*run).min(64);
+                out.push((r - 1) as u8);
+                *run -= r;
+            }
+        };
+        for (x, l) in s.iter().zip(long) {
+            if let Some(v) = l {
+                flush(&mut out, &mut run);
+                out.push(0x80 | v);
+            }
             match x {
                 None => run += 1,
                 Some(v) => {
-                    while run > 0 {
-                        let r = run.min(64);
-                        out.push((r - 1) as u8);
-                        run -= r;
-                    }
+                    flush(&mut out, &mut run);
                     out.push(0x40 | v);
                 }
             }
@@ -634,7 +666,11 @@ fn laces(n: usize, ni: usize, tris: &[[u8; 3]]) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
         .filter(|(_, &p)| !p)
         .map(|(t, _)| *t)
         .collect();
-    (lace(&left), lace(&right), strips(&rest))
+    (
+        lace(&left, &long_left),
+        lace(&right, &long_right),
+        strips(&rest),
+    )
 }
 
 /// Whether the boundary closes with a wire edge from its last position back to its first
@@ -868,8 +904,8 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
     };
     let internal = get(7)? as usize;
     let items = get(7)? as usize;
-    let nl = get(7)? as usize;
-    let nr = get(7)? as usize;
+    let nl = get(8)? as usize;
+    let nr = get(8)? as usize;
     let ns = get(10)? as usize;
     // Local order as (wire, index in wire).
     let mut order: Vec<(usize, usize)> = (0..internal).map(|k| (i, k)).collect();
@@ -933,6 +969,14 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
                     };
                     triangles.push(if side == 0 { [x, y, v] } else { [y, x, v] });
                     k += 1;
+                }
+                2 => {
+                    if k + 2 >= n {
+                        return Err(bad(format!("long lace at {k} of {n} vertices")));
+                    }
+                    let v = vert(v)?;
+                    let (x, y) = (k as u8, k as u8 + 2);
+                    triangles.push(if side == 0 { [x, y, v] } else { [y, x, v] });
                 }
                 t => return Err(bad(format!("symbol type {t} in a lace"))),
             }
