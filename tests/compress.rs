@@ -251,22 +251,61 @@ fn laced_wires_refuse_meshlets_above_64_vertices() {
 }
 
 #[test]
-fn laced_wires_corruption_is_an_error_never_a_panic() {
+fn corruption_is_an_error_never_a_panic_in_every_format() {
     let m = generate::noisy_sphere(2, 0.2, 3);
     let ml = build("qem", &m, paper_limits());
-    let enc = Format::LacedWires.encode(&m, &ml, 1e-3).unwrap();
-    assert!(compress::laced::decode(&enc, ml.len()).is_err());
-    let mut cut = enc.clone();
-    cut.data.truncate(enc.data.len() / 2);
-    assert!((0..ml.len()).any(|i| compress::laced::decode(&cut, i).is_err()));
-    // Every single-byte change anywhere decodes (to something) or errs.
-    for k in 0..enc.data.len() {
-        for x in [0u8, 0xff, enc.data[k] ^ 0x41] {
-            let mut c = enc.clone();
-            c.data[k] = x;
-            for i in [0, ml.len() / 2, ml.len() - 1] {
-                let _ = compress::laced::decode(&c, i);
+    for f in Format::ALL {
+        let enc = f.encode(&m, &ml, 1e-3).unwrap();
+        assert!(f.decode(&enc, ml.len()).is_err(), "{f:?}");
+        let mut cut = enc.clone();
+        cut.data.truncate(enc.data.len() / 2);
+        assert!(
+            (0..ml.len()).any(|i| f.decode(&cut, i).is_err()),
+            "{f:?}: half the buffer decodes"
+        );
+        // Single-byte changes all over the buffer (at most ~3000 places): each decodes (to
+        // something) or errs.
+        let stride = (enc.data.len() / 3000).max(1);
+        for k in (0..enc.data.len()).step_by(stride) {
+            for x in [0u8, 0xff, enc.data[k] ^ 0x41] {
+                let mut c = enc.clone();
+                c.data[k] = x;
+                for i in [0, ml.len() / 2, ml.len() - 1] {
+                    let _ = f.decode(&c, i);
+                }
             }
         }
     }
+}
+
+#[test]
+fn the_papers_comparison_formats_round_trip_basic_and_compact() {
+    let bunny =
+        meshletlab::mesh::load(&common::meshes_dir().join("stanford_bunny.ply.zst")).unwrap();
+    let base = generate::noisy_sphere(3, 0.2, 9);
+    let mut far = base.clone();
+    for p in &mut far.positions {
+        *p = p.map(|x| (x as f64 * 1e-3 + 1e6) as f32);
+    }
+    let awkward = awkward();
+    for (name, m) in [
+        ("bunny", &bunny),
+        ("sphere", &base),
+        ("far sphere", &far),
+        ("awkward", &awkward),
+    ] {
+        let ml = build("qem", m, paper_limits());
+        let t = compress::paper_tolerance(m);
+        let mut sizes = Vec::new();
+        for f in Format::ALL.into_iter().skip(2) {
+            sizes.push((f, round_trip(f, &format!("{name} {f:?}"), m, &ml, t)));
+        }
+        // Compact is smaller than basic, and GI basic spends its 12 bytes per triangle on indices.
+        for pair in sizes.chunks(2) {
+            assert!(pair[1].1 < pair[0].1, "{name}: {pair:?}");
+        }
+    }
+    let ml = build("qem", &bunny, paper_limits());
+    let gi = Format::Gi.encode(&bunny, &ml, 1e-3).unwrap();
+    assert_eq!(gi.sizes.connectivity, 12 * bunny.triangle_count());
 }

@@ -12,10 +12,15 @@ use std::path::PathBuf;
 pub struct CompressArgs {
     /// Mesh file.
     mesh: PathBuf,
-    /// Encoding: meshoptimizer's codec (the peer) or laced wires (needs at most 64 vertices per
-    /// meshlet, e.g. `--strategy qem --limits 64/84`, the paper's setting).
+    /// Encoding: meshoptimizer's codec (the peer), laced wires (at most 64 vertices per meshlet,
+    /// e.g. `--strategy qem --limits 64/84`, the paper's setting), or the paper's comparison
+    /// formats: triangle soup (ts), indexed (ix), self-contained (sc) meshlets, global index
+    /// buffer (gi).
     #[arg(short, long, value_enum, default_value = "meshopt")]
     format: Format,
+    /// The compact variant of ts, ix, sc or gi (quantised positions, packed indices).
+    #[arg(long)]
+    compact: bool,
     /// Strategy that builds the meshlets.
     #[arg(short, long, default_value = "meshopt")]
     strategy: String,
@@ -46,10 +51,17 @@ pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
         (_, Some(r)) => bail!("--relative-tolerance must be a positive number, not {r}"),
         (None, None) => paper_tolerance(&m),
     };
+    let format = match (a.compact, a.format.compact()) {
+        (false, _) => a.format,
+        (true, Some(f)) => f,
+        (true, None) => bail!(
+            "--compact applies to ts, ix, sc and gi, not {}",
+            a.format.name()
+        ),
+    };
     let ml = build_validated(&m, &a.mesh, &a.strategy, &a.args)?;
     let t0 = std::time::Instant::now();
-    let encoded = a
-        .format
+    let encoded = format
         .encode(&m, &ml, tolerance)
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.mesh.display()))?;
     let seconds = t0.elapsed().as_secs_f64();
@@ -58,7 +70,7 @@ pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
         source_vertices: m.vertex_count() as u32,
         source_triangles: m.triangle_count() as u32,
         fingerprint: m.fingerprint(),
-        format: a.format,
+        format,
         tolerance,
         encoded,
     };
@@ -72,7 +84,7 @@ pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
             "mesh": a.mesh.display().to_string(),
             "triangles": m.triangle_count(),
             "vertices": m.vertex_count(),
-            "format": a.format,
+            "format": format,
             "strategy": a.strategy,
             "limits": a.args.limits.to_string(),
             "meshlets": ml.len(),

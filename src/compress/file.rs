@@ -5,7 +5,7 @@
 //! | bytes | field |
 //! |---|---|
 //! | 8 | magic `MLTCMP01` |
-//! | 4 | format: 1 = meshoptimizer's codec with anchored positions ([`super::meshopt_codec`]), 2 = laced wires ([`super::laced`]) |
+//! | 4 | format: 1 = meshoptimizer's codec with anchored positions ([`super::meshopt_codec`]), 2 = laced wires ([`super::laced`]), 3-10 = TS, TS compact, IX, IX compact, SC, SC compact, GI, GI compact ([`super::baseline`]) |
 //! | 4, 4, 8 | source mesh vertex count, triangle count, fingerprint |
 //! | 8 | tolerance (f64): every decoded position is within it of the source's |
 //! | 4 | grid exponent (i32) |
@@ -24,7 +24,7 @@
 //! non-positive tolerances and trailing bytes; `check` decodes every meshlet at random access and
 //! compares it with the mesh.
 
-use super::{laced, meshopt_codec, DecodeError, Decoded, Encoded};
+use super::{baseline, laced, meshopt_codec, DecodeError, Decoded, Encoded};
 use crate::mesh::Mesh;
 use crate::meshlet::io::Reader;
 use std::path::Path;
@@ -38,6 +38,22 @@ pub enum Format {
     Meshopt,
     /// Laced wires (Mlakar et al. 2024): every vertex stored once, on its wire.
     LacedWires,
+    /// Triangle soup, f32 corners.
+    Ts,
+    /// Triangle soup, quantised per meshlet.
+    TsCompact,
+    /// Indexed meshlets, 32-bit references, f32 global buffer.
+    Ix,
+    /// Indexed meshlets, packed references, quantised global buffer.
+    IxCompact,
+    /// Self-contained meshlets, f32 copies.
+    Sc,
+    /// Self-contained meshlets, quantised per meshlet.
+    ScCompact,
+    /// Global index buffer, 32-bit indices, f32 positions.
+    Gi,
+    /// Global index buffer, packed indices, quantised positions.
+    GiCompact,
 }
 
 impl Format {
@@ -45,7 +61,62 @@ impl Format {
         match self {
             Format::Meshopt => 1,
             Format::LacedWires => 2,
+            f => 3 + Self::BASELINES.iter().position(|b| b.0 == f).unwrap_or(0) as u32,
         }
+    }
+
+    /// Every format.
+    pub const ALL: [Format; 10] = [
+        Format::Meshopt,
+        Format::LacedWires,
+        Format::Ts,
+        Format::TsCompact,
+        Format::Ix,
+        Format::IxCompact,
+        Format::Sc,
+        Format::ScCompact,
+        Format::Gi,
+        Format::GiCompact,
+    ];
+
+    /// The paper's comparison formats: (format, kind, compact).
+    const BASELINES: [(Format, baseline::Kind, bool); 8] = [
+        (Format::Ts, baseline::Kind::Ts, false),
+        (Format::TsCompact, baseline::Kind::Ts, true),
+        (Format::Ix, baseline::Kind::Ix, false),
+        (Format::IxCompact, baseline::Kind::Ix, true),
+        (Format::Sc, baseline::Kind::Sc, false),
+        (Format::ScCompact, baseline::Kind::Sc, true),
+        (Format::Gi, baseline::Kind::Gi, false),
+        (Format::GiCompact, baseline::Kind::Gi, true),
+    ];
+
+    fn from_id(id: u32) -> Option<Self> {
+        Self::ALL.into_iter().find(|f| f.id() == id)
+    }
+
+    /// The name on the command line.
+    pub fn name(self) -> String {
+        use clap::ValueEnum;
+        self.to_possible_value()
+            .map(|v| v.get_name().to_string())
+            .unwrap_or_default()
+    }
+
+    /// The compact variant of a basic comparison format.
+    pub fn compact(self) -> Option<Self> {
+        match self {
+            Format::Ts => Some(Format::TsCompact),
+            Format::Ix => Some(Format::IxCompact),
+            Format::Sc => Some(Format::ScCompact),
+            Format::Gi => Some(Format::GiCompact),
+            _ => None,
+        }
+    }
+
+    /// Whether positions are stored exactly (f32), whatever the tolerance.
+    pub fn exact(self) -> bool {
+        matches!(self, Format::Ts | Format::Ix | Format::Sc | Format::Gi)
     }
 
     /// Encodes `ml` (meshlets of `mesh`) in this format with every position within `tolerance`.
@@ -58,6 +129,13 @@ impl Format {
         Ok(match self {
             Format::Meshopt => meshopt_codec::encode(mesh, ml, tolerance)?,
             Format::LacedWires => laced::encode(mesh, ml, tolerance)?,
+            f => {
+                let (_, kind, compact) = Self::BASELINES
+                    .into_iter()
+                    .find(|b| b.0 == f)
+                    .expect("every other format is a baseline");
+                baseline::encode(mesh, ml, tolerance, kind, compact)?
+            }
         })
     }
 
@@ -66,6 +144,7 @@ impl Format {
         match self {
             Format::Meshopt => meshopt_codec::decode(enc, i),
             Format::LacedWires => laced::decode(enc, i),
+            _ => baseline::decode(enc, i),
         }
     }
 }
@@ -138,11 +217,8 @@ impl CompressedFile {
                 "not a meshletlab compressed-meshlet file (bad magic)".into()
             ));
         }
-        let format = match r.u32().ok_or_else(short)? {
-            1 => Format::Meshopt,
-            2 => Format::LacedWires,
-            f => return Err(err(format!("unknown format {f}"))),
-        };
+        let id = r.u32().ok_or_else(short)?;
+        let format = Format::from_id(id).ok_or_else(|| err(format!("unknown format {id}")))?;
         let source_vertices = r.u32().ok_or_else(short)?;
         let source_triangles = r.u32().ok_or_else(short)?;
         let fingerprint = r.u64().ok_or_else(short)?;

@@ -13,6 +13,7 @@
 //! where the grid is finer than f32's spacing at that distance the rounding lands back on the
 //! original value exactly, so f32 never adds error beyond the tolerance.
 
+pub mod baseline;
 pub mod file;
 pub mod laced;
 pub mod meshopt_codec;
@@ -29,6 +30,9 @@ pub enum EncodeError {
     /// Laced wires.
     #[error(transparent)]
     Laced(#[from] laced::EncodeError),
+    /// The paper's comparison formats.
+    #[error(transparent)]
+    Baseline(#[from] baseline::EncodeError),
 }
 
 /// A corrupt or truncated encoded buffer.

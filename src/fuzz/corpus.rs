@@ -149,8 +149,9 @@ impl Corpus {
             seeds.push(meshlet_seed(&meshlet_source, strategy, limits));
         }
         seeds.push(lod_seed(&meshlet_source));
-        seeds.push(compressed_seed(&meshlet_source, Format::Meshopt));
-        seeds.push(compressed_seed(&meshlet_source, Format::LacedWires));
+        for f in Format::ALL {
+            seeds.push(compressed_seed(&meshlet_source, f));
+        }
         Self {
             seeds,
             meshlet_source,
@@ -809,7 +810,7 @@ fn compressed_seed(m: &Mesh, format: Format) -> Seed {
             });
         }
     }
-    if format == Format::LacedWires {
+    if format != Format::Meshopt {
         // Section header: meshlet, wire and corner counts, widths, table and first-wire offsets.
         numbers.extend([0, 4, 8, 12, 16, 20].map(|k| u32f(data + k)));
         boundaries.extend([data + 12, data + 16, data + 24]);
@@ -820,12 +821,9 @@ fn compressed_seed(m: &Mesh, format: Format) -> Seed {
     numbers.extend([u32f(tables), u32f(second)]);
     boundaries.extend([tables, tables + 4, second, second + 4]);
     boundaries.push(bytes.len());
-    let name = match format {
-        Format::Meshopt => "compressed/meshopt-16-12",
-        Format::LacedWires => "compressed/laced-wires-16-12",
-    };
+    let name = format!("compressed/{}-16-12", format.name());
     Seed {
-        name: name.into(),
+        name,
         target: Target::Compressed,
         bytes,
         boundaries,
