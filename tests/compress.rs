@@ -272,6 +272,9 @@ fn corruption_is_an_error_never_a_panic_in_every_format() {
                 c.data[k] = x;
                 for i in [0, ml.len() / 2, ml.len() - 1] {
                     let _ = f.decode(&c, i);
+                    if f == Format::LacedWires {
+                        let _ = compress::laced::culling(&c, i);
+                    }
                 }
             }
         }
@@ -308,4 +311,79 @@ fn the_papers_comparison_formats_round_trip_basic_and_compact() {
     let ml = build("qem", &bunny, paper_limits());
     let gi = Format::Gi.encode(&bunny, &ml, 1e-3).unwrap();
     assert_eq!(gi.sizes.connectivity, 12 * bunny.triangle_count());
+}
+
+#[test]
+fn laced_wire_culling_bytes_are_conservative_for_the_decoded_meshlets() {
+    let bunny =
+        meshletlab::mesh::load(&common::meshes_dir().join("stanford_bunny.ply.zst")).unwrap();
+    let sphere = generate::noisy_sphere(3, 0.2, 9);
+    let awkward = awkward();
+    for (name, m) in [
+        ("bunny", &bunny),
+        ("sphere", &sphere),
+        ("awkward", &awkward),
+    ] {
+        let ml = build("qem", m, paper_limits());
+        let enc = Format::LacedWires
+            .encode(m, &ml, compress::paper_tolerance(m))
+            .unwrap();
+        let (lo, hi) = m.bounding_box();
+        let (mid, diag) = ((lo + hi) * 0.5, m.bounding_box_diagonal());
+        // Cameras around and near the mesh (a fixed Fibonacci spiral at three distances).
+        let cameras: Vec<[f32; 3]> = (0..96)
+            .map(|k| {
+                let z = 1.0 - 2.0 * (k as f32 + 0.5) / 96.0;
+                let a = k as f32 * 2.399_963;
+                let r = (1.0 - z * z).sqrt();
+                let d = [0.6, 1.5, 4.0][k % 3] * diag;
+                (mid + glam::Vec3::new(r * a.cos(), r * a.sin(), z) * d).to_array()
+            })
+            .collect();
+        let (mut culls, mut can) = (0usize, 0usize);
+        for i in 0..ml.len() {
+            let d = compress::laced::decode(&enc, i).unwrap();
+            let c = compress::laced::culling(&enc, i).unwrap();
+            let center = glam::DVec3::from_array(c.center.map(f64::from));
+            for p in &d.positions {
+                let dist = (glam::DVec3::from_array(p.map(f64::from)) - center).length();
+                assert!(
+                    dist <= c.radius as f64,
+                    "{name}: meshlet {i}: a vertex {dist} from the centre, radius {}",
+                    c.radius
+                );
+            }
+            can += (c.cutoff < 1.0) as usize;
+            for cam in &cameras {
+                if !c.backfacing(*cam) {
+                    continue;
+                }
+                culls += 1;
+                let e = glam::DVec3::from_array(cam.map(f64::from));
+                for t in &d.triangles {
+                    let [a, b, cc] =
+                        t.map(|k| glam::DVec3::from_array(d.positions[k as usize].map(f64::from)));
+                    let n = (b - a).cross(cc - a);
+                    // Back-facing (or edge-on) from the camera.
+                    assert!(
+                        n.dot(a - e) >= -1e-9 * n.length() * diag as f64,
+                        "{name}: meshlet {i} culled from {cam:?} with a front-facing triangle"
+                    );
+                }
+            }
+        }
+        println!(
+            "{name}: {can}/{} meshlets have a cone, {culls} culls over {} cameras",
+            ml.len(),
+            cameras.len()
+        );
+        if name != "awkward" {
+            assert!(
+                can * 2 > ml.len(),
+                "{name}: only {can} of {} cones",
+                ml.len()
+            );
+            assert!(culls > 0, "{name}: nothing culled");
+        }
+    }
 }

@@ -273,6 +273,7 @@ pub fn encode(
         connectivity: tally[CONN] / 8,
         positions: tally[POS] / 8,
         headers: tally[HEAD] / 8 + SECTION + 4 * ml.len(),
+        culling: 0,
         padding: 0,
     };
     let sizes = Sizes {

@@ -39,8 +39,11 @@
 //! tolerance holds by construction and no rotation is rounded in f32. Corners are the vertices of
 //! three or more meshlets only; the ends of an open boundary run stay on their wire (the run's
 //! owner pair is known, so no corner is needed to delimit it). The restart of the internal wire
-//! is implicit: a jump is a wire edge without triangles, skipped like any other. Per-meshlet
-//! culling bytes are not written yet. Short external wires (at most [`SHORT_WIRE`] vertices)
+//! is implicit: a jump is a wire edge without triangles, skipped like any other. The culling
+//! record (8 bytes per meshlet, [`Culling`]) stores an explicit coarse centre and octahedral axis
+//! where the paper derives them from its oriented boxes and stores only radius scale, cone angle
+//! and apex offset; without an apex the task shader uses the sphere-centre cone test. Both are
+//! computed from the decoded positions, so they are conservative for what is drawn. Short external wires (at most [`SHORT_WIRE`] vertices)
 //! are stored as corners.
 //!
 //! **Layout** (`data`; all offsets in bytes from its start, integers little-endian):
@@ -50,6 +53,7 @@
 //! | 4, 4, 4 | meshlets M, external wires E, corners C |
 //! | 1, 1, 1, 1 | G (bits of a global grid coordinate), count bits, external-wire id bits, corner id bits |
 //! | 4, 4 | wire table offset, first wire offset |
+//! | 8 M | culling records, one u64 per meshlet (see [`Culling`]): centre 3 x 10 bits, radius code 8, axis 2 x 8, cutoff 8 |
 //! | .. | meshlet records, each padded to 4 bytes (offsets in the file's table) |
 //! | 4 (M + E + 1) | wire table: byte offset of wire `w` (internal wire of meshlet `i` is `w = i`, external wire `j` is `M + j`, the corner wire `M + E`) |
 //! | .. | wires, each padded to 4 bytes |
@@ -71,6 +75,8 @@ use rayon::prelude::*;
 /// Most vertices a meshlet may have (6-bit references).
 pub const MAX_VERTICES: usize = 64;
 const SECTION: usize = 24;
+/// Bytes of a meshlet's culling record.
+pub const CULL: usize = 8;
 /// External wires of at most this many vertices are stored as corners instead: a wire's box
 /// (about 9 bytes), its table entry and its padding cost more than one or two vertices at full
 /// grid width on the corner wire. Measured at the paper's tolerance on qem 64/84 meshlets, in
@@ -183,7 +189,14 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
         .map(|(k, w)| wire_string(w, &grid, g, k + 1 < wire_count))
         .collect();
 
+    let culling: Vec<u64> = (0..m)
+        .into_par_iter()
+        .map(|i| culling_record(ml, i, &grid, origin, e, g))
+        .collect();
     let mut data = vec![0u8; SECTION];
+    for c in &culling {
+        data.extend(c.to_le_bytes());
+    }
     let mut bits = [0usize; 4]; // connectivity, positions, headers, padding (in bits)
     let mut offsets = Vec::with_capacity(m);
     for (r, b) in &records {
@@ -237,7 +250,8 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
         connectivity,
         positions,
         headers,
-        padding: data.len() + 4 * m - connectivity - positions - headers,
+        culling: CULL * m,
+        padding: data.len() + 4 * m - connectivity - positions - headers - CULL * m,
     };
     let mut wire_base = Vec::with_capacity(wire_count);
     let mut stored_to_source = Vec::new();
@@ -759,6 +773,163 @@ fn wire_string(
     }
     out.resize(at.div_ceil(32) * 4, 0);
     (out.clone(), [0, at - head, head, out.len() * 8 - at])
+}
+
+/// A meshlet's culling data as its 8 culling bytes decode: a bounding sphere of its decoded
+/// positions and a normal cone of its decoded triangles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Culling {
+    /// Sphere centre.
+    pub center: [f32; 3],
+    /// Sphere radius.
+    pub radius: f32,
+    /// Unit cone axis.
+    pub axis: [f32; 3],
+    /// Sine of the cone's half-angle; 1 = never culls.
+    pub cutoff: f32,
+}
+
+impl Culling {
+    /// The task shader's backface test without an apex (meshoptimizer's sphere-centre variant,
+    /// as [`crate::meshlet::descriptor::QuantisedBounds::backfacing`]): cull when
+    /// `dot(c - eye, axis) > cutoff |c - eye| + r`.
+    pub fn backfacing(&self, camera: [f32; 3]) -> bool {
+        if self.cutoff >= 1.0 {
+            return false;
+        }
+        let d = glam::Vec3::from_array(self.center) - glam::Vec3::from_array(camera);
+        let len = d.length();
+        d.dot(glam::Vec3::from_array(self.axis)) > self.cutoff * len + self.radius + 1e-5 * len
+    }
+}
+
+/// Bits of the culling record's centre per axis.
+const CENTER_BITS: u32 = 10;
+/// Radius codes per octave (the radius is rounded up to the next of them).
+const RADIUS_STEPS: f64 = 8.0;
+
+/// Centre grid shift and the radius scale for grid width `g` at exponent `e`.
+fn cull_scale(g: u32, e: i32) -> (u32, f64) {
+    let shift = g.saturating_sub(CENTER_BITS);
+    // The largest radius code is twice the grid's extent: no sphere of the mesh is larger.
+    (shift, ((e + g as i32 + 1) as f64).exp2())
+}
+
+/// Meshlet `i`'s culling record, from the positions the decoder returns, so the bounds hold for
+/// what is drawn: 10-bit centre per axis on the coarsened grid, an 8-bit radius code (eighths of
+/// an octave below twice the grid extent, rounded up), the octahedral axis (2 x 8 bits) and the
+/// sine of the half-angle measured around the decoded axis (8 bits, rounded up; 255 = never).
+fn culling_record(
+    ml: &Meshlets,
+    i: usize,
+    grid: &(impl Fn(u32) -> [i64; 3] + Sync),
+    origin: [f32; 3],
+    e: i32,
+    g: u32,
+) -> u64 {
+    let lv = ml.meshlet_vertices(i);
+    let pos = |v: u32| {
+        let q = grid(v);
+        glam::DVec3::from_array([0, 1, 2].map(|a| dequantise(q[a], origin[a], e) as f64))
+    };
+    let (shift, top) = cull_scale(g, e);
+    let mut lo = [i64::MAX; 3];
+    let mut hi = [i64::MIN; 3];
+    for &v in lv {
+        let q = grid(v);
+        for a in 0..3 {
+            lo[a] = lo[a].min(q[a]);
+            hi[a] = hi[a].max(q[a]);
+        }
+    }
+    let cc = [0, 1, 2].map(|a| {
+        (((lo[a] + hi[a]) as f64 / 2.0 / (shift as f64).exp2()).round() as i64)
+            .clamp(0, (1 << CENTER_BITS) - 1)
+    });
+    let c =
+        glam::DVec3::from_array([0, 1, 2].map(|a| dequantise(cc[a] << shift, origin[a], e) as f64));
+    let r = lv
+        .iter()
+        .map(|&v| (pos(v) - c).length())
+        .fold(0.0, f64::max);
+    // Round up, with room for the f32 decode of the radius.
+    let k = if r > 0.0 {
+        ((r * (1.0 + 1e-5) / top).log2() * RADIUS_STEPS + 255.0)
+            .ceil()
+            .clamp(0.0, 255.0) as u64
+    } else {
+        0
+    };
+    // Normal cone of the decoded triangles (degenerate ones face nowhere and are skipped).
+    let normals: Vec<glam::DVec3> = ml
+        .global_triangles(i)
+        .filter_map(|t| {
+            let [a, b, c] = t.map(pos);
+            (b - a).cross(c - a).try_normalize()
+        })
+        .collect();
+    let sum: glam::DVec3 = normals.iter().sum();
+    let never = (0u64, 0u64, 255u64);
+    let (ox, oy, cut) = match sum.try_normalize() {
+        None => never,
+        Some(axis) => {
+            let (_, qx, qy) = crate::meshlet::descriptor::octahedral_code(axis);
+            let decoded = crate::meshlet::descriptor::decode_octahedral(qx, qy);
+            let theta = normals
+                .iter()
+                .map(|n| n.dot(decoded).clamp(-1.0, 1.0).acos())
+                .fold(0.0, f64::max)
+                + crate::meshlet::descriptor::AXIS_MARGIN;
+            if theta >= std::f64::consts::FRAC_PI_2 {
+                never
+            } else {
+                (
+                    qx as u8 as u64,
+                    qy as u8 as u64,
+                    (theta.sin() * 255.0).ceil().min(255.0) as u64,
+                )
+            }
+        }
+    };
+    cc[0] as u64
+        | (cc[1] as u64) << 10
+        | (cc[2] as u64) << 20
+        | k << 30
+        | ox << 38
+        | oy << 46
+        | cut << 54
+}
+
+/// Decodes meshlet `i`'s culling record (without touching its triangles or wires).
+pub fn culling(enc: &Encoded, i: usize) -> Result<Culling, DecodeError> {
+    if i >= enc.offsets.len() {
+        return Err(DecodeError::OutOfRange(i));
+    }
+    let s = section(enc, i)?;
+    let at = SECTION + CULL * i;
+    let b = enc.data.get(at..at + CULL).ok_or(DecodeError::Truncated {
+        meshlet: i,
+        what: "culling record",
+    })?;
+    let x = u64::from_le_bytes(b.try_into().expect("8 bytes"));
+    let (shift, top) = cull_scale(s.g, enc.exponent);
+    let center = [0, 10, 20].map(|b| (x >> b & 1023) as i64);
+    let center = [0, 1, 2].map(|a| dequantise(center[a] << shift, enc.origin[a], enc.exponent));
+    let k = (x >> 30 & 255) as f64;
+    let radius = if k == 0.0 {
+        0.0
+    } else {
+        (top * ((k - 255.0) / RADIUS_STEPS).exp2()) as f32
+    };
+    let cut = x >> 54 & 255;
+    let axis =
+        crate::meshlet::descriptor::decode_octahedral((x >> 38) as u8 as i8, (x >> 46) as u8 as i8);
+    Ok(Culling {
+        center,
+        radius,
+        axis: [axis.x as f32, axis.y as f32, axis.z as f32],
+        cutoff: cut as f32 / 255.0,
+    })
 }
 
 /// A wire's header as the decoder reads it.

@@ -125,6 +125,8 @@ pub struct Sizes {
     pub positions: usize,
     /// Per-meshlet headers and the random-access offset table.
     pub headers: usize,
+    /// Per-meshlet culling records (laced wires).
+    pub culling: usize,
     /// Alignment padding.
     pub padding: usize,
 }
@@ -132,7 +134,7 @@ pub struct Sizes {
 impl Sizes {
     /// All bytes.
     pub fn total(&self) -> usize {
-        self.connectivity + self.positions + self.headers + self.padding
+        self.connectivity + self.positions + self.headers + self.culling + self.padding
     }
 }
 

@@ -453,7 +453,7 @@ pub fn decode_octahedral(x: i8, y: i8) -> DVec3 {
 
 /// Extra angle (radians) on top of the measured axis error: covers the shader's f32 decode and
 /// normalise (about 1e-7) a thousand times over, at no measurable culling cost.
-const AXIS_MARGIN: f64 = 1e-4;
+pub(crate) const AXIS_MARGIN: f64 = 1e-4;
 
 /// The cone as [octahedral x, octahedral y, cutoff code]; cutoff code 255 never culls.
 fn quantise_cone(b: &MeshletBounds) -> [u8; 3] {
@@ -462,6 +462,19 @@ fn quantise_cone(b: &MeshletBounds) -> [u8; 3] {
         return [0, 0, 255];
     }
     let axis = DVec3::new(c.axis[0] as f64, c.axis[1] as f64, c.axis[2] as f64).normalize();
+    let (err, qx, qy) = octahedral_code(axis);
+    // Widen the half-angle by the axis error: every normal within theta of the true axis is within
+    // theta + err of the decoded one.
+    let theta = (c.cutoff as f64).min(1.0).asin() + err + AXIS_MARGIN;
+    if theta >= std::f64::consts::FRAC_PI_2 {
+        return [0, 0, 255];
+    }
+    let code = (theta.sin() * 255.0).ceil().min(255.0) as u8;
+    [qx as u8, qy as u8, code]
+}
+
+/// The octahedral code (signed bytes) nearest a unit axis: (angle error in radians, x, y).
+pub fn octahedral_code(axis: DVec3) -> (f64, i8, i8) {
     // Octahedral projection, then the best of the (up to) four neighbouring codes.
     let l1 = axis.x.abs() + axis.y.abs() + axis.z.abs();
     let (mut px, mut py) = (axis.x / l1, axis.y / l1);
@@ -480,15 +493,7 @@ fn quantise_cone(b: &MeshletBounds) -> [u8; 3] {
             }
         }
     }
-    let (err, qx, qy) = best;
-    // Widen the half-angle by the axis error: every normal within theta of the true axis is within
-    // theta + err of the decoded one.
-    let theta = (c.cutoff as f64).min(1.0).asin() + err + AXIS_MARGIN;
-    if theta >= std::f64::consts::FRAC_PI_2 {
-        return [0, 0, 255];
-    }
-    let code = (theta.sin() * 255.0).ceil().min(255.0) as u8;
-    [qx as u8, qy as u8, code]
+    best
 }
 
 fn cone_bytes(ox: u32, oy: u32, cut: u32) -> ([f32; 3], f32) {
