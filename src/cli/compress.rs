@@ -100,7 +100,7 @@ pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
         println!(
-            "{}: {} triangles in {} {} meshlets -> {} bytes, {:.2} bytes/triangle (connectivity {:.2}, positions {:.2}, headers {:.2}, padding {:.2}); positions {:.2} bytes/vertex; max error {:.3e} (tolerance {:.3e}); encoded in {:.3} s -> {}",
+            "{}: {} triangles in {} {} meshlets -> {} bytes, {:.2} bytes/triangle (connectivity {:.2}, positions {:.2}, headers {:.2}, culling {:.2}, padding {:.2}); positions {:.2} bytes/vertex; max error {:.3e} (tolerance {:.3e}); encoded in {:.3} s -> {}",
             a.mesh.display(),
             m.triangle_count(),
             ml.len(),
@@ -110,6 +110,7 @@ pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
             sizes.connectivity as f64 / tris,
             sizes.positions as f64 / tris,
             sizes.headers as f64 / tris,
+            sizes.culling as f64 / tris,
             sizes.padding as f64 / tris,
             sizes.positions as f64 / verts,
             max_error,

@@ -21,8 +21,8 @@
 //! `k -> k + 1` lies left of it, one holding `k + 1 -> k` right of it: either is a one-reference
 //! triangle (1RT) naming only its third vertex. Left and right laces are separate subsequences of
 //! one-byte symbols (2-bit type, 6-bit value) walking the wire edges: `00 n` skips `n + 1` wire
-//! edges, `01 v` is a 1RT with third vertex `v`, and `10 v` (ours, *long laces*) is the triangle
-//! `k, k + 2, v` where the wire bends round a vertex, without moving on. Triangles on no free wire edge (a second
+//! edges, `01 v` is a 1RT with third vertex `v`, and `10 v` and `11 v` (ours, *long laces*) are
+//! the triangles `k, k + 2, v` and `k, k + 3, v` where the wire bends, without moving on. Triangles on no free wire edge (a second
 //! triangle on a non-manifold edge, degenerate and isolated triangles, fans between wires) go to
 //! a third subsequence of strips: `11 a`, `b`, `c` (3RT, three bytes) starts a strip, `tt v` with
 //! `tt` in 0..3 adds the neighbour across edge `tt` of the previous triangle with new vertex `v`
@@ -627,29 +627,32 @@ fn laces(n: usize, ni: usize, tris: &[[u8; 3]]) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
     }
     // Long laces: a triangle left of k -> k + 2 (or right of it) where the wire bends round a
     // vertex, one per position and side.
-    let mut long_left: Vec<Option<u8>> = vec![None; slots];
-    let mut long_right: Vec<Option<u8>> = vec![None; slots];
-    for (ti, t) in tris.iter().enumerate() {
-        if placed[ti] {
-            continue;
-        }
-        for k in 0..3 {
-            let (x, y, z) = (t[k] as usize, t[(k + 1) % 3] as usize, t[(k + 2) % 3]);
-            let (s, at) = if y == x + 2 {
-                (&mut long_left, x)
-            } else if x == y + 2 {
-                (&mut long_right, y)
-            } else {
+    // Then k -> k + 3 (type 3), where it bends round two.
+    let mut long = [0, 1].map(|_| [vec![None; slots], vec![None; slots]]);
+    for (reach, l) in [2usize, 3].into_iter().zip(&mut long) {
+        for (ti, t) in tris.iter().enumerate() {
+            if placed[ti] {
                 continue;
-            };
-            if s[at].is_none() {
-                s[at] = Some(z);
-                placed[ti] = true;
-                break;
+            }
+            for k in 0..3 {
+                let (x, y, z) = (t[k] as usize, t[(k + 1) % 3] as usize, t[(k + 2) % 3]);
+                let (side, at) = if y == x + reach {
+                    (0, x)
+                } else if x == y + reach {
+                    (1, y)
+                } else {
+                    continue;
+                };
+                if l[side][at].is_none() {
+                    l[side][at] = Some(z);
+                    placed[ti] = true;
+                    break;
+                }
             }
         }
     }
-    let lace = |s: &[Option<u8>], long: &[Option<u8>]| {
+    let [[l2l, l2r], [l3l, l3r]] = long;
+    let lace = |s: &[Option<u8>], long2: &[Option<u8>], long3: &[Option<u8>]| {
         let mut out = Vec::new();
         let mut run = 0usize;
         let flush = |out: &mut Vec<u8>, run: &mut usize| {
@@ -659,10 +662,12 @@ fn laces(n: usize, ni: usize, tris: &[[u8; 3]]) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
                 *run -= r;
             }
         };
-        for (x, l) in s.iter().zip(long) {
-            if let Some(v) = l {
-                flush(&mut out, &mut run);
-                out.push(0x80 | v);
+        for (k, x) in s.iter().enumerate() {
+            for (ty, l) in [(0x80, long2), (0xC0, long3)] {
+                if let Some(v) = l[k] {
+                    flush(&mut out, &mut run);
+                    out.push(ty | v);
+                }
             }
             match x {
                 None => run += 1,
@@ -681,8 +686,8 @@ fn laces(n: usize, ni: usize, tris: &[[u8; 3]]) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
         .map(|(t, _)| *t)
         .collect();
     (
-        lace(&left, &long_left),
-        lace(&right, &long_right),
+        lace(&left, &l2l, &l3l),
+        lace(&right, &l2r, &l3r),
         strips(&rest),
     )
 }
@@ -1141,15 +1146,16 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
                     triangles.push(if side == 0 { [x, y, v] } else { [y, x, v] });
                     k += 1;
                 }
-                2 => {
-                    if k + 2 >= n {
+                t => {
+                    // Long laces: k -> k + 2 (type 2) or k + 3 (type 3); the cursor stays.
+                    let reach = t as usize;
+                    if k + reach >= n {
                         return Err(bad(format!("long lace at {k} of {n} vertices")));
                     }
                     let v = vert(v)?;
-                    let (x, y) = (k as u8, k as u8 + 2);
+                    let (x, y) = (k as u8, (k + reach) as u8);
                     triangles.push(if side == 0 { [x, y, v] } else { [y, x, v] });
                 }
-                t => return Err(bad(format!("symbol type {t} in a lace"))),
             }
         }
     }
