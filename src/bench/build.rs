@@ -162,7 +162,7 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
 fn to_csv(rows: &[Row]) -> String {
     let mut s = String::from(
         "mesh,triangles,strategy,limits,time_ms_median,time_ms_min,runs,meshlets,mean_vertices,mean_triangles,\
-         vertex_fill,primitive_fill,cone_cullable,mean_radius_rel,duplication,connected,valid\n",
+         vertex_fill,primitive_fill,cone_cullable,mean_radius_rel,flatness_rel,duplication,connected,valid\n",
     );
     for r in rows {
         let m = &r.eval.metrics;
@@ -174,7 +174,7 @@ fn to_csv(rows: &[Row]) -> String {
             .fold(f64::INFINITY, f64::min);
         let _ = writeln!(
             s,
-            "{},{},{},{},{:.4},{:.4},{},{},{:.3},{:.3},{:.5},{:.5},{:.5},{:.6},{:.5},{:.5},{}",
+            "{},{},{},{},{:.4},{:.4},{},{},{:.3},{:.3},{:.5},{:.5},{:.5},{:.6},{:.7},{:.5},{:.5},{}",
             r.mesh,
             r.triangles,
             r.eval.strategy,
@@ -189,6 +189,7 @@ fn to_csv(rows: &[Row]) -> String {
             m.primitive_fill,
             m.cone_cullable,
             m.mean_radius_rel,
+            m.flatness_rel,
             m.duplication,
             m.connected,
             r.eval.invalid.is_none()
@@ -217,7 +218,8 @@ fn to_markdown(rows: &[Row], loads: &[LoadRow], cfg: &Config) -> String {
         "Time is the median of {} builds (wall clock, one thread unless the strategy parallelises). Every output \
          passed the validator. Columns: vfill/pfill = mean vertices/triangles per meshlet over the limits; \
          cullable = fraction of meshlets whose normal cone can cull; radius = mean bounding-sphere radius over the \
-         mesh bounding-box diagonal; dup = meshlet vertices over referenced vertices; connected = fraction of \
+         mesh bounding-box diagonal; flat = mean RMS distance of a meshlet's vertices to their least-squares plane \
+         over the diagonal (what qem minimises); dup = meshlet vertices over referenced vertices; connected = fraction of \
          meshlets that are one edge-connected piece.\n",
         cfg.runs
     );
@@ -246,7 +248,7 @@ fn to_markdown(rows: &[Row], loads: &[LoadRow], cfg: &Config) -> String {
         t.add_row(row);
     }
     right_align_numbers(&mut t, 1..2);
-    right_align_numbers(&mut t, 3..11);
+    right_align_numbers(&mut t, 3..12);
     let _ = writeln!(s, "{t}\n");
 
     let _ = writeln!(s, "## Loading\n");

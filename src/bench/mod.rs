@@ -166,26 +166,28 @@ pub fn metrics_table(rows: &[Evaluation]) -> comfy_table::Table {
         });
         t.add_row(row);
     }
-    right_align_numbers(&mut t, 1..11);
+    right_align_numbers(&mut t, 1..12);
     t
 }
 
 /// Column names of [`quality_cells`].
-pub const QUALITY_HEADER: [&str; 6] = [
+pub const QUALITY_HEADER: [&str; 7] = [
     "vfill",
     "pfill",
     "radius/diag",
+    "flat/diag",
     "cullable",
     "dup",
     "connected",
 ];
 
 /// The quality columns every metrics table shows, formatted.
-pub fn quality_cells(m: &Metrics) -> [String; 6] {
+pub fn quality_cells(m: &Metrics) -> [String; 7] {
     [
         format!("{:.3}", m.vertex_fill),
         format!("{:.3}", m.primitive_fill),
         format!("{:.4}", m.mean_radius_rel),
+        format!("{:.5}", m.flatness_rel),
         format!("{:.3}", m.cone_cullable),
         format!("{:.3}", m.duplication),
         format!("{:.3}", m.connected),

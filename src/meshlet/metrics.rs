@@ -24,6 +24,10 @@ pub struct Metrics {
     pub triangle_histogram: Vec<u32>,
     /// Mean bounding-sphere radius divided by the mesh bounding-box diagonal.
     pub mean_radius_rel: f64,
+    /// Flatness: mean over meshlets of the RMS distance of its vertices to their least-squares
+    /// plane, over the mesh bounding-box diagonal (0 = every meshlet planar; what compressed
+    /// formats with plane-aligned boxes profit from).
+    pub flatness_rel: f64,
     /// Fraction of meshlets whose normal cone can cull from some viewpoint.
     pub cone_cullable: f64,
     /// Sum of meshlet vertex counts / vertices referenced by the mesh (1 = no vertex shared).
@@ -73,6 +77,11 @@ impl Metrics {
             vertex_histogram: vh,
             triangle_histogram: th,
             mean_radius_rel: bounds.iter().map(|b| b.sphere.radius as f64).sum::<f64>() / n / diag,
+            flatness_rel: (0..ml.len())
+                .map(|i| plane_fit_rms(mesh, ml, i))
+                .sum::<f64>()
+                / n
+                / diag,
             cone_cullable: bounds.iter().filter(|b| b.cone.can_cull()).count() as f64 / n,
             duplication: sv as f64 / referenced as f64,
             connected: connected as f64 / n,
@@ -130,4 +139,29 @@ mod tests {
         assert!(!is_edge_connected(&[0, 1, 2, 2, 3, 4]));
         assert!(is_edge_connected(&[0, 1, 2]));
     }
+}
+
+/// RMS distance of meshlet `i`'s vertices to their least-squares plane (the square root of the
+/// smallest eigenvalue of their covariance).
+fn plane_fit_rms(mesh: &Mesh, ml: &Meshlets, i: usize) -> f64 {
+    let pts: Vec<glam::DVec3> = ml
+        .meshlet_vertices(i)
+        .iter()
+        .map(|&v| glam::DVec3::from_array(mesh.positions[v as usize].map(f64::from)))
+        .collect();
+    let n = pts.len().max(1) as f64;
+    let mean = pts.iter().sum::<glam::DVec3>() / n;
+    let mut z = [0.0f64; 6];
+    for p in &pts {
+        let d = *p - mean;
+        z[0] += d.x * d.x;
+        z[1] += d.y * d.y;
+        z[2] += d.z * d.z;
+        z[3] += d.x * d.y;
+        z[4] += d.x * d.z;
+        z[5] += d.y * d.z;
+    }
+    crate::strategy::qem::smallest_eigenvalue(z.map(|x| x / n))
+        .max(0.0)
+        .sqrt()
 }

@@ -122,7 +122,7 @@ impl Moments {
 
 /// Smallest eigenvalue of the symmetric matrix (xx, yy, zz, xy, xz, yz) (the trigonometric closed
 /// form).
-fn smallest_eigenvalue(z: [f64; 6]) -> f64 {
+pub(crate) fn smallest_eigenvalue(z: [f64; 6]) -> f64 {
     let [a, b, c, d, e, f] = z;
     let p1 = d * d + e * e + f * f;
     if p1 <= 1e-300 {
