@@ -128,19 +128,6 @@ pub fn is_edge_connected(tris: &[u8]) -> bool {
     pieces == 1
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn connectivity() {
-        assert!(is_edge_connected(&[0, 1, 2, 2, 1, 3]));
-        // Sharing only a vertex is not edge-connected.
-        assert!(!is_edge_connected(&[0, 1, 2, 2, 3, 4]));
-        assert!(is_edge_connected(&[0, 1, 2]));
-    }
-}
-
 /// RMS distance of meshlet `i`'s vertices to their least-squares plane (the square root of the
 /// smallest eigenvalue of their covariance).
 fn plane_fit_rms(mesh: &Mesh, ml: &Meshlets, i: usize) -> f64 {
@@ -164,4 +151,45 @@ fn plane_fit_rms(mesh: &Mesh, ml: &Meshlets, i: usize) -> f64 {
     crate::strategy::qem::smallest_eigenvalue(z.map(|x| x / n))
         .max(0.0)
         .sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn connectivity() {
+        assert!(is_edge_connected(&[0, 1, 2, 2, 1, 3]));
+        // Sharing only a vertex is not edge-connected.
+        assert!(!is_edge_connected(&[0, 1, 2, 2, 3, 4]));
+        assert!(is_edge_connected(&[0, 1, 2]));
+    }
+
+    #[test]
+    fn a_planar_meshlet_is_flat_and_a_bent_one_is_not() {
+        let mesh = Mesh {
+            positions: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [1.0, 1.0, 1.0],
+            ],
+            indices: vec![0, 1, 2, 2, 1, 3, 2, 3, 4],
+        };
+        let ml = |tris: Vec<u8>, verts: Vec<u32>| Meshlets {
+            meshlets: vec![super::super::Meshlet {
+                vertex_offset: 0,
+                triangle_offset: 0,
+                vertex_count: verts.len() as u32,
+                triangle_count: tris.len() as u32 / 3,
+            }],
+            vertices: verts,
+            triangles: tris,
+        };
+        let flat = ml(vec![0, 1, 2, 2, 1, 3], vec![0, 1, 2, 3]);
+        assert!(plane_fit_rms(&mesh, &flat, 0) < 1e-12);
+        let bent = ml(vec![0, 1, 2, 2, 1, 3, 2, 3, 4], vec![0, 1, 2, 3, 4]);
+        assert!(plane_fit_rms(&mesh, &bent, 0) > 0.1);
+    }
 }
