@@ -292,27 +292,6 @@ pub fn encode(
     })
 }
 
-/// Bit reader over a record.
-struct Reader<'a> {
-    d: &'a [u8],
-    at: usize,
-    i: usize,
-}
-
-impl Reader<'_> {
-    fn get(&mut self, bits: u32) -> Result<u32, DecodeError> {
-        let v = read_bits(self.d, self.at, bits).ok_or(DecodeError::Truncated {
-            meshlet: self.i,
-            what: "record",
-        })?;
-        self.at += bits as usize;
-        Ok(v)
-    }
-    fn align(&mut self) {
-        self.at = self.at.div_ceil(32) * 32;
-    }
-}
-
 /// Decodes meshlet `i`.
 pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
     let start = *enc.offsets.get(i).ok_or(DecodeError::OutOfRange(i))? as usize;
@@ -330,10 +309,11 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
     if g > 31 || vbits > 32 || h[1] > 1 {
         return Err(bad("section header out of range".into()));
     }
-    let mut r = Reader {
-        d,
+    let mut r = super::BitReader {
+        data: d,
         at: 8 * start,
-        i,
+        meshlet: i,
+        what: "record",
     };
     let vc = if kind != Kind::Ts && kind != Kind::Gi {
         r.get(8)? as usize + 1
@@ -374,7 +354,7 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
                 positions.push(p);
             }
         } else {
-            r.align();
+            r.at = r.at.div_ceil(32) * 32;
             for _ in 0..held {
                 let mut p = [0f32; 3];
                 for x in &mut p {
@@ -387,7 +367,7 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
             vertices.push(provenance(k)?);
         }
     }
-    let read_ref = |r: &mut Reader| {
+    let read_ref = |r: &mut super::BitReader| {
         let v = r.get(vbits)? as usize;
         if v >= nv || v >= enc.source_vertices as usize {
             return Err(bad(format!("reference {v} beyond {nv} vertices")));
@@ -397,7 +377,7 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
     match kind {
         Kind::Gi => {
             if !compact {
-                r.align();
+                r.at = r.at.div_ceil(32) * 32;
             }
             // Global indices, one per corner (merged into local vertices below).
             for _ in 0..3 * tc {
@@ -407,7 +387,7 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
         Kind::Ts => {}
         Kind::Ix => {
             if !compact {
-                r.align();
+                r.at = r.at.div_ceil(32) * 32;
             }
             for _ in 0..vc {
                 vertices.push(read_ref(&mut r)?);

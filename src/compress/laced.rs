@@ -31,7 +31,9 @@
 //! **Geometry.** Each wire is a self-contained bit string, padded to 32-bit words: its vertex
 //! count, an anchor on the global grid ([`super::grid_exponent`]) and per-axis bit widths (the
 //! box, 3 G + 15 + count bits, about 9 bytes at the paper's tolerance), then each vertex's offset
-//! from the anchor. Every vertex is stored once, so it decodes to the same bits in every meshlet:
+//! from the anchor. Ours: where it is smaller, a wire is *delta-coded* instead (a mode bit and
+//! three more widths): the first vertex as an offset, every next one as the zigzag difference to
+//! the one before (wire neighbours are mostly mesh neighbours, so differences are short). Every vertex is stored once, so it decodes to the same bits in every meshlet:
 //! crack-free by construction.
 //!
 //! **Where we differ.** The per-wire box is axis-aligned on the one global grid rather than
@@ -61,8 +63,9 @@
 //! A meshlet record, bit-packed LSB first: internal count (7), item count (7), left symbols (8),
 //! right symbols (8), strip bytes (10), then per item 1 bit (0 = external wire, 1 = corner) and
 //! the wire id plus a direction bit (1 = backwards), or the corner id; then, byte-aligned, the
-//! left, right and strip symbols. A wire: count, anchor (3 x G), bits per axis (3 x 5), then per
-//! vertex x, y, z.
+//! left, right and strip symbols. A wire: count (7) and delta mode (1) except on the
+//! corner wire, anchor (3 x G), bits per axis (3 x 5), in delta mode difference bits per axis
+//! (3 x 5), then per vertex x, y, z.
 //!
 //! The decoder's vertex ids come from [`Encoded::wire_base`] and [`Encoded::stored_to_source`]:
 //! provenance for checking against the source mesh, not part of the format's size.
@@ -758,22 +761,50 @@ fn wire_string(
         }
     }
     let b = [0, 1, 2].map(|a| width((hi[a] - lo[a]) as u64));
+    // Delta mode: consecutive wire vertices are mostly neighbours, so their zigzag differences
+    // need fewer bits than offsets across the whole box (not for the corner wire, which is read
+    // at random).
+    let zig = |d: i64| ((d << 1) ^ (d >> 63)) as u64;
+    let db = [0, 1, 2].map(|a| {
+        q.windows(2)
+            .map(|p| width(zig(p[1][a] - p[0][a])))
+            .max()
+            .unwrap_or(0)
+    });
+    let sum = |x: [u32; 3]| (x[0] + x[1] + x[2]) as usize;
+    let n = q.len();
+    let delta = counted && n > 1 && 15 + sum(b) + (n - 1) * sum(db) < n * sum(b);
     let mut out = Vec::new();
     let mut at = 0;
-    // The corner wire's count is in the section header; every other wire holds at most 64.
-    for (bits, v) in [(if counted { 7 } else { 0 }, w.len() as u32)]
-        .into_iter()
-        .chain(lo.map(|x| (g, x as u32)))
-        .chain(b.map(|x| (5, x)))
-    {
-        write_bits(&mut out, at, bits, v);
-        at += bits as usize;
+    let put = |out: &mut Vec<u8>, at: &mut usize, bits: u32, v: u32| {
+        write_bits(out, *at, bits, v);
+        *at += bits as usize;
+    };
+    // The corner wire's count is in the section header; every other wire holds at most 64 and
+    // says whether it is delta-coded.
+    if counted {
+        put(&mut out, &mut at, 7, n as u32);
+        put(&mut out, &mut at, 1, delta as u32);
+    }
+    for x in lo {
+        put(&mut out, &mut at, g, x as u32);
+    }
+    for x in b {
+        put(&mut out, &mut at, 5, x);
+    }
+    if delta {
+        for x in db {
+            put(&mut out, &mut at, 5, x);
+        }
     }
     let head = at;
-    for p in &q {
+    for (k, p) in q.iter().enumerate() {
         for a in 0..3 {
-            write_bits(&mut out, at, b[a], (p[a] - lo[a]) as u32);
-            at += b[a] as usize;
+            if delta && k > 0 {
+                put(&mut out, &mut at, db[a], zig(p[a] - q[k - 1][a]) as u32);
+            } else {
+                put(&mut out, &mut at, b[a], (p[a] - lo[a]) as u32);
+            }
         }
     }
     out.resize(at.div_ceil(32) * 4, 0);
@@ -943,6 +974,8 @@ struct Wire {
     lo: [u32; 3],
     bits: [u32; 3],
     start: usize,
+    /// Delta-coded wires: every grid point, decoded when the wire is read.
+    points: Option<Vec<[i64; 3]>>,
 }
 
 /// Reads the section header fields the decoder needs.
@@ -1012,46 +1045,77 @@ fn wire(enc: &Encoded, s: &Section, w: usize, i: usize) -> Result<Wire, DecodeEr
         },
     )? as usize;
     let start = s.first + 4 * entry;
-    let trunc = DecodeError::Truncated {
+    let mut r = super::BitReader {
+        data: d,
+        at: 8 * start,
         meshlet: i,
         what: "wire",
     };
-    let mut at = 8 * start;
-    let mut get = |b: u32| -> Result<u32, DecodeError> {
-        let v = read_bits(d, at, b).ok_or(trunc.clone())?;
-        at += b as usize;
-        Ok(v)
-    };
-    let count = if w == s.m + s.e {
-        s.c
+    let (count, delta) = if w == s.m + s.e {
+        (s.c, false)
     } else {
-        get(7)? as usize
+        (r.get(7)? as usize, r.get(1)? == 1)
     };
-    let lo = [get(s.g)?, get(s.g)?, get(s.g)?];
-    let bits = [get(5)?, get(5)?, get(5)?];
-    if bits.iter().any(|&b| b > s.g.max(1)) {
+    let lo = [r.get(s.g)?, r.get(s.g)?, r.get(s.g)?];
+    let bits = [r.get(5)?, r.get(5)?, r.get(5)?];
+    let db = if delta {
+        [r.get(5)?, r.get(5)?, r.get(5)?]
+    } else {
+        [0; 3]
+    };
+    if bits.iter().any(|&b| b > s.g.max(1)) || db.iter().any(|&b| b > 32) {
         return Err(DecodeError::Invalid {
             meshlet: i,
-            what: format!("wire {w}: bits per axis {bits:?} above the grid's {}", s.g),
+            what: format!(
+                "wire {w}: bits per axis {bits:?}/{db:?} above the grid's {}",
+                s.g
+            ),
         });
     }
     let per = (bits[0] + bits[1] + bits[2]) as usize;
-    if count.checked_mul(per).is_none_or(|b| at + b > 8 * d.len()) {
+    if !delta
+        && count
+            .checked_mul(per)
+            .is_none_or(|b| r.at + b > 8 * d.len())
+    {
         return Err(DecodeError::Truncated {
             meshlet: i,
             what: "wire vertices",
         });
     }
+    let start = r.at;
+    let points = if delta {
+        let mut pts: Vec<[i64; 3]> = Vec::with_capacity(count);
+        for k in 0..count {
+            let mut p = [0i64; 3];
+            for a in 0..3 {
+                p[a] = if k == 0 {
+                    lo[a] as i64 + r.get(bits[a])? as i64
+                } else {
+                    let z = r.get(db[a])? as i64;
+                    pts[k - 1][a] + ((z >> 1) ^ -(z & 1))
+                };
+            }
+            pts.push(p);
+        }
+        Some(pts)
+    } else {
+        None
+    };
     Ok(Wire {
         count,
         lo,
         bits,
-        start: at,
+        start,
+        points,
     })
 }
 
 impl Wire {
     fn position(&self, enc: &Encoded, k: usize) -> [f32; 3] {
+        if let Some(p) = &self.points {
+            return [0, 1, 2].map(|a| dequantise(p[k][a], enc.origin[a], enc.exponent));
+        }
         let per = (self.bits[0] + self.bits[1] + self.bits[2]) as usize;
         let mut at = self.start + k * per;
         [0, 1, 2].map(|a| {

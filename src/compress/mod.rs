@@ -157,6 +157,27 @@ pub(crate) fn read_bits(data: &[u8], at: usize, bits: u32) -> Option<u32> {
     Some(((v >> (at % 8)) & ((1u64 << bits) - 1)) as u32)
 }
 
+/// Sequential bit reader for decoders: a truncated read is a typed error naming the meshlet.
+pub(crate) struct BitReader<'a> {
+    pub(crate) data: &'a [u8],
+    /// Bit offset of the next read.
+    pub(crate) at: usize,
+    pub(crate) meshlet: usize,
+    pub(crate) what: &'static str,
+}
+
+impl BitReader<'_> {
+    /// Reads `bits` (<= 32) bits.
+    pub(crate) fn get(&mut self, bits: u32) -> Result<u32, DecodeError> {
+        let v = read_bits(self.data, self.at, bits).ok_or(DecodeError::Truncated {
+            meshlet: self.meshlet,
+            what: self.what,
+        })?;
+        self.at += bits as usize;
+        Ok(v)
+    }
+}
+
 /// Appends `bits` bits of `v` at bit offset `at` (the buffer grows as needed).
 pub(crate) fn write_bits(data: &mut Vec<u8>, at: usize, bits: u32, v: u32) {
     let end = at + bits as usize;
