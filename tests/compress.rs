@@ -24,6 +24,11 @@ fn round_trip(format: Format, name: &str, mesh: &Mesh, ml: &Meshlets, tolerance:
         .encode(mesh, ml, tolerance)
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     assert_eq!(enc.sizes.total(), enc.data.len() + 4 * enc.offsets.len());
+    assert!(
+        enc.sizes.geometry_headers <= enc.sizes.headers,
+        "{name}: {:?}",
+        enc.sizes
+    );
     let mut seen: HashMap<u32, [f32; 3]> = HashMap::new();
     let mut worst = 0.0f64;
     for i in 0..ml.len() {

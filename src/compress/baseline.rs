@@ -167,6 +167,7 @@ pub fn encode(
     let mut data = vec![0u8; SECTION];
     let mut offsets = Vec::with_capacity(ml.len());
     let mut tally = [0usize; 4];
+    let mut boxes = 0usize;
     let mut wire_base = Vec::new();
     let mut stored_to_source = Vec::new();
     for i in 0..ml.len() {
@@ -202,6 +203,7 @@ pub fn encode(
                 for x in bits {
                     b.put(HEAD, 5, x);
                 }
+                boxes += 3 * (g + 5) as usize;
                 for p in &q {
                     for a in 0..3 {
                         b.put(POS, bits[a], (p[a] - lo[a]) as u32);
@@ -273,6 +275,7 @@ pub fn encode(
         connectivity: tally[CONN] / 8,
         positions: tally[POS] / 8,
         headers: tally[HEAD] / 8 + SECTION + 4 * ml.len(),
+        geometry_headers: boxes / 8,
         culling: 0,
         padding: 0,
     };

@@ -226,11 +226,13 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
     }
     data[table..table + packed.len()].copy_from_slice(&packed);
     let first = data.len();
+    let mut wire_head = wire_count * table_bits as usize;
     for (s, b) in &strings {
         data.extend_from_slice(s);
         for k in 0..4 {
             bits[k] += b[k];
         }
+        wire_head += b[2];
     }
     let mut head = Vec::with_capacity(SECTION);
     for x in [m, wires.len(), corners.len()] {
@@ -253,6 +255,7 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
         connectivity,
         positions,
         headers,
+        geometry_headers: wire_head / 8,
         culling: CULL * m,
         padding: data.len() + 4 * m - connectivity - positions - headers - CULL * m,
     };

@@ -127,6 +127,8 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
         let pad = (4 - data.len() % 4) % 4;
         data.resize(data.len() + pad, 0);
         sizes.headers += HEADER;
+        // The anchor and the bits per axis place the positions.
+        sizes.geometry_headers += 15;
         sizes.connectivity += conn.len();
         sizes.positions += packed.len();
         sizes.padding += pad;

@@ -125,6 +125,10 @@ pub struct Sizes {
     pub positions: usize,
     /// Per-meshlet headers and the random-access offset table.
     pub headers: usize,
+    /// Of `headers`: the bytes that place positions (per-wire or per-meshlet boxes: anchors, bit
+    /// widths, laced wires' wire table); the paper counts them as geometry. Not added again in
+    /// [`Sizes::total`].
+    pub geometry_headers: usize,
     /// Per-meshlet culling records (laced wires).
     pub culling: usize,
     /// Alignment padding.
