@@ -337,12 +337,12 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
 type Fig8 = (String, u32, &'static str, f64, f64, f64);
 
 fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
-    let mut csv = String::from("mesh,triangles,vertices,format,meshlets_from,meshlets,setting,tolerance_rel,connectivity_bytes,position_bytes,header_bytes,culling_bytes,padding_bytes,total_bytes,bytes_per_triangle,max_error_rel,mean_error_rel,duplication,encode_mtps_1t,encode_mtps_2t,decode_mtps_1t,decode_mtps_2t\n");
+    let mut csv = String::from("mesh,triangles,vertices,format,meshlets_from,meshlets,setting,tolerance_rel,connectivity_bytes,position_bytes,header_bytes,geometry_header_bytes,culling_bytes,padding_bytes,total_bytes,bytes_per_triangle,max_error_rel,mean_error_rel,duplication,encode_mtps_1t,encode_mtps_2t,decode_mtps_1t,decode_mtps_2t\n");
     for r in rows {
         let s = &r.sizes;
         writeln!(
             csv,
-            "{},{},{},{:?},{},{},{},{:.3e},{},{},{},{},{},{},{:.4},{:.3e},{:.3e},{:.3},{:.2},{:.2},{:.2},{:.2}",
+            "{},{},{},{:?},{},{},{},{:.3e},{},{},{},{},{},{},{},{:.4},{:.3e},{:.3e},{:.3},{:.2},{:.2},{:.2},{:.2}",
             r.mesh,
             r.triangles,
             r.vertices,
@@ -354,6 +354,7 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
             s.connectivity,
             s.positions,
             s.headers,
+            s.geometry_headers,
             s.culling,
             s.padding,
             s.total(),
