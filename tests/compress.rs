@@ -7,14 +7,8 @@ mod common;
 
 use meshletlab::compress::{self, file::Format};
 use meshletlab::mesh::{generate, Mesh};
-use meshletlab::meshlet::{Limits, Meshlets};
+use meshletlab::meshlet::{canonical, Limits, Meshlets};
 use std::collections::HashMap;
-
-/// A triangle up to rotation (winding kept).
-fn canonical(t: [u32; 3]) -> [u32; 3] {
-    let k = (0..3).min_by_key(|&k| t[k]).unwrap();
-    [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
-}
 
 /// Round trip of one codec; returns bytes per triangle.
 fn round_trip(format: Format, name: &str, mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> f64 {

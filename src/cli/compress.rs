@@ -66,14 +66,7 @@ pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
         .map_err(|e| anyhow::anyhow!("{}: {e}", a.mesh.display()))?;
     let seconds = t0.elapsed().as_secs_f64();
     let sizes = encoded.sizes;
-    let file = CompressedFile {
-        source_vertices: m.vertex_count() as u32,
-        source_triangles: m.triangle_count() as u32,
-        fingerprint: m.fingerprint(),
-        format,
-        tolerance,
-        encoded,
-    };
+    let file = CompressedFile::new(&m, format, tolerance, encoded);
     // Prove the file before writing it: every meshlet decoded at random access and compared.
     let max_error = file.check(&m, &a.output)?;
     file.save(&a.output)?;

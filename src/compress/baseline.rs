@@ -29,7 +29,10 @@
 //! TS and SC carry no vertex ids; like laced wires, provenance tables (not counted) map their
 //! stored vertices to the source mesh for checking.
 
-use super::{dequantise, quantise, read_bits, write_bits, DecodeError, Decoded, Encoded, Sizes};
+use super::{
+    anchored_box, bits_for, dequantise, quantise, read_bits, width, write_bits, DecodeError,
+    Decoded, Encoded, Sizes,
+};
 use crate::mesh::Mesh;
 use crate::meshlet::Meshlets;
 
@@ -70,19 +73,6 @@ pub enum EncodeError {
     GridTooFine,
 }
 
-fn width(v: u64) -> u32 {
-    64 - v.leading_zeros()
-}
-
-/// Bits that hold `0..n`.
-fn bits_for(n: usize) -> u32 {
-    if n <= 1 {
-        0
-    } else {
-        usize::BITS - (n - 1).leading_zeros()
-    }
-}
-
 /// A bit writer that keeps the byte tally by kind (connectivity, positions, headers).
 struct Bits {
     out: Vec<u8>,
@@ -120,22 +110,6 @@ impl Bits {
 const CONN: usize = 0;
 const POS: usize = 1;
 const HEAD: usize = 2;
-
-/// Anchored box of grid points: (anchor, bits per axis).
-fn bbox(q: &[[i64; 3]]) -> ([i64; 3], [u32; 3]) {
-    let mut lo = [i64::MAX; 3];
-    let mut hi = [i64::MIN; 3];
-    for p in q {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
-        }
-    }
-    if q.is_empty() {
-        return ([0; 3], [0; 3]);
-    }
-    (lo, [0, 1, 2].map(|a| width((hi[a] - lo[a]) as u64)))
-}
 
 /// Encodes `ml` in `kind` (compact or basic) at `tolerance` (compact only; basic is exact).
 pub fn encode(
@@ -196,7 +170,7 @@ pub fn encode(
         match (kind, compact) {
             (Kind::Ts | Kind::Sc, true) => {
                 let q: Vec<[i64; 3]> = held.iter().map(|&v| grid(v)).collect();
-                let (lo, bits) = bbox(&q);
+                let (lo, _, bits) = anchored_box(&q);
                 for a in lo {
                     b.put(HEAD, g, a as u32);
                 }

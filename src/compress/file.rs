@@ -175,6 +175,18 @@ impl CompressedFile {
         data.starts_with(MAGIC)
     }
 
+    /// The file of `encoded`, an encoding of meshlets of `mesh` in `format` within `tolerance`.
+    pub fn new(mesh: &Mesh, format: Format, tolerance: f64, encoded: Encoded) -> Self {
+        Self {
+            source_vertices: mesh.vertex_count() as u32,
+            source_triangles: mesh.triangle_count() as u32,
+            fingerprint: mesh.fingerprint(),
+            format,
+            tolerance,
+            encoded,
+        }
+    }
+
     /// The file's bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
         let e = &self.encoded;
@@ -301,10 +313,7 @@ impl CompressedFile {
             self.fingerprint,
         )
         .map_err(err)?;
-        let canonical = |t: [u32; 3]| {
-            let k = (0..3).min_by_key(|&k| t[k]).unwrap_or(0);
-            [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
-        };
+        use crate::meshlet::canonical;
         let mut want: Vec<[u32; 3]> = (0..mesh.triangle_count())
             .map(|t| canonical(mesh.triangle(t)))
             .collect();

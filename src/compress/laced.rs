@@ -70,7 +70,10 @@
 //! The decoder's vertex ids come from [`Encoded::wire_base`] and [`Encoded::stored_to_source`]:
 //! provenance for checking against the source mesh, not part of the format's size.
 
-use super::{dequantise, quantise, read_bits, write_bits, DecodeError, Decoded, Encoded, Sizes};
+use super::{
+    anchored_box, bits_for, dequantise, quantise, read_bits, width, write_bits, DecodeError,
+    Decoded, Encoded, Sizes,
+};
 use crate::mesh::Mesh;
 use crate::meshlet::Meshlets;
 use rayon::prelude::*;
@@ -82,9 +85,11 @@ const SECTION: usize = 24;
 pub const CULL: usize = 8;
 /// External wires of at most this many vertices are stored as corners instead: a wire's box
 /// (about 9 bytes), its table entry and its padding cost more than one or two vertices at full
-/// grid width on the corner wire. Measured at the paper's tolerance on qem 64/84 meshlets, in
-/// bytes per triangle for 0/1/2/3/4: bunny 4.41/4.36/4.34/4.37/4.43, igea 4.33/4.29/4.27/4.33/4.42,
-/// fandisk 4.24/4.19/4.18/4.20/4.27.
+/// grid width on the corner wire. Measured when introduced (before long laces, culling records
+/// and delta wires) at the paper's tolerance on qem 64/84 meshlets, bytes per triangle for
+/// 0/1/2/3/4: bunny 4.41/4.36/4.34/4.37/4.43, igea 4.33/4.29/4.27/4.33/4.42, fandisk
+/// 4.24/4.19/4.18/4.20/4.27; re-checked after long laces at 1e-4 on meshopt 64/126 meshlets for
+/// 1/2/3: bunny 3.489/3.494/3.507, dragon 3.326/3.322/3.354, igea 3.238/3.242/3.265 (1 and 2 tie).
 pub const SHORT_WIRE: usize = 2;
 const HEAD_BITS: usize = 7 + 7 + 8 + 8 + 10;
 
@@ -116,20 +121,6 @@ enum Owner {
 enum Item {
     Wire(u32, bool),
     Corner(u32),
-}
-
-/// Number of bits that hold `0..n`.
-fn bits_for(n: usize) -> u32 {
-    if n <= 1 {
-        0
-    } else {
-        usize::BITS - (n - 1).leading_zeros()
-    }
-}
-
-/// Bits of a non-negative value (0 for 0).
-fn width(v: u64) -> u32 {
-    64 - v.leading_zeros()
 }
 
 /// Per-meshlet topology the first pass finds: its boundary walk and internal wire.
@@ -389,7 +380,6 @@ fn shape(ml: &Meshlets, i: usize, owner: &[Owner], pairs: &[(u32, u32)]) -> Shap
     // Items in walk order, then any the walk missed (in local order).
     let mut items = Vec::new();
     let mut runs: Vec<(u32, Vec<u32>)> = Vec::new();
-    let mut listed = 0u64;
     let rest: Vec<usize> = (0..n).filter(|&k| seen >> k & 1 == 0).collect();
     for &k in walk.iter().chain(&rest) {
         let item = match own(k) {
@@ -406,10 +396,10 @@ fn shape(ml: &Meshlets, i: usize, owner: &[Owner], pairs: &[(u32, u32)]) -> Shap
             Owner::Corner(c) => Item::Corner(c),
             _ => continue,
         };
-        if listed >> k & 1 == 0 && !items.contains(&item) {
+        // Each local vertex comes once; a wire's other vertices name the same item.
+        if !items.contains(&item) {
             items.push(item);
         }
-        listed |= 1 << k;
     }
     // Internal wire: levels by edge distance to the boundary.
     let inner: u64 = (0..n)
@@ -751,19 +741,7 @@ fn wire_string(
     counted: bool,
 ) -> (Vec<u8>, [usize; 4]) {
     let q: Vec<[i64; 3]> = w.iter().map(|&v| grid(v)).collect();
-    let mut lo = [0i64; 3];
-    let mut hi = [0i64; 3];
-    if let Some(f) = q.first() {
-        lo = *f;
-        hi = *f;
-    }
-    for p in &q {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
-        }
-    }
-    let b = [0, 1, 2].map(|a| width((hi[a] - lo[a]) as u64));
+    let (lo, _, b) = anchored_box(&q);
     // Delta mode: consecutive wire vertices are mostly neighbours, so their zigzag differences
     // need fewer bits than offsets across the whole box (not for the corner wire, which is read
     // at random).
@@ -811,7 +789,8 @@ fn wire_string(
         }
     }
     out.resize(at.div_ceil(32) * 4, 0);
-    (out.clone(), [0, at - head, head, out.len() * 8 - at])
+    let padding = out.len() * 8 - at;
+    (out, [0, at - head, head, padding])
 }
 
 /// A meshlet's culling data as its 8 culling bytes decode: a bounding sphere of its decoded
@@ -833,12 +812,13 @@ impl Culling {
     /// as [`crate::meshlet::descriptor::QuantisedBounds::backfacing`]): cull when
     /// `dot(c - eye, axis) > cutoff |c - eye| + r`.
     pub fn backfacing(&self, camera: [f32; 3]) -> bool {
-        if self.cutoff >= 1.0 {
-            return false;
-        }
-        let d = glam::Vec3::from_array(self.center) - glam::Vec3::from_array(camera);
-        let len = d.length();
-        d.dot(glam::Vec3::from_array(self.axis)) > self.cutoff * len + self.radius + 1e-5 * len
+        crate::meshlet::descriptor::sphere_cone_backfacing(
+            glam::Vec3::from_array(self.center),
+            self.radius,
+            glam::Vec3::from_array(self.axis),
+            self.cutoff,
+            camera,
+        )
     }
 }
 
@@ -1288,12 +1268,8 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
 mod tests {
     use super::*;
     use crate::mesh::generate;
+    use crate::meshlet::canonical;
     use crate::strategy::{by_name, Options};
-
-    fn canonical(t: [u32; 3]) -> [u32; 3] {
-        let k = (0..3).min_by_key(|&k| t[k]).unwrap();
-        [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
-    }
 
     #[test]
     fn every_triangle_comes_back() {

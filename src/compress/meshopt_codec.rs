@@ -20,7 +20,7 @@
 //! plus a u32 offset per meshlet for random access. Position k belongs to the k-th decoded
 //! vertex reference.
 
-use super::{dequantise, quantise, read_bits, write_bits, DecodeError, Sizes};
+use super::{anchored_box, dequantise, quantise, read_bits, write_bits, DecodeError, Sizes};
 pub use super::{Decoded, Encoded};
 use crate::mesh::Mesh;
 use crate::meshlet::Meshlets;
@@ -86,14 +86,7 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
                 [0, 1, 2].map(|a| quantise(p[a], origin[a], e))
             })
             .collect();
-        let mut anchor = [i64::MAX; 3];
-        let mut top = [i64::MIN; 3];
-        for p in &q {
-            for a in 0..3 {
-                anchor[a] = anchor[a].min(p[a]);
-                top[a] = top[a].max(p[a]);
-            }
-        }
+        let (anchor, top, bits) = anchored_box(&q);
         if anchor
             .iter()
             .chain(&top)
@@ -101,7 +94,6 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
         {
             return Err(EncodeError::GridTooFine(i));
         }
-        let bits = [0, 1, 2].map(|a| 64 - ((top[a] - anchor[a]) as u64).leading_zeros());
         if bits.iter().any(|&b| b > 31) {
             return Err(EncodeError::GridTooFine(i));
         }

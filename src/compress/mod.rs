@@ -161,6 +161,36 @@ pub(crate) fn read_bits(data: &[u8], at: usize, bits: u32) -> Option<u32> {
     Some(((v >> (at % 8)) & ((1u64 << bits) - 1)) as u32)
 }
 
+/// Bits of a non-negative value (0 for 0).
+pub(crate) fn width(v: u64) -> u32 {
+    64 - v.leading_zeros()
+}
+
+/// Bits that hold the values `0..n`.
+pub(crate) fn bits_for(n: usize) -> u32 {
+    if n <= 1 {
+        0
+    } else {
+        usize::BITS - (n - 1).leading_zeros()
+    }
+}
+
+/// The box of grid points, (lowest, highest) per axis, and its bits per axis; zeros when empty.
+/// Every format that anchors positions (per wire, per meshlet) stores `lo` and offsets in `bits`.
+pub(crate) fn anchored_box(q: &[[i64; 3]]) -> ([i64; 3], [i64; 3], [u32; 3]) {
+    let Some(&first) = q.first() else {
+        return ([0; 3], [0; 3], [0; 3]);
+    };
+    let (mut lo, mut hi) = (first, first);
+    for p in q {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    (lo, hi, [0, 1, 2].map(|a| width((hi[a] - lo[a]) as u64)))
+}
+
 /// Sequential bit reader for decoders: a truncated read is a typed error naming the meshlet.
 pub(crate) struct BitReader<'a> {
     pub(crate) data: &'a [u8],

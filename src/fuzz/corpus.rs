@@ -764,14 +764,7 @@ fn compressed_seed(m: &Mesh, format: Format) -> Seed {
     let encoded = format
         .encode(m, &s.build(m, limits), tolerance)
         .expect("seed encodes");
-    let f = file::CompressedFile {
-        source_vertices: m.vertex_count() as u32,
-        source_triangles: m.triangle_count() as u32,
-        fingerprint: m.fingerprint(),
-        format,
-        tolerance,
-        encoded,
-    };
+    let f = file::CompressedFile::new(m, format, tolerance, encoded);
     let bytes = f.to_bytes();
     let u32f = |at: usize| Field::Bin {
         at,

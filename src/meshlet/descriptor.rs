@@ -138,19 +138,36 @@ impl QuantisedBounds {
     /// p of the sphere is seen within asin(r / |c - eye|) of the centre direction, so every normal is
     /// then more than 90 degrees from every view ray (sin(a + b) <= sin a + sin b).
     pub fn backfacing(&self, camera: [f32; 3]) -> bool {
-        if self.cutoff >= 1.0 {
-            return false;
-        }
         let (lo, hi) = (
             glam::Vec3::from_array(self.min),
             glam::Vec3::from_array(self.max),
         );
-        let c = (lo + hi) * 0.5;
-        let r = (hi - lo).length() * 0.5;
-        let d = c - glam::Vec3::from_array(camera);
-        let len = d.length();
-        d.dot(glam::Vec3::from_array(self.axis)) > self.cutoff * len + r + 1e-5 * len
+        sphere_cone_backfacing(
+            (lo + hi) * 0.5,
+            (hi - lo).length() * 0.5,
+            glam::Vec3::from_array(self.axis),
+            self.cutoff,
+            camera,
+        )
     }
+}
+
+/// The apex-free backface test (meshoptimizer's sphere-centre variant) as a task shader runs it
+/// in f32: cull when `dot(c - eye, axis) > cutoff |c - eye| + r` (plus a 1e-5 relative margin for
+/// the f32 arithmetic); a cutoff of 1 never culls. Used by every culling record without an apex.
+pub fn sphere_cone_backfacing(
+    center: glam::Vec3,
+    radius: f32,
+    axis: glam::Vec3,
+    cutoff: f32,
+    camera: [f32; 3],
+) -> bool {
+    if cutoff >= 1.0 {
+        return false;
+    }
+    let d = center - glam::Vec3::from_array(camera);
+    let len = d.length();
+    d.dot(axis) > cutoff * len + radius + 1e-5 * len
 }
 
 /// One meshlet as read back from a packed buffer.

@@ -18,7 +18,7 @@ mod validate;
 pub use bounds::{Cone, MeshletBounds, Sphere};
 pub use builder::MeshletBuilder;
 pub use metrics::Metrics;
-pub use validate::{validate, ValidationError};
+pub use validate::{canonical, validate, ValidationError};
 
 use serde::Serialize;
 use std::fmt;

@@ -77,9 +77,10 @@ pub enum ValidationError {
     TrianglesDiffer(String),
 }
 
-/// Rotates a triangle so its smallest index comes first, keeping the winding.
+/// Rotates a triangle so its smallest index comes first, keeping the winding (a triangle up to
+/// rotation, as the validator and the codecs' round trips compare them).
 #[inline]
-pub(crate) fn canonical(t: [u32; 3]) -> [u32; 3] {
+pub fn canonical(t: [u32; 3]) -> [u32; 3] {
     let [a, b, c] = t;
     if a <= b && a <= c {
         [a, b, c]
