@@ -46,6 +46,52 @@ fn shaders() -> Vec<(String, &'static str, String, Vec<String>)> {
         "meshlet_split_lod.task.spv".to_string(),
         vec!["-DDESC=0".to_string(), "-DLOD=1".to_string()],
     ));
+    // Compressed formats (src/render/compressed.rs): the task shader with and without laced
+    // wires' culling records, the laced-wires, SC and IX compact mesh shaders and the vertex
+    // shader that pulls GI and TS compact corners.
+    let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+    list.push((
+        "compressed.task (laced-wires)".into(),
+        "compressed.task",
+        "compressed_laced.task.spv".into(),
+        s(&["-DLACED=1"]),
+    ));
+    list.push((
+        "compressed.task".into(),
+        "compressed.task",
+        "compressed.task.spv".into(),
+        vec![],
+    ));
+    for p in [126, 256] {
+        list.push((
+            format!("laced.mesh (64/{p})"),
+            "laced.mesh",
+            format!("laced_{p}.mesh.spv"),
+            vec![format!("-DMAX_P={p}")],
+        ));
+    }
+    for (name, kind) in [("ix-compact", 1), ("sc-compact", 2)] {
+        for (v, p) in [(64, 126), (256, 256)] {
+            list.push((
+                format!("compact.mesh ({name}, {v}/{p})"),
+                "compact.mesh",
+                format!("compact_{name}_{v}_{p}.mesh.spv"),
+                vec![
+                    format!("-DKIND={kind}"),
+                    format!("-DMAX_V={v}"),
+                    format!("-DMAX_P={p}"),
+                ],
+            ));
+        }
+    }
+    for (name, kind) in [("ts-compact", 0), ("gi-compact", 3)] {
+        list.push((
+            format!("compact.vert ({name})"),
+            "compact.vert",
+            format!("compact_{name}.vert.spv"),
+            vec![format!("-DKIND={kind}")],
+        ));
+    }
     for src in ["baseline.vert", "shade.frag", "meshlet_id.frag"] {
         list.push((src.to_string(), src, format!("{src}.spv"), vec![]));
     }

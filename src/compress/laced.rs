@@ -61,8 +61,10 @@
 //! | .. | wires, each padded to 4 bytes |
 //!
 //! A meshlet record, bit-packed LSB first: internal count (7), item count (7), left symbols (8),
-//! right symbols (8), strip bytes (10), then per item 1 bit (0 = external wire, 1 = corner) and
-//! the wire id plus a direction bit (1 = backwards), or the corner id; then, byte-aligned, the
+//! right symbols (8), strip bytes (10), then one kind bit per item (0 = external wire, 1 = corner),
+//! then per item the wire id plus a direction bit (1 = backwards), or the corner id (kinds first,
+//! so item `j`'s offset is a popcount of the kind bits before it: the mesh shader reads every
+//! item in parallel); then, byte-aligned, the
 //! left, right and strip symbols. A wire: count (7) and delta mode (1) except on the
 //! corner wire, anchor (3 x G), bits per axis (3 x 5), in delta mode difference bits per axis
 //! (3 x 5), then per vertex x, y, z.
@@ -556,17 +558,18 @@ fn record(
     put(&mut out, 8, left.len() as u32);
     put(&mut out, 8, right.len() as u32);
     put(&mut out, 10, strips.len() as u32);
+    // Kind bits of every item first, then the ids: item `j` then starts at a bit offset a
+    // popcount of the kind bits gives, so a shader reads every item at once.
+    for it in &s.items {
+        put(&mut out, 1, matches!(it, Item::Corner(_)) as u32);
+    }
     for it in &s.items {
         match *it {
             Item::Wire(j, back) => {
-                put(&mut out, 1, 0);
                 put(&mut out, wire_bits, j);
                 put(&mut out, 1, back as u32);
             }
-            Item::Corner(c) => {
-                put(&mut out, 1, 1);
-                put(&mut out, corner_bits, c);
-            }
+            Item::Corner(c) => put(&mut out, corner_bits, c),
         }
     }
     let item_bits = at - HEAD_BITS;
@@ -1132,8 +1135,12 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
     let ns = get(10)? as usize;
     // Local order as (wire, index in wire).
     let mut order: Vec<(usize, usize)> = (0..internal).map(|k| (i, k)).collect();
+    let mut kinds = Vec::with_capacity(items);
     for _ in 0..items {
-        if get(1)? == 0 {
+        kinds.push(get(1)?);
+    }
+    for kind in kinds {
+        if kind == 0 {
             let j = get(s.wire_bits)? as usize;
             let back = get(1)? == 1;
             if j >= s.e {

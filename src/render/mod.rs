@@ -2,12 +2,13 @@
 //! [`Context`], the [`Pass`] that draws meshlets through task and mesh shaders or the whole mesh
 //! through the vertex pipeline, and the camera protocol.
 
+pub mod compressed;
 pub mod context;
 pub mod pass;
 pub mod validation;
 
 pub use context::Context;
-pub use pass::{Frame, MeshQueries, Pass, Pipeline, Shading, HEIGHT, WIDTH};
+pub use pass::{Drawn, Frame, MeshQueries, Pass, Pipeline, Shading, HEIGHT, WIDTH};
 
 use crate::mesh::Mesh;
 use glam::{Mat4, Vec3};
@@ -34,6 +35,12 @@ pub enum RenderError {
     /// `render_lod` on a pass built without a LOD DAG.
     #[error("this render pass holds no LOD DAG (build it with Pass::with_lod)")]
     NotLod,
+    /// A compressed buffer that does not decode on the CPU: never uploaded.
+    #[error("compressed meshlets rejected before upload: {0}")]
+    Corrupt(#[from] crate::compress::DecodeError),
+    /// A compressed format (or format and pipeline) without a shader decoder.
+    #[error("no shader decoder for {0}: the GPU decodes laced-wires, sc-compact and ix-compact in mesh shaders, gi-compact and ts-compact in the vertex shader")]
+    NoShaderDecoder(String),
     /// A Vulkan call failed.
     #[error("Vulkan call failed: {0}: {1}")]
     Vulkan(&'static str, ash::vk::Result),

@@ -2,6 +2,7 @@
 //! either by the mesh-shader pipeline (task-shader culling, one mesh workgroup per meshlet) or by
 //! the classic vertex pipeline (one indexed draw of the same mesh) as the baseline.
 
+use super::compressed::{Decoder, Upload};
 use super::context::{Buffer, Context};
 use super::{vk_err, Camera, RenderError};
 use crate::lod::flat::{loaded, Flat, Query, ViewData};
@@ -100,10 +101,59 @@ impl LodLayout {
     }
 }
 
+/// The SPIR-V a pass is built from.
+struct Modules {
+    task: Option<&'static [u8]>,
+    mesh: Option<&'static [u8]>,
+    vertex: &'static [u8],
+    input: Input,
+    lod_task: Option<&'static [u8]>,
+}
+
+/// What a pass records about its data.
+struct Fields {
+    index_count: u32,
+    meshlet_count: u32,
+    drawn: Drawn,
+    object: descriptor::ObjectBox,
+    device_bytes: usize,
+}
+
 struct Target {
     image: vk::Image,
     memory: vk::DeviceMemory,
     view: vk::ImageView,
+}
+
+/// What a pass holds on the device.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Drawn {
+    /// Positions and meshlets in a descriptor layout (meshlet pipeline and vertex baseline).
+    Descriptors(Format),
+    /// A compressed encoding decoded by the shaders ([`super::compressed`]).
+    Compressed(crate::compress::file::Format, Decoder),
+}
+
+/// What `build` uploads from.
+enum Source<'s> {
+    Descriptors {
+        mesh: &'s Mesh,
+        ml: &'s Meshlets,
+        format: Format,
+        lod: Option<&'s Flat>,
+    },
+    Compressed(&'s Upload),
+}
+
+/// How a pipeline gets its vertices.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Input {
+    /// Task and mesh shaders.
+    Mesh,
+    /// A vertex buffer of f32 positions.
+    Buffer,
+    /// Pulled by the vertex shader from storage buffers.
+    Pulled,
 }
 
 /// A mesh and its meshlets on the device, with the pipelines and targets to draw them.
@@ -114,7 +164,7 @@ pub struct Pass<'a> {
     readback: Buffer,
     index_count: u32,
     meshlet_count: u32,
-    format: Format,
+    drawn: Drawn,
     object: descriptor::ObjectBox,
     device_bytes: usize,
     set_layout: vk::DescriptorSetLayout,
@@ -162,37 +212,64 @@ impl<'a> Pass<'a> {
         ml: &Meshlets,
         format: Format,
     ) -> Result<Self, RenderError> {
-        Self::build(ctx, mesh, ml, format, None)
+        Self::build(
+            ctx,
+            Source::Descriptors {
+                mesh,
+                ml,
+                format,
+                lod: None,
+            },
+        )
+    }
+
+    /// Uploads a compressed encoding as it is (checked by [`super::compressed::prepare`]) and
+    /// builds the pipelines that decode it: task and mesh shaders, or the vertex shader for GI and
+    /// TS compact.
+    pub fn compressed(ctx: &'a Context, upload: &Upload) -> Result<Self, RenderError> {
+        Self::build(ctx, Source::Compressed(upload))
     }
 
     /// Uploads a flattened LOD DAG over its source `mesh` (split layout) with its LOD records, for
     /// [`Pass::render_lod`]; [`Pass::render`] then draws every level at once, which is only
     /// useful for debugging.
     pub fn with_lod(ctx: &'a Context, mesh: &Mesh, flat: &Flat) -> Result<Self, RenderError> {
-        Self::build(ctx, mesh, &flat.meshlets, Format::Split, Some(flat))
+        Self::build(
+            ctx,
+            Source::Descriptors {
+                mesh,
+                ml: &flat.meshlets,
+                format: Format::Split,
+                lod: Some(flat),
+            },
+        )
     }
 
-    fn build(
-        ctx: &'a Context,
-        mesh: &Mesh,
-        ml: &Meshlets,
-        format: Format,
-        lod: Option<&Flat>,
-    ) -> Result<Self, RenderError> {
-        let limits = ml.meshlets.iter().fold((0, 0), |(v, t), m| {
-            (v.max(m.vertex_count), t.max(m.triangle_count))
-        });
-        let size = if limits.0 <= Limits::DEFAULT.max_vertices
-            && limits.1 <= Limits::DEFAULT.max_triangles
-        {
-            "64/126"
-        } else {
-            "256/256"
+    fn build(ctx: &'a Context, source: Source) -> Result<Self, RenderError> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let small = |v: (usize, usize)| {
+            v.0 <= Limits::DEFAULT.max_vertices as usize
+                && v.1 <= Limits::DEFAULT.max_triangles as usize
         };
+        let (mesh, ml, format, lod) = match source {
+            Source::Descriptors {
+                mesh,
+                ml,
+                format,
+                lod,
+            } => (mesh, ml, format, lod),
+            Source::Compressed(up) => return Self::build_compressed(ctx, up, small(up.max_counts)),
+        };
+        let limits = ml.meshlets.iter().fold((0, 0), |(v, t), m| {
+            (
+                v.max(m.vertex_count as usize),
+                t.max(m.triangle_count as usize),
+            )
+        });
+        let size = if small(limits) { "64/126" } else { "256/256" };
         let task_spv = shader(&format!("meshlet.task ({format})"));
         let mesh_spv = shader(&format!("meshlet.mesh ({format}, {size})"));
         let packed = descriptor::pack(mesh, ml, format)?;
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         // Vulkan has no empty buffers: a format's unused bindings get one zero vec4.
         let words = |w: &[u32]| -> Vec<u32> {
             if w.is_empty() {
@@ -222,6 +299,110 @@ impl<'a> Pass<'a> {
             },
             ctx.buffer(std::mem::size_of::<ViewData>() as u64, storage)?,
         ];
+        let lod_task = lod.map(|_| shader("meshlet.task (split, lod)"));
+        let modules = Modules {
+            task: Some(task_spv),
+            mesh: Some(mesh_spv),
+            vertex: shader("baseline.vert"),
+            input: Input::Buffer,
+            lod_task,
+        };
+        let lod_layout = lod.map(|f| LodLayout {
+            starts: f.starts.clone(),
+            total: f.records.len(),
+        });
+        Self::finish(
+            ctx,
+            buffers,
+            modules,
+            Fields {
+                index_count: mesh.indices.len() as u32,
+                meshlet_count: ml.len() as u32,
+                drawn: Drawn::Descriptors(format),
+                object: packed.object,
+                device_bytes: packed.device_bytes(mesh.positions.len()),
+            },
+            lod_layout,
+        )
+    }
+
+    fn build_compressed(ctx: &'a Context, up: &Upload, small: bool) -> Result<Self, RenderError> {
+        use crate::compress::file::Format as C;
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        let how = super::compressed::decoder(up.format)?;
+        let name = up.format.name();
+        let size = if small { "64/126" } else { "256/256" };
+        let (task, mesh, vertex) = match (up.format, how) {
+            (C::LacedWires, _) => (
+                Some(shader("compressed.task (laced-wires)")),
+                Some(shader(&format!(
+                    "laced.mesh (64/{})",
+                    if small { 126 } else { 256 }
+                ))),
+                None,
+            ),
+            (_, Decoder::Mesh) => (
+                Some(shader("compressed.task")),
+                Some(shader(&format!("compact.mesh ({name}, {size})"))),
+                None,
+            ),
+            (_, Decoder::Vertex) => (None, None, Some(shader(&format!("compact.vert ({name})")))),
+        };
+        let nonempty = |w: &[u32]| -> Vec<u32> {
+            if w.is_empty() {
+                vec![0; 4]
+            } else {
+                w.to_vec()
+            }
+        };
+        let dummy = [0u32; 4];
+        let buffers = vec![
+            ctx.upload(&dummy, storage)?,
+            ctx.upload(&up.offsets, storage)?,
+            ctx.upload(&up.words, storage)?,
+            ctx.upload(&nonempty(&up.first_triangle), storage)?,
+            ctx.upload(&dummy, storage)?,
+            ctx.upload(&dummy, vk::BufferUsageFlags::INDEX_BUFFER)?,
+            ctx.upload(&dummy, storage)?,
+            ctx.upload(&dummy, storage)?,
+        ];
+        let modules = Modules {
+            task,
+            mesh,
+            vertex: vertex.unwrap_or(shader("baseline.vert")),
+            input: if vertex.is_some() {
+                Input::Pulled
+            } else {
+                Input::Buffer
+            },
+            lod_task: None,
+        };
+        Self::finish(
+            ctx,
+            buffers,
+            modules,
+            Fields {
+                index_count: 3 * up.triangles as u32,
+                meshlet_count: up.meshlets() as u32,
+                drawn: Drawn::Compressed(up.format, how),
+                object: descriptor::ObjectBox {
+                    min: up.origin,
+                    step: [up.step; 3],
+                },
+                device_bytes: up.device_bytes(),
+            },
+            None,
+        )
+    }
+
+    fn finish(
+        ctx: &'a Context,
+        buffers: Vec<Buffer>,
+        modules: Modules,
+        fields: Fields,
+        lod_layout: Option<LodLayout>,
+    ) -> Result<Self, RenderError> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let counters = ctx.buffer(32, storage)?;
         let readback = ctx.buffer(
             WIDTH as u64 * HEIGHT as u64 * 4,
@@ -310,63 +491,49 @@ impl<'a> Pass<'a> {
             }
             .map_err(vk_err("shader module"))
         };
-        let task = module(task_spv)?;
-        let meshm = module(mesh_spv)?;
-        let vert = module(shader("baseline.vert"))?;
         let shade = module(shader("shade.frag"))?;
         let ids = module(shader("meshlet_id.frag"))?;
-        let lod_task = match lod {
-            Some(_) => Some(module(shader("meshlet.task (split, lod)"))?),
-            None => None,
-        };
-        let build = |mods: &[(vk::ShaderStageFlags, vk::ShaderModule)], vertex_input: bool| {
-            pipeline(d, layout, mods, vertex_input)
-        };
-        let mesh_shade = build(
-            &[
-                (vk::ShaderStageFlags::TASK_EXT, task),
-                (vk::ShaderStageFlags::MESH_EXT, meshm),
-                (vk::ShaderStageFlags::FRAGMENT, shade),
-            ],
-            false,
-        )?;
-        let mesh_ids = build(
-            &[
-                (vk::ShaderStageFlags::TASK_EXT, task),
-                (vk::ShaderStageFlags::MESH_EXT, meshm),
-                (vk::ShaderStageFlags::FRAGMENT, ids),
-            ],
-            false,
-        )?;
-        let vertex = build(
+        let vert = module(modules.vertex)?;
+        let vertex = pipeline(
+            d,
+            layout,
             &[
                 (vk::ShaderStageFlags::VERTEX, vert),
                 (vk::ShaderStageFlags::FRAGMENT, shade),
             ],
-            true,
+            modules.input,
         )?;
-        let lod_pipelines = match lod_task {
-            Some(t) => Some((
-                build(
+        let mut made = vec![shade, ids, vert];
+        let null = vk::Pipeline::null();
+        // Task + mesh pipelines, shaded and coloured by meshlet id.
+        let mut mesh_pair = |task: &[u8], mesh: vk::ShaderModule| {
+            let t = module(task)?;
+            made.push(t);
+            let mut pair = [null; 2];
+            for (p, frag) in pair.iter_mut().zip([shade, ids]) {
+                *p = pipeline(
+                    d,
+                    layout,
                     &[
                         (vk::ShaderStageFlags::TASK_EXT, t),
-                        (vk::ShaderStageFlags::MESH_EXT, meshm),
-                        (vk::ShaderStageFlags::FRAGMENT, shade),
+                        (vk::ShaderStageFlags::MESH_EXT, mesh),
+                        (vk::ShaderStageFlags::FRAGMENT, frag),
                     ],
-                    false,
-                )?,
-                build(
-                    &[
-                        (vk::ShaderStageFlags::TASK_EXT, t),
-                        (vk::ShaderStageFlags::MESH_EXT, meshm),
-                        (vk::ShaderStageFlags::FRAGMENT, ids),
-                    ],
-                    false,
-                )?,
-            )),
-            None => None,
+                    Input::Mesh,
+                )?;
+            }
+            Ok::<_, RenderError>((pair[0], pair[1]))
         };
-        for m in [task, meshm, vert, shade, ids].into_iter().chain(lod_task) {
+        let (mut mesh_shade, mut mesh_ids, mut lod_pipelines) = (null, null, None);
+        if let (Some(task), Some(mesh)) = (modules.task, modules.mesh) {
+            let meshm = module(mesh)?;
+            (mesh_shade, mesh_ids) = mesh_pair(task, meshm)?;
+            if let Some(lod_task) = modules.lod_task {
+                lod_pipelines = Some(mesh_pair(lod_task, meshm)?);
+            }
+            made.push(meshm);
+        }
+        for m in made {
             unsafe { d.destroy_shader_module(m, None) };
         }
         let targets = [
@@ -425,11 +592,11 @@ impl<'a> Pass<'a> {
             buffers,
             counters,
             readback,
-            index_count: mesh.indices.len() as u32,
-            meshlet_count: ml.len() as u32,
-            format,
-            object: packed.object,
-            device_bytes: packed.device_bytes(mesh.positions.len()),
+            index_count: fields.index_count,
+            meshlet_count: fields.meshlet_count,
+            drawn: fields.drawn,
+            object: fields.object,
+            device_bytes: fields.device_bytes,
             set_layout,
             pool,
             set,
@@ -437,22 +604,38 @@ impl<'a> Pass<'a> {
             mesh_shade,
             mesh_ids,
             vertex,
-            lod: lod.zip(lod_pipelines).map(|(f, p)| {
-                let layout = LodLayout {
-                    starts: f.starts.clone(),
-                    total: f.records.len(),
-                };
-                (layout, p)
-            }),
+            lod: lod_layout.zip(lod_pipelines),
             targets,
             queries,
             mesh_queries,
         })
     }
 
-    /// The descriptor layout the meshlets were uploaded in.
+    /// The descriptor layout the meshlets were uploaded in (split for a compressed pass, whose
+    /// layout is [`Pass::drawn`]).
     pub fn format(&self) -> Format {
-        self.format
+        match self.drawn {
+            Drawn::Descriptors(f) => f,
+            Drawn::Compressed(..) => Format::Split,
+        }
+    }
+
+    /// What the pass holds: a descriptor layout or a compressed format.
+    pub fn drawn(&self) -> Drawn {
+        self.drawn
+    }
+
+    /// The pipeline that draws this pass's data: the mesh pipeline (with `cull`ing where the data
+    /// has bounds), or the vertex pipeline for GI and TS compact.
+    pub fn native(&self, cull: bool) -> Pipeline {
+        match self.drawn {
+            Drawn::Compressed(_, Decoder::Vertex) => Pipeline::Vertex,
+            _ => Pipeline::Mesh {
+                frustum: cull,
+                cone: cull,
+                colour_ids: false,
+            },
+        }
     }
 
     /// Device bytes of the meshlet data in this layout (see `Packed::device_bytes`).
@@ -483,6 +666,15 @@ impl<'a> Pass<'a> {
             Pipeline::Vertex => (self.vertex, 0),
         };
         let mesh = matches!(how, Pipeline::Mesh { .. });
+        if let Drawn::Compressed(f, decoder) = self.drawn {
+            if mesh != (decoder == Decoder::Mesh) {
+                return Err(RenderError::NoShaderDecoder(format!(
+                    "{} through the {} pipeline",
+                    f.name(),
+                    if mesh { "mesh" } else { "vertex" }
+                )));
+            }
+        }
         self.frame(camera, pipeline, flags, shading, self.meshlet_count, mesh)
     }
 
@@ -673,6 +865,8 @@ impl<'a> Pass<'a> {
             if mesh {
                 ctx.mesh
                     .cmd_draw_mesh_tasks(cmd, meshlet_count.div_ceil(TASK_GROUP), 1, 1);
+            } else if matches!(self.drawn, Drawn::Compressed(..)) {
+                d.cmd_draw(cmd, self.index_count, 1, 0, 0);
             } else {
                 d.cmd_bind_vertex_buffers(cmd, 0, &[self.buffers[0].buf], &[0]);
                 d.cmd_bind_index_buffer(cmd, self.buffers[5].buf, 0, vk::IndexType::UINT32);
@@ -865,7 +1059,7 @@ fn pipeline(
     d: &ash::Device,
     layout: vk::PipelineLayout,
     mods: &[(vk::ShaderStageFlags, vk::ShaderModule)],
-    vertex_input: bool,
+    input: Input,
 ) -> Result<vk::Pipeline, RenderError> {
     let stages: Vec<_> = mods
         .iter()
@@ -882,9 +1076,13 @@ fn pipeline(
     let vbind = [vk::VertexInputBindingDescription::default()
         .stride(12)
         .input_rate(vk::VertexInputRate::VERTEX)];
-    let vi = vk::PipelineVertexInputStateCreateInfo::default()
-        .vertex_attribute_descriptions(&attributes)
-        .vertex_binding_descriptions(&vbind);
+    let vi = if input == Input::Buffer {
+        vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_attribute_descriptions(&attributes)
+            .vertex_binding_descriptions(&vbind)
+    } else {
+        vk::PipelineVertexInputStateCreateInfo::default()
+    };
     let ia = vk::PipelineInputAssemblyStateCreateInfo::default()
         .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
     let vp = vk::PipelineViewportStateCreateInfo::default()
@@ -921,7 +1119,7 @@ fn pipeline(
         .dynamic_state(&dy)
         .layout(layout)
         .push_next(&mut rendering);
-    if vertex_input {
+    if input != Input::Mesh {
         info = info.vertex_input_state(&vi).input_assembly_state(&ia);
     }
     unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }

@@ -1,0 +1,194 @@
+//! Compressed meshlets drawn from their encoded bytes (Mlakar et al. 2024, §4): what goes to the
+//! GPU and the CPU check that guards it.
+//!
+//! The device holds exactly the encoding (`Encoded::data`, padded to 32-bit words), its per-meshlet
+//! offset table and, for the two formats drawn through the vertex pipeline, a first-triangle table;
+//! no decoded copy. Which shaders decode which format:
+//!
+//! | format | task shader | decoder |
+//! |---|---|---|
+//! | laced wires | `compressed.task` with its culling records | `laced.mesh` (parallel, see its header) |
+//! | SC, IX compact | `compressed.task`, no culling data | `compact.mesh` |
+//! | GI, TS compact | none | `compact.vert`, one vertex per triangle corner |
+//!
+//! meshoptimizer's codec and the basic (f32) formats have no shader here: the codec is a byte
+//! stream meant for CPU decoding, and the basic formats are the uncompressed layouts' peers that
+//! the descriptor pass already draws.
+//!
+//! **Before upload** every meshlet is decoded on the CPU ([`prepare`]): a corrupted buffer is
+//! rejected with a typed error naming the meshlet and never reaches the GPU. The shaders read the
+//! fields the CPU decoder read, so a buffer that decodes is a buffer the shaders read in range.
+//! Positions must also lie on the grid's extent (the shaders keep grid points in 32 bits) and the
+//! counts within the shader variant's outputs.
+
+use super::RenderError;
+use crate::compress::file::Format;
+use crate::compress::{DecodeError, Encoded};
+use crate::mesh::Mesh;
+use crate::meshlet::{Meshlet, Meshlets};
+
+/// How a compressed format is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Decoder {
+    /// Task and mesh shaders (laced wires, SC and IX compact).
+    Mesh,
+    /// One non-indexed draw through the vertex shader (GI and TS compact).
+    Vertex,
+}
+
+/// An encoding checked and laid out for the GPU.
+#[derive(Clone, Debug)]
+pub struct Upload {
+    /// The format.
+    pub format: Format,
+    /// The encoded bytes as little-endian words (zero-padded to a word).
+    pub words: Vec<u32>,
+    /// Byte offset of each meshlet's record.
+    pub offsets: Vec<u32>,
+    /// First triangle of each meshlet and the total (vertex-pipeline formats; empty otherwise).
+    pub first_triangle: Vec<u32>,
+    /// Grid origin.
+    pub origin: [f32; 3],
+    /// Grid step `2^e`.
+    pub step: f32,
+    /// Triangles over all meshlets.
+    pub triangles: usize,
+    /// Largest vertex and triangle count of a meshlet (picks the shader variant).
+    pub max_counts: (usize, usize),
+}
+
+impl Upload {
+    /// Bytes resident on the device: the encoding, its offset table and the first-triangle table.
+    pub fn device_bytes(&self) -> usize {
+        4 * (self.words.len() + self.offsets.len() + self.first_triangle.len())
+    }
+
+    /// Meshlets.
+    pub fn meshlets(&self) -> usize {
+        self.offsets.len()
+    }
+}
+
+/// How `format` is decoded on the GPU, or why it is not.
+pub fn decoder(format: Format) -> Result<Decoder, RenderError> {
+    match format {
+        Format::LacedWires | Format::ScCompact | Format::IxCompact => Ok(Decoder::Mesh),
+        Format::GiCompact | Format::TsCompact => Ok(Decoder::Vertex),
+        f => Err(RenderError::NoShaderDecoder(f.name())),
+    }
+}
+
+/// The formats the GPU decodes, in the order the bench reports them.
+pub const FORMATS: [Format; 5] = [
+    Format::LacedWires,
+    Format::ScCompact,
+    Format::IxCompact,
+    Format::GiCompact,
+    Format::TsCompact,
+];
+
+/// Checks `enc` (in `format`) by decoding every meshlet on the CPU and lays it out for upload.
+pub fn prepare(enc: &Encoded, format: Format) -> Result<Upload, RenderError> {
+    let how = decoder(format)?;
+    let bad =
+        |meshlet: usize, what: String| RenderError::Corrupt(DecodeError::Invalid { meshlet, what });
+    if enc.offsets.is_empty() {
+        return Err(bad(0, "no meshlets".into()));
+    }
+    let step = (enc.exponent as f64).exp2();
+    // Grid points stay below 2^31 (the encoders refuse more), and positions inside that extent.
+    let hi: [f64; 3] = enc.origin.map(|o| o as f64 + step * (1u64 << 31) as f64);
+    let mut first_triangle = Vec::with_capacity(enc.offsets.len() + 1);
+    let mut triangles = 0usize;
+    let mut max_counts = (0, 0);
+    for i in 0..enc.offsets.len() {
+        let d = format.decode(enc, i)?;
+        let (v, t) = (d.positions.len(), d.triangles.len());
+        if t == 0 {
+            return Err(bad(i, "no triangles".into()));
+        }
+        for p in &d.positions {
+            for a in 0..3 {
+                let x = p[a] as f64;
+                if !(x >= enc.origin[a] as f64 && x <= hi[a]) {
+                    return Err(bad(i, format!("position {p:?} off the grid")));
+                }
+            }
+        }
+        max_counts = (max_counts.0.max(v), max_counts.1.max(t));
+        first_triangle.push(triangles as u32);
+        triangles += t;
+    }
+    if triangles >= 1 << 30 {
+        return Err(bad(0, format!("{triangles} triangles in one draw")));
+    }
+    first_triangle.push(triangles as u32);
+    if how == Decoder::Mesh && (max_counts.0 > 256 || max_counts.1 > 256) {
+        return Err(bad(
+            0,
+            format!(
+                "a meshlet of {} vertices / {} triangles: the mesh shaders take 256/256",
+                max_counts.0, max_counts.1
+            ),
+        ));
+    }
+    let mut words: Vec<u32> = enc
+        .data
+        .chunks(4)
+        .map(|c| {
+            let mut b = [0u8; 4];
+            b[..c.len()].copy_from_slice(c);
+            u32::from_le_bytes(b)
+        })
+        .collect();
+    // One spare word: a read of a field that ends on the last word may touch the next.
+    words.push(0);
+    Ok(Upload {
+        format,
+        words,
+        offsets: enc.offsets.clone(),
+        first_triangle: if how == Decoder::Vertex {
+            first_triangle
+        } else {
+            Vec::new()
+        },
+        origin: enc.origin,
+        step: step as f32,
+        triangles,
+        max_counts,
+    })
+}
+
+/// The uncompressed reference for an image test: `mesh` with every vertex at the position the
+/// CPU decoder gives it, and the meshlets exactly as decoded (same local vertex order, triangles
+/// and corner rotation as the shaders emit). Drawn by the uncompressed pass it must give the same
+/// image as the compressed pass.
+pub fn decoded_reference(
+    mesh: &Mesh,
+    enc: &Encoded,
+    format: Format,
+) -> Result<(Mesh, Meshlets), DecodeError> {
+    let mut out = mesh.clone();
+    let mut ml = Meshlets::default();
+    let mut indices = Vec::with_capacity(mesh.indices.len());
+    for i in 0..enc.offsets.len() {
+        let d = format.decode(enc, i)?;
+        for (&v, p) in d.vertices.iter().zip(&d.positions) {
+            out.positions[v as usize] = *p;
+        }
+        ml.meshlets.push(Meshlet {
+            vertex_offset: ml.vertices.len() as u32,
+            triangle_offset: ml.triangles.len() as u32,
+            vertex_count: d.vertices.len() as u32,
+            triangle_count: d.triangles.len() as u32,
+        });
+        ml.vertices.extend(&d.vertices);
+        for t in &d.triangles {
+            ml.triangles.extend(t);
+            indices.extend(t.map(|c| d.vertices[c as usize]));
+        }
+    }
+    // The vertex pipeline draws the triangles in meshlet order too.
+    out.indices = indices;
+    Ok((out, ml))
+}
