@@ -39,17 +39,10 @@ const NO_CULL: Pipeline = Pipeline::Mesh {
 
 /// Draws `enc` and its decoded reference from every view and compares; returns the meshlets the
 /// laced-wire records culled (frustum, cone) over the views.
-fn check(
-    ctx: &Context,
-    what: &str,
-    mesh: &Mesh,
-    enc: &Encoded,
-    format: Format,
-    views: &[Camera],
-) -> (u32, u32) {
+fn check(ctx: &Context, what: &str, enc: &Encoded, format: Format, views: &[Camera]) -> (u32, u32) {
     let up = prepare(enc, format).unwrap();
     let pass = Pass::compressed(ctx, &up).unwrap();
-    let (rmesh, rml) = decoded_reference(mesh, enc, format).unwrap();
+    let (rmesh, rml) = decoded_reference(enc, format).unwrap();
     let reference = Pass::new(ctx, &rmesh, &rml).unwrap();
     let vertex = matches!(pass.drawn(), Drawn::Compressed(_, Decoder::Vertex));
     let (mut frustum, mut cone) = (0, 0);
@@ -138,7 +131,7 @@ fn every_shader_decoded_format_draws_its_cpu_decoded_reference() {
                 continue;
             }
             let enc = format.encode(&mesh, &ml, paper_tolerance(&mesh)).unwrap();
-            let (frustum, cone) = check(&ctx, &what, &mesh, &enc, format, &views);
+            let (frustum, cone) = check(&ctx, &what, &enc, format, &views);
             if format == Format::LacedWires {
                 assert!(frustum > 0 && cone > 0, "{what}: laced-wire records culled {frustum} by the frustum, {cone} by the cone");
             }
@@ -146,4 +139,66 @@ fn every_shader_decoded_format_draws_its_cpu_decoded_reference() {
     }
     let (errors, first) = ctx.validation.as_ref().unwrap().errors();
     assert_eq!(errors, 0, "validation layer errors: {first:#?}");
+}
+
+#[test]
+fn damaged_buffers_are_refused_before_upload_or_drawn_exactly_as_they_decode() {
+    let ctx = Context::new(true).expect("lavapipe with VK_EXT_mesh_shader (make setup)");
+    let mesh = common::load("fandisk");
+    let ml = meshlets(&mesh, "meshopt", Limits::DEFAULT);
+    let view = Camera::random_views(&mesh, 1, 3, 2.5);
+    let mut state = 0x5eed_u64;
+    // Positions take most of a compact record, and any bits there decode: flips land in both
+    // kinds of byte, and both outcomes must show up.
+    let (mut total_refused, mut total_drawn) = (0, 0);
+    for format in FORMATS {
+        let enc = format.encode(&mesh, &ml, paper_tolerance(&mesh)).unwrap();
+        // Truncated: refused, with the meshlet named.
+        let mut cut = enc.clone();
+        cut.data.truncate(enc.data.len() / 2);
+        let err = prepare(&cut, format).unwrap_err();
+        assert!(
+            matches!(err, RenderError::Corrupt(_)),
+            "{}: {err}",
+            format.name()
+        );
+        assert!(err.to_string().contains("meshlet"), "{err}");
+        let (mut refused, mut drawn) = (0, 0);
+        for _ in 0..16 {
+            state = meshletlab::mesh::generate::splitmix64(state);
+            let mut bad = enc.clone();
+            let at = (state >> 8) as usize % bad.data.len();
+            bad.data[at] ^= (state as u8).max(1);
+            match prepare(&bad, format) {
+                Err(RenderError::Corrupt(_)) => refused += 1,
+                Err(e) => panic!("{}: byte {at}: {e}", format.name()),
+                // Whatever the CPU accepts, the shaders draw exactly as the CPU decodes it.
+                Ok(_) => {
+                    check(&ctx, &format!("damaged at byte {at}"), &bad, format, &view);
+                    drawn += 1;
+                }
+            }
+        }
+        assert_eq!(refused + drawn, 16, "{}", format.name());
+        total_refused += refused;
+        total_drawn += drawn;
+    }
+    assert!(
+        total_refused > 0 && total_drawn > 0,
+        "{total_refused} refused, {total_drawn} drawn"
+    );
+    let (errors, first) = ctx.validation.as_ref().unwrap().errors();
+    assert_eq!(errors, 0, "validation layer errors: {first:#?}");
+}
+
+#[test]
+fn formats_without_a_shader_decoder_say_so() {
+    let mesh = common::load("fandisk");
+    let ml = meshlets(&mesh, "meshopt", Limits::DEFAULT);
+    for format in [Format::Meshopt, Format::Sc, Format::Gi] {
+        let enc = format.encode(&mesh, &ml, paper_tolerance(&mesh)).unwrap();
+        let err = prepare(&enc, format).unwrap_err();
+        assert!(matches!(err, RenderError::NoShaderDecoder(_)), "{err}");
+        assert!(err.to_string().contains("laced-wires"), "{err}");
+    }
 }

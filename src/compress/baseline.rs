@@ -417,12 +417,18 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
                 ids.len()
             )));
         }
-        let mut local = vec![[0f32; 3]; ids.len()];
+        let mut local: Vec<Option<[f32; 3]>> = vec![None; ids.len()];
         for t in 0..tc {
             let mut tri = [0u8; 3];
             for (k, c) in tri.iter_mut().enumerate() {
                 let j = ids.binary_search(&vertices[3 * t + k]).unwrap_or(0);
-                local[j] = positions[3 * t + k];
+                let p = positions[3 * t + k];
+                // TS stores a vertex once per corner: copies that disagree are damage (one
+                // decoded position per vertex could not say what a renderer draws).
+                if local[j].is_some_and(|q| q.map(f32::to_bits) != p.map(f32::to_bits)) {
+                    return Err(bad(format!("copies of vertex {} disagree", ids[j])));
+                }
+                local[j] = Some(p);
                 *c = j as u8;
             }
             triangles.push(tri);
@@ -430,7 +436,7 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
         return Ok(Decoded {
             vertices: ids,
             triangles,
-            positions: local,
+            positions: local.into_iter().map(|p| p.unwrap_or_default()).collect(),
         });
     }
     Ok(Decoded {

@@ -18,8 +18,8 @@
 //! **Before upload** every meshlet is decoded on the CPU ([`prepare`]): a corrupted buffer is
 //! rejected with a typed error naming the meshlet and never reaches the GPU. The shaders read the
 //! fields the CPU decoder read, so a buffer that decodes is a buffer the shaders read in range.
-//! Positions must also lie on the grid's extent (the shaders keep grid points in 32 bits) and the
-//! counts within the shader variant's outputs.
+//! Positions must also lie within 2^24 grid steps of the origin (the shaders dequantise in f32,
+//! exactly there) and the counts within the shader variant's outputs.
 
 use super::RenderError;
 use crate::compress::file::Format;
@@ -96,13 +96,18 @@ pub fn prepare(enc: &Encoded, format: Format) -> Result<Upload, RenderError> {
         return Err(bad(0, "no meshlets".into()));
     }
     let step = (enc.exponent as f64).exp2();
-    // Grid points stay below 2^31 (the encoders refuse more), and positions inside that extent.
-    let hi: [f64; 3] = enc.origin.map(|o| o as f64 + step * (1u64 << 31) as f64);
+    // The shaders dequantise in f32: exact (the CPU's bits) for grid points below 2^24, a grid
+    // finer than f32 can place anyway. Positions beyond that extent are refused.
+    let hi: [f64; 3] = enc.origin.map(|o| o as f64 + step * (1u64 << 24) as f64);
     let mut first_triangle = Vec::with_capacity(enc.offsets.len() + 1);
     let mut triangles = 0usize;
     let mut max_counts = (0, 0);
     for i in 0..enc.offsets.len() {
         let d = format.decode(enc, i)?;
+        if format == Format::LacedWires {
+            // The task shader reads the culling record.
+            crate::compress::laced::culling(enc, i)?;
+        }
         let (v, t) = (d.positions.len(), d.triangles.len());
         if t == 0 {
             return Err(bad(i, "no triangles".into()));
@@ -111,7 +116,12 @@ pub fn prepare(enc: &Encoded, format: Format) -> Result<Upload, RenderError> {
             for a in 0..3 {
                 let x = p[a] as f64;
                 if !(x >= enc.origin[a] as f64 && x <= hi[a]) {
-                    return Err(bad(i, format!("position {p:?} off the grid")));
+                    return Err(bad(
+                        i,
+                        format!(
+                            "position {p:?} off the grid's first 2^24 steps (f32 in the shaders)"
+                        ),
+                    ));
                 }
             }
         }
@@ -159,36 +169,30 @@ pub fn prepare(enc: &Encoded, format: Format) -> Result<Upload, RenderError> {
     })
 }
 
-/// The uncompressed reference for an image test: `mesh` with every vertex at the position the
-/// CPU decoder gives it, and the meshlets exactly as decoded (same local vertex order, triangles
-/// and corner rotation as the shaders emit). Drawn by the uncompressed pass it must give the same
-/// image as the compressed pass.
-pub fn decoded_reference(
-    mesh: &Mesh,
-    enc: &Encoded,
-    format: Format,
-) -> Result<(Mesh, Meshlets), DecodeError> {
-    let mut out = mesh.clone();
+/// The uncompressed reference for an image test: one vertex per decoded meshlet vertex, at the
+/// position the CPU decoder gives it, and the meshlets exactly as decoded (same local vertex
+/// order, triangles, corner rotation and meshlet order as the shaders emit; the index buffer in
+/// that order too). Drawn by the uncompressed pass it must give the compressed pass's image. Each
+/// meshlet owns its vertices, so the reference holds even for a buffer whose copies of one source
+/// vertex disagree (a damaged but decodable SC record).
+pub fn decoded_reference(enc: &Encoded, format: Format) -> Result<(Mesh, Meshlets), DecodeError> {
+    let mut mesh = Mesh::default();
     let mut ml = Meshlets::default();
-    let mut indices = Vec::with_capacity(mesh.indices.len());
     for i in 0..enc.offsets.len() {
         let d = format.decode(enc, i)?;
-        for (&v, p) in d.vertices.iter().zip(&d.positions) {
-            out.positions[v as usize] = *p;
-        }
+        let first = mesh.positions.len() as u32;
         ml.meshlets.push(Meshlet {
-            vertex_offset: ml.vertices.len() as u32,
+            vertex_offset: first,
             triangle_offset: ml.triangles.len() as u32,
-            vertex_count: d.vertices.len() as u32,
+            vertex_count: d.positions.len() as u32,
             triangle_count: d.triangles.len() as u32,
         });
-        ml.vertices.extend(&d.vertices);
+        ml.vertices.extend(first..first + d.positions.len() as u32);
+        mesh.positions.extend(&d.positions);
         for t in &d.triangles {
             ml.triangles.extend(t);
-            indices.extend(t.map(|c| d.vertices[c as usize]));
+            mesh.indices.extend(t.map(|c| first + c as u32));
         }
     }
-    // The vertex pipeline draws the triangles in meshlet order too.
-    out.indices = indices;
-    Ok((out, ml))
+    Ok((mesh, ml))
 }
