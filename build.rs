@@ -63,12 +63,20 @@ fn shaders() -> Vec<(String, &'static str, String, Vec<String>)> {
         vec![],
     ));
     for p in [126, 256] {
-        list.push((
-            format!("laced.mesh (64/{p})"),
-            "laced.mesh",
-            format!("laced_{p}.mesh.spv"),
-            vec![format!("-DMAX_P={p}")],
-        ));
+        // Scans in workgroup memory, and with subgroup operations where the device has them.
+        for (tag, extra) in [("", None), (", subgroups", Some("-DSUBGROUPS=1"))] {
+            let mut defines = vec![format!("-DMAX_P={p}")];
+            defines.extend(extra.map(String::from));
+            list.push((
+                format!("laced.mesh (64/{p}{tag})"),
+                "laced.mesh",
+                format!(
+                    "laced_{p}{}.mesh.spv",
+                    if extra.is_some() { "_sg" } else { "" }
+                ),
+                defines,
+            ));
+        }
     }
     for (name, kind) in [("ix-compact", 1), ("sc-compact", 2)] {
         for (v, p) in [(64, 126), (256, 256)] {

@@ -9,7 +9,7 @@ use meshletlab::compress::file::Format;
 use meshletlab::compress::{paper_tolerance, Encoded};
 use meshletlab::mesh::Mesh;
 use meshletlab::meshlet::{Limits, Meshlets};
-use meshletlab::render::compressed::{decoded_reference, prepare, Decoder, FORMATS};
+use meshletlab::render::compressed::{decoded_reference, prepare, Decoder, Upload, FORMATS};
 use meshletlab::render::{
     differing_pixels, Camera, Context, Drawn, Pass, Pipeline, RenderError, Shading,
 };
@@ -42,6 +42,25 @@ const NO_CULL: Pipeline = Pipeline::Mesh {
 fn check(ctx: &Context, what: &str, enc: &Encoded, format: Format, views: &[Camera]) -> (u32, u32) {
     let up = prepare(enc, format).unwrap();
     let pass = Pass::compressed(ctx, &up).unwrap();
+    let culled = check_pass(ctx, what, enc, &up, &pass, views);
+    if format == Format::LacedWires && ctx.mesh_subgroups {
+        // The decoder without subgroup operations, for devices that lack them in mesh shaders.
+        let pass = Pass::compressed_with(ctx, &up, false).unwrap();
+        let what = format!("{what} (workgroup-memory scans)");
+        assert_eq!(check_pass(ctx, &what, enc, &up, &pass, views), culled);
+    }
+    culled
+}
+
+fn check_pass(
+    ctx: &Context,
+    what: &str,
+    enc: &Encoded,
+    up: &Upload,
+    pass: &Pass,
+    views: &[Camera],
+) -> (u32, u32) {
+    let format = up.format;
     let (rmesh, rml) = decoded_reference(enc, format).unwrap();
     let reference = Pass::new(ctx, &rmesh, &rml).unwrap();
     let vertex = matches!(pass.drawn(), Drawn::Compressed(_, Decoder::Vertex));

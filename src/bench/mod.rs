@@ -3,6 +3,7 @@
 
 pub mod build;
 pub mod compress;
+pub mod compress_render;
 pub mod gpu;
 pub mod kmedoids;
 pub mod lod;

@@ -172,6 +172,28 @@ pub enum BenchCommand {
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
         runs: u32,
     },
+    /// Compressed meshlets drawn from their encoded bytes (laced wires, SC/IX/GI/TS compact)
+    /// against the uncompressed split layout and the vertex pipeline, per shared mesh and on a
+    /// multi-mesh scene: bytes resident, ms per frame, the targets' ratios, size against speed
+    /// -> compress-render.md, compress-render.csv, compress_render_tradeoff.svg.
+    CompressRender {
+        /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
+        #[arg(long)]
+        meshes: Option<PathBuf>,
+        /// Output folder.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Views per mesh (framed random directions).
+        #[arg(long, default_value_t = 7, value_parser = clap::value_parser!(u64).range(1..))]
+        views: u64,
+        /// Seed of the view sequence.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Copies of the ten shared meshes in the scene (sized so every format stays under
+        /// lavapipe's 128 MiB storage binding).
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..))]
+        scene_copies: u64,
+    },
     /// Mutation fuzzer over every file reader (PLY ASCII/LE/BE, OBJ, glTF, GLB, .zst, meshlet
     /// files): >= 1 M seeded cases in child processes; panics, hangs and allocations over the bound
     /// are counted -> robustness.md, robustness.csv. Exit 1 if any case is a defect.
@@ -363,6 +385,29 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             println!(
                 "wrote {} ({} encodings)",
                 cfg.out.join("compress.md").display(),
+                rows.len()
+            );
+            Ok(())
+        }
+        BenchCommand::CompressRender {
+            meshes,
+            out,
+            views,
+            seed,
+            scene_copies,
+        } => {
+            let cfg = bench::compress_render::Config {
+                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                out,
+                views: views as usize,
+                seed,
+                scene_copies: scene_copies as usize,
+                quiet: q,
+            };
+            let rows = bench::compress_render::run(&cfg)?;
+            println!(
+                "wrote {} ({} rows)",
+                cfg.out.join("compress-render.md").display(),
                 rows.len()
             );
             Ok(())

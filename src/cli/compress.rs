@@ -42,15 +42,25 @@ pub struct CompressArgs {
     args: StrategyArgs,
 }
 
-pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
-    let m = load(&a.mesh, quiet)?;
-    let tolerance = match (a.tolerance, a.relative_tolerance) {
+/// The position tolerance from `--tolerance` (mesh units) or `--relative-tolerance` (of the
+/// bounding-box diagonal), else the paper's.
+pub(super) fn tolerance(
+    m: &crate::mesh::Mesh,
+    absolute: Option<f64>,
+    relative: Option<f64>,
+) -> Result<f64> {
+    Ok(match (absolute, relative) {
         (Some(t), _) if t > 0.0 && t.is_finite() => t,
         (Some(t), _) => bail!("--tolerance must be a positive number, not {t}"),
         (_, Some(r)) if r > 0.0 && r.is_finite() => r * m.bounding_box_diagonal() as f64,
         (_, Some(r)) => bail!("--relative-tolerance must be a positive number, not {r}"),
-        (None, None) => paper_tolerance(&m),
-    };
+        (None, None) => paper_tolerance(m),
+    })
+}
+
+pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
+    let m = load(&a.mesh, quiet)?;
+    let tolerance = tolerance(&m, a.tolerance, a.relative_tolerance)?;
     let format = match (a.compact, a.format.compact()) {
         (false, _) => a.format,
         (true, Some(f)) => f,

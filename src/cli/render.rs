@@ -1,6 +1,7 @@
 //! `meshletlab render`: task + mesh shaders beside the vertex pipeline from seeded random views.
 
 use super::{build_validated, load, StrategyArgs};
+use crate::compress::file::{CompressedFile, Format as CompressedFormat};
 use crate::lod::flat::Flat;
 use crate::meshlet::descriptor::Format;
 use crate::render::{Camera, Context, Pass, Pipeline, Shading, HEIGHT, WIDTH};
@@ -49,6 +50,22 @@ pub struct RenderArgs {
     /// loaded level is drawn where finer detail would be wanted.
     #[arg(long, requires = "lod", value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     levels: Option<u32>,
+    /// Draw the meshlets compressed in this format, decoded by the shaders from the encoded bytes
+    /// (Mlakar et al. 2024): laced-wires (task-shader culling from its records), sc-compact and
+    /// ix-compact (mesh shaders), gi-compact and ts-compact (vertex shader). Each view is also
+    /// drawn uncompressed from the CPU-decoded meshlets, and the two images must be identical.
+    #[arg(long, value_name = "FORMAT", conflicts_with_all = ["lod", "compressed"])]
+    format: Option<CompressedFormat>,
+    /// Draw a file written by `meshletlab compress` (of MESH) instead; it is decoded on the CPU
+    /// first and refused if damaged, before anything is uploaded.
+    #[arg(long, value_name = "FILE", conflicts_with = "lod")]
+    compressed: Option<PathBuf>,
+    /// With --format: largest position error in mesh units (default: the paper's 14-bit grid).
+    #[arg(long, requires = "format", conflicts_with = "relative_tolerance")]
+    tolerance: Option<f64>,
+    /// With --format: largest position error as a fraction of the bounding-box diagonal.
+    #[arg(long, requires = "format")]
+    relative_tolerance: Option<f64>,
     /// Enable the Khronos validation layer and fail on any error it reports.
     #[arg(long)]
     validate: bool,
@@ -75,6 +92,9 @@ struct ViewRow {
 pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
     if a.lod {
         return run_lod(a, quiet);
+    }
+    if a.format.is_some() || a.compressed.is_some() {
+        return run_compressed(a, quiet);
     }
     let name = &a.strategy;
     crate::strategy::by_name(name, &a.args.options())?;
@@ -291,6 +311,163 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
             r.view,
             r.meshlets_drawn,
             r.cpu_reference_drawn
+        );
+    }
+    report_validation(validation_errors, a.json)
+}
+
+/// One view of a compressed pass.
+#[derive(serde::Serialize)]
+struct CompressedRow {
+    view: usize,
+    distance_radii: f32,
+    compressed_ms: f64,
+    uncompressed_ms: f64,
+    meshlets_culled_frustum: u32,
+    meshlets_culled_backface: u32,
+    meshlets_drawn: u32,
+    identical_to_decoded_reference: bool,
+}
+
+/// `render --format F` / `--compressed FILE`: the shaders decode the compressed bytes.
+fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
+    use crate::render::compressed::{decoded_reference, prepare};
+    if a.descriptor != Format::Split {
+        bail!("--format and --compressed draw the compressed bytes; --descriptor does not apply");
+    }
+    let m = load(&a.mesh, quiet)?;
+    let (format, enc, what) = match (&a.compressed, a.format) {
+        (Some(path), _) => {
+            let data = crate::meshlet::io::read_file(path)?;
+            let file = CompressedFile::from_bytes(&data, path)?;
+            // The file must be an encoding of this mesh (and decode, which `prepare` repeats).
+            file.check(&m, path)?;
+            (file.format, file.encoded, path.display().to_string())
+        }
+        (None, Some(format)) => {
+            let tolerance = super::compress::tolerance(&m, a.tolerance, a.relative_tolerance)?;
+            let ml = build_validated(&m, &a.mesh, &a.strategy, &a.args)?;
+            let enc = format
+                .encode(&m, &ml, tolerance)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", a.mesh.display()))?;
+            (format, enc, format!("{} meshlets", a.strategy))
+        }
+        (None, None) => unreachable!("run_compressed needs --format or --compressed"),
+    };
+    let label = || match &a.compressed {
+        Some(p) => p.display().to_string(),
+        None => a.mesh.display().to_string(),
+    };
+    let upload = prepare(&enc, format).with_context(label)?;
+    let (ref_mesh, ref_ml) = decoded_reference(&enc, format).with_context(label)?;
+    let ctx = Context::new(a.validate)?;
+    let pass = Pass::compressed(&ctx, &upload).with_context(label)?;
+    let reference = Pass::new(&ctx, &ref_mesh, &ref_ml)?;
+    let tris = upload.triangles.max(1) as f64;
+    if !a.json {
+        println!(
+            "{}: {} triangles, {what} in {}: {} meshlets, {:.2} bytes per triangle resident (uncompressed split layout: {:.2}); device: {}",
+            a.mesh.display(),
+            m.triangle_count(),
+            format.name(),
+            upload.meshlets(),
+            upload.device_bytes() as f64 / tris,
+            reference.device_bytes() as f64 / tris,
+            ctx.name
+        );
+    }
+    let cull = !a.no_cull;
+    let how = pass.native(cull);
+    let reference_how = match how {
+        Pipeline::Vertex => Pipeline::Vertex,
+        _ => Pipeline::Mesh {
+            frustum: cull,
+            cone: cull,
+            colour_ids: false,
+        },
+    };
+    let (views, radius) = cameras(&a, &m);
+    let mut rows = Vec::new();
+    for (i, cam) in views.iter().enumerate() {
+        let f = pass.render(cam, how, Shading::Lit)?;
+        let r = reference.render(cam, reference_how, Shading::Lit)?;
+        // Exact comparison: the reference without culling (only laced wires carry culling data).
+        let exact = match how {
+            Pipeline::Vertex => f.pixels == r.pixels,
+            _ => {
+                let no_cull = Pipeline::Mesh {
+                    frustum: false,
+                    cone: false,
+                    colour_ids: false,
+                };
+                let x = pass.render(cam, no_cull, Shading::Unlit)?;
+                let y = reference.render(cam, no_cull, Shading::Unlit)?;
+                x.pixels == y.pixels && f.pixels == pass.render(cam, no_cull, Shading::Lit)?.pixels
+            }
+        };
+        let row = CompressedRow {
+            view: i,
+            distance_radii: (cam.eye - cam.target).length() / radius,
+            compressed_ms: f.gpu_ns * 1e-6,
+            uncompressed_ms: r.gpu_ns * 1e-6,
+            meshlets_culled_frustum: f.culled_frustum,
+            meshlets_culled_backface: f.culled_cone,
+            meshlets_drawn: f.drawn,
+            identical_to_decoded_reference: exact,
+        };
+        if !a.json {
+            println!(
+                "view {i} ({:.2} radii): {} {:8.3} ms  uncompressed {:8.3} ms  culled: frustum {} backface {}  image {}",
+                row.distance_radii,
+                format.name(),
+                row.compressed_ms,
+                row.uncompressed_ms,
+                f.culled_frustum,
+                f.culled_cone,
+                if exact { "identical to the CPU-decoded reference" } else { "DIFFERS from the CPU-decoded reference" }
+            );
+        }
+        rows.push(row);
+        if i == 0 {
+            if let Some(p) = &a.output {
+                let colour = match how {
+                    Pipeline::Vertex => Pipeline::Vertex,
+                    _ => Pipeline::Mesh {
+                        frustum: cull,
+                        cone: cull,
+                        colour_ids: true,
+                    },
+                };
+                let img = pass.render(cam, colour, Shading::Lit)?;
+                crate::render::write_png(p, WIDTH, HEIGHT, &img.pixels)
+                    .with_context(|| format!("cannot write {}", p.display()))?;
+            }
+        }
+    }
+    let validation_errors = ctx.validation.as_ref().map(|v| v.errors());
+    if a.json {
+        let out = serde_json::json!({
+            "mesh": a.mesh.display().to_string(),
+            "triangles": m.triangle_count(),
+            "format": format,
+            "source": what,
+            "meshlets": upload.meshlets(),
+            "device_bytes": upload.device_bytes(),
+            "uncompressed_device_bytes": reference.device_bytes(),
+            "device": ctx.name,
+            "culling": cull,
+            "png": a.output.as_ref().map(|p| p.display().to_string()),
+            "validation_errors": validation_errors.as_ref().map(|e| e.0),
+            "views": rows,
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else if let Some(p) = &a.output {
+        println!("wrote {}", p.display());
+    }
+    if let Some(r) = rows.iter().find(|r| !r.identical_to_decoded_reference) {
+        bail!(
+            "view {}: the shader-decoded image differs from the CPU-decoded reference",
+            r.view
         );
     }
     report_validation(validation_errors, a.json)

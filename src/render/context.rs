@@ -27,6 +27,12 @@ pub struct Context {
     pub timestamp_period: f32,
     /// Whether the device has `meshShaderQueries` (mesh primitives generated, task/mesh invocations).
     pub mesh_queries: bool,
+    /// Largest storage-buffer binding in bytes (lavapipe: 128 MiB).
+    pub max_storage_range: u64,
+    /// Subgroup width.
+    pub subgroup_size: u32,
+    /// Whether mesh shaders have subgroup arithmetic and ballot.
+    pub mesh_subgroups: bool,
     /// Device name and driver.
     pub name: String,
     /// Errors reported by the validation layer (when enabled).
@@ -128,6 +134,18 @@ impl Context {
             unsafe { instance.destroy_instance(None) };
             return Err(RenderError::NoMeshShader(seen.join(", ")));
         };
+        // Subgroups: whether mesh shaders may use subgroup arithmetic (the laced-wires decoder's
+        // scans pick a variant by this; lavapipe's subgroups are 8 wide).
+        let mut sub = vk::PhysicalDeviceSubgroupProperties::default();
+        let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut sub);
+        unsafe { instance.get_physical_device_properties2(physical, &mut p2) };
+        let subgroup_size = sub.subgroup_size;
+        let mesh_subgroups = sub
+            .supported_stages
+            .contains(vk::ShaderStageFlags::MESH_EXT)
+            && sub
+                .supported_operations
+                .contains(vk::SubgroupFeatureFlags::ARITHMETIC | vk::SubgroupFeatureFlags::BALLOT);
         let priorities = [1.0];
         let queues = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(family)
@@ -174,6 +192,9 @@ impl Context {
             pool,
             timestamp_period: props.limits.timestamp_period,
             mesh_queries,
+            max_storage_range: props.limits.max_storage_buffer_range as u64,
+            subgroup_size,
+            mesh_subgroups,
             name,
             validation,
             memory,

@@ -41,6 +41,16 @@ pub enum RenderError {
     /// A compressed format (or format and pipeline) without a shader decoder.
     #[error("no shader decoder for {0}: the GPU decodes laced-wires, sc-compact and ix-compact in mesh shaders, gi-compact and ts-compact in the vertex shader")]
     NoShaderDecoder(String),
+    /// A storage buffer beyond the device's binding limit (the pass does not chunk).
+    #[error("{what}: {bytes} bytes in one storage binding, above the device's {limit}; draw a smaller mesh or scene")]
+    TooLarge {
+        /// Which buffer.
+        what: &'static str,
+        /// Its size.
+        bytes: u64,
+        /// The device's `maxStorageBufferRange`.
+        limit: u64,
+    },
     /// A Vulkan call failed.
     #[error("Vulkan call failed: {0}: {1}")]
     Vulkan(&'static str, ash::vk::Result),

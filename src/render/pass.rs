@@ -142,7 +142,8 @@ enum Source<'s> {
         format: Format,
         lod: Option<&'s Flat>,
     },
-    Compressed(&'s Upload),
+    /// The upload, and whether laced wires' scans use subgroup operations.
+    Compressed(&'s Upload, bool),
 }
 
 /// How a pipeline gets its vertices.
@@ -227,7 +228,20 @@ impl<'a> Pass<'a> {
     /// builds the pipelines that decode it: task and mesh shaders, or the vertex shader for GI and
     /// TS compact.
     pub fn compressed(ctx: &'a Context, upload: &Upload) -> Result<Self, RenderError> {
-        Self::build(ctx, Source::Compressed(upload))
+        Self::compressed_with(ctx, upload, ctx.mesh_subgroups)
+    }
+
+    /// [`Pass::compressed`] choosing the laced-wires decoder's scans: subgroup operations (where
+    /// the device has them in mesh shaders) or workgroup memory only.
+    pub fn compressed_with(
+        ctx: &'a Context,
+        upload: &Upload,
+        subgroups: bool,
+    ) -> Result<Self, RenderError> {
+        Self::build(
+            ctx,
+            Source::Compressed(upload, subgroups && ctx.mesh_subgroups),
+        )
     }
 
     /// Uploads a flattened LOD DAG over its source `mesh` (split layout) with its LOD records, for
@@ -258,7 +272,9 @@ impl<'a> Pass<'a> {
                 format,
                 lod,
             } => (mesh, ml, format, lod),
-            Source::Compressed(up) => return Self::build_compressed(ctx, up, small(up.max_counts)),
+            Source::Compressed(up, subgroups) => {
+                return Self::build_compressed(ctx, up, small(up.max_counts), subgroups)
+            }
         };
         let limits = ml.meshlets.iter().fold((0, 0), |(v, t), m| {
             (
@@ -326,7 +342,12 @@ impl<'a> Pass<'a> {
         )
     }
 
-    fn build_compressed(ctx: &'a Context, up: &Upload, small: bool) -> Result<Self, RenderError> {
+    fn build_compressed(
+        ctx: &'a Context,
+        up: &Upload,
+        small: bool,
+        subgroups: bool,
+    ) -> Result<Self, RenderError> {
         use crate::compress::file::Format as C;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let how = super::compressed::decoder(up.format)?;
@@ -336,8 +357,9 @@ impl<'a> Pass<'a> {
             (C::LacedWires, _) => (
                 Some(shader("compressed.task (laced-wires)")),
                 Some(shader(&format!(
-                    "laced.mesh (64/{})",
-                    if small { 126 } else { 256 }
+                    "laced.mesh (64/{}{})",
+                    if small { 126 } else { 256 },
+                    if subgroups { ", subgroups" } else { "" }
                 ))),
                 None,
             ),
@@ -403,6 +425,22 @@ impl<'a> Pass<'a> {
         lod_layout: Option<LodLayout>,
     ) -> Result<Self, RenderError> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        const NAMES: [&str; 5] = [
+            "positions",
+            "descriptors / offsets",
+            "meshlet data",
+            "triangles / first triangles",
+            "task data",
+        ];
+        for (b, what) in buffers.iter().zip(NAMES) {
+            if b.size > ctx.max_storage_range {
+                let (bytes, limit) = (b.size, ctx.max_storage_range);
+                for b in &buffers {
+                    ctx.destroy_buffer(b);
+                }
+                return Err(RenderError::TooLarge { what, bytes, limit });
+            }
+        }
         let counters = ctx.buffer(32, storage)?;
         let readback = ctx.buffer(
             WIDTH as u64 * HEIGHT as u64 * 4,
