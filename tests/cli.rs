@@ -256,6 +256,63 @@ fn render_writes_a_meshlet_coloured_png_for_each_descriptor() {
 }
 
 #[test]
+fn render_draws_compressed_meshlets_and_refuses_a_damaged_file() {
+    let dir = common::scratch("render-compressed");
+    let mesh = common::meshes_dir().join("fandisk.ply.zst");
+    let m = mesh.to_str().unwrap();
+    let png = dir.join("laced.png");
+    for format in ["laced-wires", "gi-compact"] {
+        let out = ok(&[
+            "render",
+            "-q",
+            m,
+            "--format",
+            format,
+            "--views",
+            "2",
+            "--validate",
+            "--json",
+            "-o",
+            png.to_str().unwrap(),
+        ]);
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v["format"], format, "{out}");
+        assert_eq!(v["validation_errors"], 0, "{out}");
+        assert!(
+            v["device_bytes"].as_u64().unwrap() < v["uncompressed_device_bytes"].as_u64().unwrap()
+        );
+        let views = v["views"].as_array().unwrap();
+        assert_eq!(views.len(), 2);
+        assert!(
+            views
+                .iter()
+                .all(|x| x["identical_to_decoded_reference"] == true),
+            "{out}"
+        );
+    }
+    // A file from `compress`, drawn as it is; then one byte of it damaged: refused, naming the
+    // file, before anything reaches the GPU.
+    let file = dir.join("fandisk.cmp");
+    let f = file.to_str().unwrap();
+    ok(&["compress", "-q", m, "--format", "laced-wires", "-o", f]);
+    let out = ok(&["render", "-q", m, "--compressed", f, "--views", "1"]);
+    assert!(
+        out.contains("laced-wires") && out.contains("identical to the CPU-decoded reference"),
+        "{out}"
+    );
+    let mut bytes = std::fs::read(&file).unwrap();
+    bytes.truncate(bytes.len() / 2);
+    std::fs::write(&file, &bytes).unwrap();
+    let out = cli(&["render", "-q", m, "--compressed", f, "--views", "1"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("fandisk.cmp"));
+    // A format without a shader decoder: said so.
+    let out = cli(&["render", "-q", m, "--format", "meshopt"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no shader decoder for meshopt"));
+}
+
+#[test]
 fn export_writes_a_glb_the_loader_reads_back() {
     let dir = common::scratch("export-cli");
     let mesh = common::meshes_dir().join("stellarium_gaspra.ply.zst");

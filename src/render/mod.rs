@@ -1,6 +1,7 @@
 //! The mesh-shader render benchmark (ash + VK_EXT_mesh_shader, shaders in glsl/): a headless
 //! [`Context`], the [`Pass`] that draws meshlets through task and mesh shaders or the whole mesh
-//! through the vertex pipeline, and the camera protocol.
+//! through the vertex pipeline, compressed meshlets decoded by the shaders from their encoded
+//! bytes ([`compressed`]), and the camera protocol.
 
 pub mod compressed;
 pub mod context;
