@@ -32,6 +32,7 @@ bench: setup
 	$(CARGO) run --release --quiet -- bench render
 	$(CARGO) run --release --quiet -- bench lod
 	$(CARGO) run --release --quiet -- bench compress
+	$(CARGO) run --release --quiet -- bench compress-render
 	$(MAKE) bench-robustness
 
 # The fuzzer runs in the `fuzz` profile (optimised, overflow checks on): >= 1 M cases, results/robustness.md.

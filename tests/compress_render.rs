@@ -6,6 +6,7 @@
 mod common;
 
 use meshletlab::compress::file::Format;
+use meshletlab::compress::laced::culling;
 use meshletlab::compress::{paper_tolerance, Encoded};
 use meshletlab::mesh::Mesh;
 use meshletlab::meshlet::{Limits, Meshlets};
@@ -61,6 +62,7 @@ fn check_pass(
     views: &[Camera],
 ) -> (u32, u32) {
     let format = up.format;
+    let mut compared = 0;
     let (rmesh, rml) = decoded_reference(enc, format).unwrap();
     let reference = Pass::new(ctx, &rmesh, &rml).unwrap();
     let vertex = matches!(pass.drawn(), Drawn::Compressed(_, Decoder::Vertex));
@@ -121,10 +123,27 @@ fn check_pass(
         assert_eq!(b.drawn, up.meshlets() as u32, "{tag}");
         if format != Format::LacedWires {
             assert_eq!(a.drawn, up.meshlets() as u32, "{tag}");
+        } else if a.culled_frustum == 0 {
+            // The task shader reads the culling records as the CPU does: its cone test culls what
+            // laced::Culling::backfacing culls, up to f32 decoding at the cone's edge (the shader
+            // widens the radius by 1e-4, so it may keep a few more).
+            let cpu = (0..up.meshlets())
+                .filter(|&m| culling(enc, m).unwrap().backfacing(v.eye.to_array()))
+                .count() as i64;
+            let gpu = a.culled_cone as i64;
+            compared += 1;
+            assert!(
+                (gpu - cpu).abs() <= 2 + cpu / 100 && (cpu == 0 || gpu > 0),
+                "{tag}: the task shader culled {gpu} by the cone, the CPU records {cpu}"
+            );
         }
         frustum += a.culled_frustum;
         cone += a.culled_cone;
     }
+    assert!(
+        format != Format::LacedWires || compared > 0 || views.len() < 2,
+        "{what}: no view without frustum culling to compare the cone culling with"
+    );
     (frustum, cone)
 }
 

@@ -449,7 +449,7 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
         let out = serde_json::json!({
             "mesh": a.mesh.display().to_string(),
             "triangles": m.triangle_count(),
-            "format": format,
+            "format": format.name(),
             "source": what,
             "meshlets": upload.meshlets(),
             "device_bytes": upload.device_bytes(),
