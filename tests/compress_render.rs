@@ -22,21 +22,9 @@ fn meshlets(mesh: &Mesh, name: &str, limits: Limits) -> Meshlets {
         .build(mesh, limits)
 }
 
-const IDS: Pipeline = Pipeline::Mesh {
-    frustum: false,
-    cone: false,
-    colour_ids: true,
-};
-const CULL: Pipeline = Pipeline::Mesh {
-    frustum: true,
-    cone: true,
-    colour_ids: false,
-};
-const NO_CULL: Pipeline = Pipeline::Mesh {
-    frustum: false,
-    cone: false,
-    colour_ids: false,
-};
+const IDS: Pipeline = Pipeline::mesh_ids(false);
+const CULL: Pipeline = Pipeline::mesh(true);
+const NO_CULL: Pipeline = Pipeline::mesh(false);
 
 /// Draws `enc` and its decoded reference from every view and compares; returns the meshlets the
 /// laced-wire records culled (frustum, cone) over the views.
@@ -238,5 +226,36 @@ fn formats_without_a_shader_decoder_say_so() {
         let err = prepare(&enc, format).unwrap_err();
         assert!(matches!(err, RenderError::NoShaderDecoder(_)), "{err}");
         assert!(err.to_string().contains("laced-wires"), "{err}");
+    }
+}
+
+#[test]
+fn laced_wire_task_culling_never_removes_a_visible_triangle() {
+    let ctx = Context::new(false).expect("lavapipe with VK_EXT_mesh_shader (make setup)");
+    for name in ["stanford_bunny", "stellarium_gaspra"] {
+        let mesh = common::load(name);
+        let ml = meshlets(&mesh, "meshopt", Limits::DEFAULT);
+        let enc = Format::LacedWires
+            .encode(&mesh, &ml, paper_tolerance(&mesh))
+            .unwrap();
+        let pass = Pass::compressed(&ctx, &prepare(&enc, Format::LacedWires).unwrap()).unwrap();
+        // Many seeded views, from inside the bounds (frustum culling) to far out (cone culling).
+        let mut views = Vec::new();
+        for (k, distance) in [0.5f32, 0.8, 1.2, 2.0, 3.5].into_iter().enumerate() {
+            views.extend(Camera::random_views(&mesh, 5, 100 + k as u64, distance));
+        }
+        let (mut frustum, mut cone) = (0, 0);
+        for (i, v) in views.iter().enumerate() {
+            let a = pass.render(v, CULL, Shading::Lit).unwrap();
+            let b = pass.render(v, NO_CULL, Shading::Lit).unwrap();
+            assert_eq!(
+                differing_pixels(&a.pixels, &b.pixels),
+                0,
+                "{name} view {i}: culling changed the image"
+            );
+            frustum += a.culled_frustum;
+            cone += a.culled_cone;
+        }
+        assert!(frustum > 0 && cone > 0, "{name}: {frustum} {cone}");
     }
 }

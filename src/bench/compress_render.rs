@@ -16,7 +16,7 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{line_chart, Axes, Series};
-use super::{machine_note, median, today};
+use super::{machine_note, median, p95, today};
 use crate::compress::file::Format;
 use crate::compress::paper_tolerance;
 use crate::mesh::{self, Mesh};
@@ -110,12 +110,6 @@ impl Row {
     }
 }
 
-fn p95(xs: &[f64]) -> f64 {
-    let mut v = xs.to_vec();
-    v.sort_by(f64::total_cmp);
-    v[((v.len() as f64 * 0.95).ceil() as usize).clamp(1, v.len()) - 1]
-}
-
 /// Every shared mesh scaled to a unit diagonal on a grid, `copies` times over, as one mesh.
 fn scene(files: &[PathBuf], copies: usize) -> Result<(String, Mesh)> {
     let mut positions: Vec<[f32; 3]> = Vec::new();
@@ -195,11 +189,7 @@ fn measure(ctx: &Context, name: &str, m: &Mesh, cfg: &Config) -> Result<Vec<Row>
         let how = pass.native(false);
         let ids = match how {
             Pipeline::Vertex => how,
-            _ => Pipeline::Mesh {
-                frustum: false,
-                cone: false,
-                colour_ids: true,
-            },
+            _ => Pipeline::mesh_ids(false),
         };
         let a = pass.render(&views[0], ids, Shading::Lit)?;
         let b = reference.render(&views[0], ids, Shading::Lit)?;
@@ -220,16 +210,8 @@ fn measure(ctx: &Context, name: &str, m: &Mesh, cfg: &Config) -> Result<Vec<Row>
         }
     }
     let how = |v: Variant, p: &Pass| match v {
-        Variant::SplitCull => Pipeline::Mesh {
-            frustum: true,
-            cone: true,
-            colour_ids: false,
-        },
-        Variant::SplitNoCull => Pipeline::Mesh {
-            frustum: false,
-            cone: false,
-            colour_ids: false,
-        },
+        Variant::SplitCull => Pipeline::mesh(true),
+        Variant::SplitNoCull => Pipeline::mesh(false),
         Variant::VertexPipeline => Pipeline::Vertex,
         Variant::Compressed(_, cull) => p.native(cull),
     };

@@ -38,6 +38,13 @@ pub struct Evaluation {
 }
 
 /// Median of a non-empty slice.
+/// The 95th percentile (nearest rank) of `xs` (not empty).
+pub fn p95(xs: &[f64]) -> f64 {
+    let mut v = xs.to_vec();
+    v.sort_by(f64::total_cmp);
+    v[((v.len() as f64 * 0.95).ceil() as usize).clamp(1, v.len()) - 1]
+}
+
 pub fn median(xs: &[f64]) -> f64 {
     let mut v = xs.to_vec();
     v.sort_by(f64::total_cmp);

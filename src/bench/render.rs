@@ -8,7 +8,7 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{bar_chart, line_chart, Axes, Bars, Series};
-use super::{machine_note, median, today};
+use super::{machine_note, median, p95, today};
 use crate::mesh::{self, Mesh};
 use crate::meshlet::descriptor::Format;
 use crate::meshlet::order::{
@@ -132,12 +132,6 @@ fn frames(passes: &[&Pass], views: &[Camera], how: Pipeline) -> Result<Vec<(Vec<
         }
     }
     Ok(out)
-}
-
-fn p95(xs: &[f64]) -> f64 {
-    let mut v = xs.to_vec();
-    v.sort_by(f64::total_cmp);
-    v[((v.len() as f64 * 0.95).ceil() as usize).clamp(1, v.len()) - 1]
 }
 
 struct Row {

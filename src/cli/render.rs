@@ -380,11 +380,7 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
     let how = pass.native(cull);
     let reference_how = match how {
         Pipeline::Vertex => Pipeline::Vertex,
-        _ => Pipeline::Mesh {
-            frustum: cull,
-            cone: cull,
-            colour_ids: false,
-        },
+        _ => Pipeline::mesh(cull),
     };
     let (views, radius) = cameras(&a, &m);
     let mut rows = Vec::new();
@@ -395,11 +391,7 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
         let exact = match how {
             Pipeline::Vertex => f.pixels == r.pixels,
             _ => {
-                let no_cull = Pipeline::Mesh {
-                    frustum: false,
-                    cone: false,
-                    colour_ids: false,
-                };
+                let no_cull = Pipeline::mesh(false);
                 let x = pass.render(cam, no_cull, Shading::Unlit)?;
                 let y = reference.render(cam, no_cull, Shading::Unlit)?;
                 x.pixels == y.pixels && f.pixels == pass.render(cam, no_cull, Shading::Lit)?.pixels
@@ -432,11 +424,7 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
             if let Some(p) = &a.output {
                 let colour = match how {
                     Pipeline::Vertex => Pipeline::Vertex,
-                    _ => Pipeline::Mesh {
-                        frustum: cull,
-                        cone: cull,
-                        colour_ids: true,
-                    },
+                    _ => Pipeline::mesh_ids(cull),
                 };
                 let img = pass.render(cam, colour, Shading::Lit)?;
                 crate::render::write_png(p, WIDTH, HEIGHT, &img.pixels)

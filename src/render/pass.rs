@@ -37,6 +37,26 @@ pub enum Pipeline {
     Vertex,
 }
 
+impl Pipeline {
+    /// The mesh pipeline, shaded, with frustum and cone culling when `cull`.
+    pub const fn mesh(cull: bool) -> Self {
+        Pipeline::Mesh {
+            frustum: cull,
+            cone: cull,
+            colour_ids: false,
+        }
+    }
+
+    /// The mesh pipeline coloured by meshlet id, with frustum and cone culling when `cull`.
+    pub const fn mesh_ids(cull: bool) -> Self {
+        Pipeline::Mesh {
+            frustum: cull,
+            cone: cull,
+            colour_ids: true,
+        }
+    }
+}
+
 /// How fragments are coloured (the meshlet-id colouring is a [`Pipeline::Mesh`] option).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Shading {
@@ -668,11 +688,7 @@ impl<'a> Pass<'a> {
     pub fn native(&self, cull: bool) -> Pipeline {
         match self.drawn {
             Drawn::Compressed(_, Decoder::Vertex) => Pipeline::Vertex,
-            _ => Pipeline::Mesh {
-                frustum: cull,
-                cone: cull,
-                colour_ids: false,
-            },
+            _ => Pipeline::mesh(cull),
         }
     }
 
