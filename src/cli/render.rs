@@ -167,13 +167,8 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
             "meshlets": ml.len(),
             "descriptor": a.descriptor.to_string(),
             "device_bytes_per_triangle": bytes_per_triangle,
-            "device": ctx.name,
-            "culling": cull,
-            "png": a.output.as_ref().map(|p| p.display().to_string()),
-            "validation_errors": validation_errors.as_ref().map(|e| e.0),
-            "views": rows,
         });
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        print_json(out, &ctx, cull, &a, &validation_errors, &rows)?;
     }
     if let (Some(p), false) = (&a.output, a.json) {
         println!("wrote {}", p.display());
@@ -295,13 +290,8 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
             "levels_loaded": loaded_levels,
             "meshlets": flat.meshlets.len(),
             "threshold_px": a.threshold,
-            "device": ctx.name,
-            "culling": cull,
-            "png": a.output.as_ref().map(|p| p.display().to_string()),
-            "validation_errors": validation_errors.as_ref().map(|e| e.0),
-            "views": rows,
         });
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        print_json(out, &ctx, cull, &a, &validation_errors, &rows)?;
     } else if let Some(p) = &a.output {
         println!("wrote {} (coloured by meshlet)", p.display());
     }
@@ -442,13 +432,8 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
             "meshlets": upload.meshlets(),
             "device_bytes": upload.device_bytes(),
             "uncompressed_device_bytes": reference.device_bytes(),
-            "device": ctx.name,
-            "culling": cull,
-            "png": a.output.as_ref().map(|p| p.display().to_string()),
-            "validation_errors": validation_errors.as_ref().map(|e| e.0),
-            "views": rows,
         });
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        print_json(out, &ctx, cull, &a, &validation_errors, &rows)?;
     } else if let Some(p) = &a.output {
         println!("wrote {}", p.display());
     }
@@ -471,6 +456,32 @@ fn cameras(a: &RenderArgs, m: &crate::mesh::Mesh) -> (Vec<Camera>, f32) {
     };
     let (lo, hi) = m.bounding_box();
     (views, ((hi - lo).length() * 0.5).max(1e-6))
+}
+
+/// Prints a view report as JSON: `out` (the command's own fields) with the device, culling, PNG,
+/// validation-layer errors and per-view rows every render mode reports.
+fn print_json<T: std::fmt::Debug>(
+    mut out: serde_json::Value,
+    ctx: &Context,
+    cull: bool,
+    a: &RenderArgs,
+    validation_errors: &Option<(u32, T)>,
+    rows: &impl serde::Serialize,
+) -> Result<()> {
+    let o = out.as_object_mut().expect("a JSON object");
+    o.insert("device".into(), ctx.name.clone().into());
+    o.insert("culling".into(), cull.into());
+    o.insert(
+        "png".into(),
+        a.output.as_ref().map(|p| p.display().to_string()).into(),
+    );
+    o.insert(
+        "validation_errors".into(),
+        validation_errors.as_ref().map(|e| e.0).into(),
+    );
+    o.insert("views".into(), serde_json::to_value(rows)?);
+    println!("{}", serde_json::to_string_pretty(&out)?);
+    Ok(())
 }
 
 /// Fails on validation-layer errors (when the layer ran), else says there were none.
