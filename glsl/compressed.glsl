@@ -19,9 +19,6 @@ uint bits_at(uint at, uint n) {
     return n == 32u ? v : v & ((1u << n) - 1u);
 }
 
-// Byte `b` of the data.
-uint byte_at(uint b) { return (data[b >> 2u] >> ((b & 3u) * 8u)) & 255u; }
-
 // Bits that hold the values 0..n (src/compress bits_for).
 uint bits_for(uint n) { return n <= 1u ? 0u : uint(findMSB(n - 1u)) + 1u; }
 

@@ -189,25 +189,21 @@ fn damaged_buffers_are_refused_before_upload_or_drawn_exactly_as_they_decode() {
             format.name()
         );
         assert!(err.to_string().contains("meshlet"), "{err}");
-        let (mut refused, mut drawn) = (0, 0);
         for _ in 0..16 {
             state = meshletlab::mesh::generate::splitmix64(state);
             let mut bad = enc.clone();
             let at = (state >> 8) as usize % bad.data.len();
             bad.data[at] ^= (state as u8).max(1);
             match prepare(&bad, format) {
-                Err(RenderError::Corrupt(_)) => refused += 1,
+                Err(RenderError::Corrupt(_)) => total_refused += 1,
                 Err(e) => panic!("{}: byte {at}: {e}", format.name()),
                 // Whatever the CPU accepts, the shaders draw exactly as the CPU decodes it.
                 Ok(_) => {
                     check(&ctx, &format!("damaged at byte {at}"), &bad, format, &view);
-                    drawn += 1;
+                    total_drawn += 1;
                 }
             }
         }
-        assert_eq!(refused + drawn, 16, "{}", format.name());
-        total_refused += refused;
-        total_drawn += drawn;
     }
     assert!(
         total_refused > 0 && total_drawn > 0,

@@ -97,7 +97,7 @@ pub struct Row {
     pub ms: Vec<f64>,
     /// Meshlets culled by the task shader per frame (mean).
     pub culled: f64,
-    /// The largest single storage buffer the variant binds.
+    /// The largest single storage buffer the variant binds (0 when not drawn).
     pub largest_binding: usize,
 }
 
@@ -155,26 +155,13 @@ fn measure(ctx: &Context, name: &str, m: &Mesh, cfg: &Config) -> Result<Vec<Row>
         crate::render::FRAME_FILL,
     );
     let split = Pass::new(ctx, m, &ml)?;
-    let positions = 12 * m.vertex_count();
-    let split_widest = positions.max(4 * ml.vertices.len());
-    let mut passes: Vec<(Variant, &Pass, usize, usize)> = vec![
-        (
-            Variant::SplitCull,
-            &split,
-            split.device_bytes(),
-            split_widest,
-        ),
-        (
-            Variant::SplitNoCull,
-            &split,
-            split.device_bytes(),
-            split_widest,
-        ),
+    let mut passes: Vec<(Variant, &Pass, usize)> = vec![
+        (Variant::SplitCull, &split, split.device_bytes()),
+        (Variant::SplitNoCull, &split, split.device_bytes()),
         (
             Variant::VertexPipeline,
             &split,
-            positions + 4 * m.indices.len(),
-            positions.max(4 * m.indices.len()),
+            12 * m.vertex_count() + 4 * m.indices.len(),
         ),
     ];
     let mut owned = Vec::new();
@@ -200,13 +187,12 @@ fn measure(ctx: &Context, name: &str, m: &Mesh, cfg: &Config) -> Result<Vec<Row>
             );
         }
         drop(reference);
-        let widest = 4 * up.words.len();
-        owned.push((format, pass, up.device_bytes(), widest));
+        owned.push((format, pass, up.device_bytes()));
     }
-    for (format, pass, bytes, widest) in &owned {
-        passes.push((Variant::Compressed(*format, false), pass, *bytes, *widest));
+    for (format, pass, bytes) in &owned {
+        passes.push((Variant::Compressed(*format, false), pass, *bytes));
         if *format == Format::LacedWires {
-            passes.push((Variant::Compressed(*format, true), pass, *bytes, *widest));
+            passes.push((Variant::Compressed(*format, true), pass, *bytes));
         }
     }
     let how = |v: Variant, p: &Pass| match v {
@@ -232,7 +218,7 @@ fn measure(ctx: &Context, name: &str, m: &Mesh, cfg: &Config) -> Result<Vec<Row>
         .iter()
         .zip(ms)
         .zip(culled)
-        .map(|(((v, _, bytes, widest), ms), culled)| Row {
+        .map(|(((v, p, bytes), ms), culled)| Row {
             mesh: name.to_string(),
             triangles: m.triangle_count(),
             meshlets: ml.len(),
@@ -240,7 +226,7 @@ fn measure(ctx: &Context, name: &str, m: &Mesh, cfg: &Config) -> Result<Vec<Row>
             bytes: *bytes,
             ms,
             culled: culled as f64 / views.len() as f64,
-            largest_binding: *widest,
+            largest_binding: p.largest_storage_binding() as usize,
         })
         .collect();
     rows.push(Row {
@@ -251,7 +237,8 @@ fn measure(ctx: &Context, name: &str, m: &Mesh, cfg: &Config) -> Result<Vec<Row>
         bytes: meshopt.sizes.total(),
         ms: Vec::new(),
         culled: 0.0,
-        largest_binding: meshopt.data.len(),
+        // Not drawn, so nothing bound.
+        largest_binding: 0,
     });
     Ok(rows)
 }

@@ -121,12 +121,12 @@ impl LodLayout {
     }
 }
 
-/// The SPIR-V a pass is built from.
+/// The SPIR-V a pass is built from: task and mesh shaders and a vertex shader with its input,
+/// each where the data can be drawn that way.
 struct Modules {
     task: Option<&'static [u8]>,
     mesh: Option<&'static [u8]>,
-    vertex: &'static [u8],
-    input: Input,
+    vertex: Option<(&'static [u8], Input)>,
     lod_task: Option<&'static [u8]>,
 }
 
@@ -188,6 +188,8 @@ pub struct Pass<'a> {
     drawn: Drawn,
     object: descriptor::ObjectBox,
     device_bytes: usize,
+    /// The largest storage buffer bound (the one `maxStorageBufferRange` limits).
+    largest_binding: u64,
     set_layout: vk::DescriptorSetLayout,
     pool: vk::DescriptorPool,
     set: vk::DescriptorSet,
@@ -201,6 +203,15 @@ pub struct Pass<'a> {
     queries: vk::QueryPool,
     /// Pipeline statistics (task, mesh invocations) and mesh primitives generated.
     mesh_queries: Option<(vk::QueryPool, vk::QueryPool)>,
+}
+
+/// Vulkan has no empty buffers: an unused binding gets one zero vec4.
+fn nonempty(w: &[u32]) -> Vec<u32> {
+    if w.is_empty() {
+        vec![0; 4]
+    } else {
+        w.to_vec()
+    }
 }
 
 fn spirv(bytes: &[u8]) -> Result<Vec<u32>, RenderError> {
@@ -306,14 +317,6 @@ impl<'a> Pass<'a> {
         let task_spv = shader(&format!("meshlet.task ({format})"));
         let mesh_spv = shader(&format!("meshlet.mesh ({format}, {size})"));
         let packed = descriptor::pack(mesh, ml, format)?;
-        // Vulkan has no empty buffers: a format's unused bindings get one zero vec4.
-        let words = |w: &[u32]| -> Vec<u32> {
-            if w.is_empty() {
-                vec![0; 4]
-            } else {
-                w.to_vec()
-            }
-        };
         let task: Vec<[f32; 4]> = if packed.task.is_empty() {
             vec![[0.0; 4]]
         } else {
@@ -324,9 +327,9 @@ impl<'a> Pass<'a> {
                 &mesh.positions,
                 storage | vk::BufferUsageFlags::VERTEX_BUFFER,
             )?,
-            ctx.upload(&words(&packed.descriptors), storage)?,
-            ctx.upload(&words(&packed.data), storage)?,
-            ctx.upload(&words(&packed.triangles), storage)?,
+            ctx.upload(&nonempty(&packed.descriptors), storage)?,
+            ctx.upload(&nonempty(&packed.data), storage)?,
+            ctx.upload(&nonempty(&packed.triangles), storage)?,
             ctx.upload(&task, storage)?,
             ctx.upload(&mesh.indices, vk::BufferUsageFlags::INDEX_BUFFER)?,
             match lod {
@@ -339,8 +342,7 @@ impl<'a> Pass<'a> {
         let modules = Modules {
             task: Some(task_spv),
             mesh: Some(mesh_spv),
-            vertex: shader("baseline.vert"),
-            input: Input::Buffer,
+            vertex: Some((shader("baseline.vert"), Input::Buffer)),
             lod_task,
         };
         let lod_layout = lod.map(|f| LodLayout {
@@ -390,13 +392,6 @@ impl<'a> Pass<'a> {
             ),
             (_, Decoder::Vertex) => (None, None, Some(shader(&format!("compact.vert ({name})")))),
         };
-        let nonempty = |w: &[u32]| -> Vec<u32> {
-            if w.is_empty() {
-                vec![0; 4]
-            } else {
-                w.to_vec()
-            }
-        };
         let dummy = [0u32; 4];
         let buffers = vec![
             ctx.upload(&dummy, storage)?,
@@ -411,12 +406,7 @@ impl<'a> Pass<'a> {
         let modules = Modules {
             task,
             mesh,
-            vertex: vertex.unwrap_or(shader("baseline.vert")),
-            input: if vertex.is_some() {
-                Input::Pulled
-            } else {
-                Input::Buffer
-            },
+            vertex: vertex.map(|v| (v, Input::Pulled)),
             lod_task: None,
         };
         Self::finish(
@@ -452,6 +442,7 @@ impl<'a> Pass<'a> {
             "triangles / first triangles",
             "task data",
         ];
+        let largest_binding = buffers.iter().take(NAMES.len()).map(|b| b.size).max();
         for (b, what) in buffers.iter().zip(NAMES) {
             if b.size > ctx.max_storage_range {
                 let (bytes, limit) = (b.size, ctx.max_storage_range);
@@ -551,18 +542,22 @@ impl<'a> Pass<'a> {
         };
         let shade = module(shader("shade.frag"))?;
         let ids = module(shader("meshlet_id.frag"))?;
-        let vert = module(modules.vertex)?;
-        let vertex = pipeline(
-            d,
-            layout,
-            &[
-                (vk::ShaderStageFlags::VERTEX, vert),
-                (vk::ShaderStageFlags::FRAGMENT, shade),
-            ],
-            modules.input,
-        )?;
-        let mut made = vec![shade, ids, vert];
+        let mut made = vec![shade, ids];
         let null = vk::Pipeline::null();
+        let mut vertex = null;
+        if let Some((code, input)) = modules.vertex {
+            let vert = module(code)?;
+            made.push(vert);
+            vertex = pipeline(
+                d,
+                layout,
+                &[
+                    (vk::ShaderStageFlags::VERTEX, vert),
+                    (vk::ShaderStageFlags::FRAGMENT, shade),
+                ],
+                input,
+            )?;
+        }
         // Task + mesh pipelines, shaded and coloured by meshlet id.
         let mut mesh_pair = |task: &[u8], mesh: vk::ShaderModule| {
             let t = module(task)?;
@@ -655,6 +650,7 @@ impl<'a> Pass<'a> {
             drawn: fields.drawn,
             object: fields.object,
             device_bytes: fields.device_bytes,
+            largest_binding: largest_binding.unwrap_or(0),
             set_layout,
             pool,
             set,
@@ -692,6 +688,12 @@ impl<'a> Pass<'a> {
         }
     }
 
+    /// Bytes of the largest storage buffer the pass binds (at most the device's
+    /// `maxStorageBufferRange`; the vertex and index buffers are not storage bindings).
+    pub fn largest_storage_binding(&self) -> u64 {
+        self.largest_binding
+    }
+
     /// Device bytes of the meshlet data in this layout (see `Packed::device_bytes`).
     pub fn device_bytes(&self) -> usize {
         self.device_bytes
@@ -720,14 +722,16 @@ impl<'a> Pass<'a> {
             Pipeline::Vertex => (self.vertex, 0),
         };
         let mesh = matches!(how, Pipeline::Mesh { .. });
-        if let Drawn::Compressed(f, decoder) = self.drawn {
-            if mesh != (decoder == Decoder::Mesh) {
-                return Err(RenderError::NoShaderDecoder(format!(
-                    "{} through the {} pipeline",
-                    f.name(),
-                    if mesh { "mesh" } else { "vertex" }
-                )));
-            }
+        if pipeline == vk::Pipeline::null() {
+            // Only compressed passes lack a pipeline: each format has one decoder.
+            let what = match self.drawn {
+                Drawn::Compressed(f, _) => f.name(),
+                Drawn::Descriptors(f) => f.to_string(),
+            };
+            return Err(RenderError::NoShaderDecoder(format!(
+                "{what} through the {} pipeline",
+                if mesh { "mesh" } else { "vertex" }
+            )));
         }
         self.frame(camera, pipeline, flags, shading, self.meshlet_count, mesh)
     }
