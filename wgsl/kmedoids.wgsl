@@ -1,15 +1,13 @@
-// k-medoids on the triangle dual graph, mirroring src/strategy/kmedoids.rs step by step:
-//   clear, seed, bfs_round x levels          assign (multi-source BFS, lowest cluster wins ties)
+// k-medoids on the triangle dual graph, mirroring src/strategy/kmedoids.rs step by step (assign,
+// the multi-source BFS, is wgsl/assign.wgsl):
+//   dirty_clear, medoid_index, dirty_mark    clusters whose members changed since the last update
+//                                            (the CPU's UpdateCache: the others keep their medoid)
 //   mem_clear, mem_count, scan, mem_scatter  members of each cluster (CSR)
-//   update                                   new medoid per cluster + shift, convergence counters
+//   update                                   new medoid per changed cluster + shift, counters
 //   mark_clear, mark, scan, place            new medoids in ascending order (cluster ids)
-//   stats                                    distinct vertices and farthest member per cluster
+//   remember                                 each triangle's new medoid, for the next dirty_mark
+//   (split statistics: wgsl/split.wgsl)
 //   dist_partial                             the objective (sum of hop distances), per workgroup
-//
-// bfs_round is a pull relaxation: in round d an unreached triangle takes the smallest label among
-// its neighbours at distance d. Every competitor is at the same distance, so the min over labels is
-// the CPU's fetch_min on (distance << 32 | cluster); no 64-bit atomics needed, and the result does
-// not depend on thread order.
 
 struct Params { t: u32, k: u32, d: u32, slot: u32, max_v: u32, max_t: u32, w6: u32, w7: u32 }
 
@@ -24,14 +22,15 @@ struct Params { t: u32, k: u32, d: u32, slot: u32, max_v: u32, max_t: u32, w6: u
 @group(0) @binding(8) var<storage, read_write> mem_off: array<atomic<u32>>;
 @group(0) @binding(9) var<storage, read_write> mem_items: array<u32>;
 @group(0) @binding(10) var<storage, read_write> cursor: array<atomic<u32>>;
-// [0, k) new medoid, [k, 2k) shift, [2k, 3k) distinct vertices, [3k, 4k) farthest member.
+// [0, k) new medoid, [k, 2k) shift; [2k, 4k) split.wgsl's statistics.
 @group(0) @binding(11) var<storage, read_write> result: array<u32>;
 @group(0) @binding(12) var<storage, read_write> flags: array<u32>;
 // Two words per triangle: the large-cluster fallback's BFS distance and queue, per cluster at
 // 2 * (its member offset).
 @group(0) @binding(13) var<storage, read_write> scratch: array<u32>;
-@group(0) @binding(14) var<storage, read_write> idx_a: array<u32>;
-@group(0) @binding(15) var<storage, read_write> idx_b: array<u32>;
+// [0, T): the medoid each triangle's cluster moved to at the last update (NONE before the first);
+// [T, T + k): 1 where the cluster's members changed since then.
+@group(0) @binding(14) var<storage, read_write> prev: array<u32>;
 
 const PART: u32 = 33554432u;
 const NONE: u32 = 0xffffffffu;
@@ -41,17 +40,8 @@ const CHANGED: u32 = 1u;
 const LARGE: u32 = 2u;
 
 fn nb(i: u32) -> u32 { if (i < PART) { return dual_a[i]; } return dual_b[i - PART]; }
-fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART]; }
 fn flat(gid: vec3<u32>) -> u32 { return gid.x + gid.y * 65535u * 64u; }
 fn group(wid: vec3<u32>) -> u32 { return wid.x + wid.y * 65535u; }
-
-@compute @workgroup_size(64)
-fn clear(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let t = flat(gid);
-    if (t >= p.t) { return; }
-    labels[t] = NONE;
-    dist[t] = NONE;
-}
 
 @compute @workgroup_size(64)
 fn clear_counters(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -59,28 +49,44 @@ fn clear_counters(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (i < arrayLength(&counters)) { atomicStore(&counters[i], 0u); }
 }
 
+// ---- which clusters changed ------------------------------------------------------------------
+//
+// The CPU caches each cluster's update by its member list: a cluster whose members are exactly
+// those that moved to its medoid at the last update gets that medoid again, with shift 0. Here a
+// triangle whose current medoid differs from the one it remembered marks both clusters changed;
+// every other cluster is unchanged (same test, per triangle).
+
 @compute @workgroup_size(64)
-fn seed(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn dirty_clear(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = flat(gid);
-    if (c >= p.k) { return; }
-    labels[medoids[c]] = c;
-    dist[medoids[c]] = 0u;
+    if (c < p.k) { prev[p.t + c] = 0u; }
+}
+
+// flags[medoid] = its cluster (flags is free until mark_clear).
+@compute @workgroup_size(64)
+fn medoid_index(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let c = flat(gid);
+    if (c < p.k) { flags[medoids[c]] = c; }
 }
 
 @compute @workgroup_size(64)
-fn bfs_round(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn dirty_mark(@builtin(global_invocation_id) gid: vec3<u32>) {
     let t = flat(gid);
-    if (t >= p.t || dist[t] != NONE) { return; }
-    var best = NONE;
-    for (var i = dual_off[t]; i < dual_off[t + 1u]; i++) {
-        let n = nb(i);
-        if (dist[n] == p.d) { best = min(best, labels[n]); }
-    }
-    if (best != NONE) {
-        labels[t] = best;
-        dist[t] = p.d + 1u;
-        atomicAdd(&counters[p.slot], 1u);
-    }
+    if (t >= p.t || labels[t] == NONE) { return; }
+    let l = labels[t];
+    let before = prev[t];
+    if (medoids[l] == before) { return; }
+    prev[p.t + l] = 1u;
+    if (before == NONE) { return; }
+    // The cluster that triangle left, if its medoid is still one (it always is: splits only add).
+    let c = flags[before];
+    if (c < p.k && medoids[c] == before) { prev[p.t + c] = 1u; }
+}
+
+@compute @workgroup_size(64)
+fn remember(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let t = flat(gid);
+    if (t < p.t && labels[t] != NONE) { prev[t] = result[labels[t]]; }
 }
 
 @compute @workgroup_size(64)
@@ -98,7 +104,7 @@ fn mem_count(@builtin(global_invocation_id) gid: vec3<u32>) {
     atomicAdd(&mem_off[labels[t]], 1u);
 }
 
-// Any order within a cluster: update sorts its members, stats does not need an order.
+// Any order within a cluster: update sorts its members, split.wgsl does not need an order.
 @compute @workgroup_size(64)
 fn mem_scatter(@builtin(global_invocation_id) gid: vec3<u32>) {
     let t = flat(gid);
@@ -116,6 +122,9 @@ fn mem_scatter(@builtin(global_invocation_id) gid: vec3<u32>) {
 // clusters (rare) fall back to one thread running a BFS per source in global scratch.
 
 const MAXM: u32 = 256u;
+// Threads per update workgroup: 64 on a GPU; the host sets 8 (one SIMD row) on lavapipe, where
+// every barrier switches between the rows of a workgroup and the BFS levels are barrier-bound.
+override UW: u32 = 64u;
 const MAXADJ: u32 = 1024u;
 
 var<workgroup> wm: array<u32, 256>;
@@ -129,7 +138,6 @@ var<workgroup> w_m: u32;
 var<workgroup> w_go: u32;
 var<workgroup> w_changed: atomic<u32>;
 var<workgroup> w_best: atomic<u32>;
-var<workgroup> w_part: array<u32, 64>;
 
 // Local index of triangle x in the sorted member list wm[0..m).
 fn local_index(x: u32, m: u32) -> u32 {
@@ -142,6 +150,12 @@ fn local_index(x: u32, m: u32) -> u32 {
     return lo;
 }
 
+// Word w of a reach set with every source of an m-member cluster present.
+fn full_word(w: u32, words: u32, m: u32) -> u32 {
+    if (w + 1u == words && m % 32u != 0u) { return (1u << (m % 32u)) - 1u; }
+    return NONE;
+}
+
 fn finish(c: u32, new_medoid: u32, shift: u32) {
     result[c] = new_medoid;
     result[p.k + c] = shift;
@@ -149,16 +163,25 @@ fn finish(c: u32, new_medoid: u32, shift: u32) {
     if (new_medoid != medoids[c]) { atomicAdd(&counters[CHANGED], 1u); }
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(UW)
 fn update(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let c = group(wid);
     if (c >= p.k) { return; }
     if (lid == 0u) {
         w_m = atomicLoad(&mem_off[c + 1u]) - atomicLoad(&mem_off[c]);
+        // Unchanged members: the same medoid, no shift (as the CPU's cache hit).
+        if (prev[p.t + c] == 0u) { w_m = NONE; }
         atomicStore(&w_best, NONE);
         atomicStore(&w_changed, 0u);
     }
     let m = workgroupUniformLoad(&w_m);
+    if (m == NONE) {
+        if (lid == 0u) {
+            result[c] = medoids[c];
+            result[p.k + c] = 0u;
+        }
+        return;
+    }
     let off = atomicLoad(&mem_off[c]);
     if (m > MAXM) {
         if (lid == 0u) { large_update(c, off, m); }
@@ -166,9 +189,9 @@ fn update(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index
     }
     // Members, sorted by rank (they are distinct): local index = position in ascending order, so
     // ties on the sum go to the lowest triangle id as on the CPU.
-    for (var i = lid; i < m; i += 64u) { wtmp[i] = mem_items[off + i]; }
+    for (var i = lid; i < m; i += UW) { wtmp[i] = mem_items[off + i]; }
     workgroupBarrier();
-    for (var i = lid; i < m; i += 64u) {
+    for (var i = lid; i < m; i += UW) {
         let x = wtmp[i];
         var r = 0u;
         for (var j = 0u; j < m; j++) { r += u32(wtmp[j] < x); }
@@ -176,7 +199,7 @@ fn update(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index
     }
     workgroupBarrier();
     // Local adjacency: neighbours with the same label.
-    for (var i = lid; i < m; i += 64u) {
+    for (var i = lid; i < m; i += UW) {
         let t = wm[i];
         var n = 0u;
         for (var e = dual_off[t]; e < dual_off[t + 1u]; e++) { n += u32(labels[nb(e)] == c); }
@@ -192,7 +215,7 @@ fn update(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index
         if (lid == 0u) { large_update(c, off, m); }
         return;
     }
-    for (var i = lid; i < m; i += 64u) {
+    for (var i = lid; i < m; i += UW) {
         let t = wm[i];
         var at = loff[i];
         for (var e = dual_off[t]; e < dual_off[t + 1u]; e++) {
@@ -206,7 +229,7 @@ fn update(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index
     let words = (m + 31u) / 32u;
     let stride = m * words; // second reach buffer
     let old = local_index(medoids[c], m);
-    for (var v = lid; v < m; v += 64u) {
+    for (var v = lid; v < m; v += UW) {
         for (var w = 0u; w < words; w++) { reach[v * words + w] = 0u; }
         reach[v * words + v / 32u] = 1u << (v % 32u);
         sums[v] = 0u;
@@ -218,12 +241,18 @@ fn update(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index
     var d = 0u;
     loop {
         let nxt = stride - cur;
-        for (var v = lid; v < m; v += 64u) {
+        for (var v = lid; v < m; v += UW) {
             var grew = 0u;
+            let first = loff[v];
+            let end = loff[v + 1u];
             for (var w = 0u; w < words; w++) {
                 let own = reach[cur + v * words + w];
                 var x = own;
-                for (var e = loff[v]; e < loff[v + 1u]; e++) { x |= reach[cur + ladj[e] * words + w]; }
+                // A word whose sources have all arrived cannot grow: skip its neighbours (most
+                // words fill well before the last level).
+                if (own != full_word(w, words, m)) {
+                    for (var e = first; e < end; e++) { x |= reach[cur + ladj[e] * words + w]; }
+                }
                 var fresh = x & ~own;
                 reach[nxt + v * words + w] = x;
                 if (fresh != 0u) {
@@ -251,7 +280,7 @@ fn update(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index
         d++;
         if (workgroupUniformLoad(&w_go) == 0u) { break; }
     }
-    for (var v = lid; v < m; v += 64u) {
+    for (var v = lid; v < m; v += UW) {
         var reached = 0u;
         for (var w = 0u; w < words; w++) { reached += countOneBits(reach[cur + v * words + w]); }
         // Unreachable members cost the member count each, as on the CPU.
@@ -351,63 +380,6 @@ fn mark(@builtin(global_invocation_id) gid: vec3<u32>) {
 fn place(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = flat(gid);
     if (c < p.k) { medoids[flags[result[c]]] = result[c]; }
-}
-
-// ---- split support -----------------------------------------------------------------------------
-
-// Distinct vertices (only for clusters within the triangle limit, as the CPU checks triangles
-// first) and the farthest member (largest distance, lowest id).
-@compute @workgroup_size(64)
-fn stats(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let c = group(wid);
-    if (c >= p.k) { return; }
-    let off = atomicLoad(&mem_off[c]);
-    let m = atomicLoad(&mem_off[c + 1u]) - off;
-    // Farthest: a per-thread best, then thread 0 over the 64.
-    var far = NONE;
-    var fd = 0u;
-    for (var i = lid; i < m; i += 64u) {
-        let t = mem_items[off + i];
-        let dt = dist[t];
-        if (far == NONE || dt > fd || (dt == fd && t < far)) {
-            far = t;
-            fd = dt;
-        }
-    }
-    let small = m <= p.max_t;
-    if (small) {
-        for (var i = lid; i < 3u * m; i += 64u) { reach[i] = idx(3u * mem_items[off + i / 3u] + i % 3u); }
-    }
-    workgroupBarrier();
-    var distinct = 0u;
-    if (small) {
-        for (var i = lid; i < 3u * m; i += 64u) {
-            var first = true;
-            for (var j = 0u; j < i; j++) {
-                if (reach[j] == reach[i]) { first = false; break; }
-            }
-            distinct += u32(first);
-        }
-    }
-    w_part[lid] = distinct;
-    wtmp[lid] = far;
-    loff[lid] = fd;
-    workgroupBarrier();
-    if (lid == 0u) {
-        var total = 0u;
-        var bf = NONE;
-        var bd = 0u;
-        for (var i = 0u; i < 64u; i++) {
-            total += w_part[i];
-            let f = wtmp[i];
-            if (f != NONE && (bf == NONE || loff[i] > bd || (loff[i] == bd && f < bf))) {
-                bf = f;
-                bd = loff[i];
-            }
-        }
-        result[2u * p.k + c] = total;
-        result[3u * p.k + c] = bf;
-    }
 }
 
 var<workgroup> w_sum: atomic<u32>;

@@ -81,5 +81,16 @@ pub(super) fn run(a: ParityArgs, quiet: bool) -> Result<()> {
     } else {
         print_checks(&checks);
     }
+    if gpu.timing_each_kernel() {
+        // MESHLETLAB_GPU_PROFILE: where the GPU time of all checks went, to stderr.
+        let p = gpu.profile();
+        eprintln!(
+            "gpu profile: {} submissions, {} dispatches, {} round trips ({:.3} s waiting), {:.3} s kernels",
+            p.submissions, p.dispatches, p.round_trips, p.wait_seconds, p.kernel_seconds
+        );
+        for (k, (n, s)) in &p.per_kernel {
+            eprintln!("gpu profile: {k:<16} {n:>7} {:>10.1} ms", s * 1e3);
+        }
+    }
     verdict(&a.mesh, &checks)
 }

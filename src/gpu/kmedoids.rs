@@ -3,9 +3,14 @@
 //! iteration and split counts and meshlets.
 //!
 //! The loop is driven from the host, but the per-triangle data (dual graph, labels, distances,
-//! members) stays on the GPU. Per BFS batch the host reads 8 round counters; per iteration 3
-//! counters; per split round the per-cluster counts (O(clusters)); labels and distances come back
-//! once, at the end, to pack meshlets.
+//! members) stays on the GPU. One iteration (medoid update, then assignment) is one submission and
+//! one host round trip: the host records as many BFS levels as the last assignment needed plus
+//! two, and reads the convergence counters and the frontier sizes together; only a deeper
+//! assignment costs another round trip. Per split round the host reads per-cluster counts
+//! (O(clusters)); labels and distances come back once, at the end, to pack meshlets.
+//!
+//! Where the CPU caches updates by member list, the GPU marks the clusters whose members changed
+//! (`dirty_mark`) and updates only those: same results, same skipped work.
 
 use super::adjacency::{AdjacencyKernels, DeviceAdjacency, Timing};
 use super::scan::ScanJob;
@@ -19,9 +24,13 @@ use crate::strategy::kmedoids::{
 };
 use std::time::Instant;
 
-/// BFS rounds recorded per submission (their update counters come back together).
-const ROUNDS: usize = 8;
-const COUNTERS: usize = 8 + ROUNDS;
+/// Frontier-size counters (a ring in `wgsl/assign.wgsl`, after 8 update counters).
+const RING: usize = 64;
+const SIZES: usize = 8;
+const COUNTERS: usize = SIZES + RING;
+/// Most BFS levels recorded in one submission (fewer than the ring, so no slot is reused before
+/// the host reads it).
+const MAX_LEVELS: usize = RING - 4;
 
 /// A GPU k-medoids run: the same [`Clustering`] as the CPU, plus GPU facts.
 pub struct GpuClustering {
@@ -33,26 +42,42 @@ pub struct GpuClustering {
     pub adjacency_kernel: f64,
     /// Cluster updates that took the one-thread path (over 256 members or a dense local graph).
     pub large_updates: u32,
-    /// BFS rounds run in total.
+    /// BFS levels run in total (dispatches of `push` that had a frontier).
     pub bfs_rounds: u32,
+    /// Cluster updates skipped because the members had not changed.
+    pub skipped_updates: u64,
     /// Wall time of the whole run in seconds.
     pub seconds: f64,
 }
 
 /// Per cluster: triangles, distinct vertices, farthest member.
 type ClusterStats = (Vec<u32>, Vec<u32>, Vec<u32>);
+/// After an assignment: unreached triangles, the counters, and the extra reads.
+type Assigned = (usize, Vec<u32>, Vec<Vec<u32>>);
+
+/// The three kernel modules of a run.
+struct Family<'a> {
+    update: &'a Kernels,
+    assign: &'a Kernels,
+    split: &'a Kernels,
+}
 
 struct Run<'a> {
     gpu: &'a Gpu,
     kernels: &'a Kernels,
+    assign_kernels: &'a Kernels,
+    split_kernels: &'a Kernels,
     scan: &'a Scan,
     bind: wgpu::BindGroup,
+    assign_bind: wgpu::BindGroup,
+    split_bind: wgpu::BindGroup,
     labels: wgpu::Buffer,
     dist: wgpu::Buffer,
     medoids: wgpu::Buffer,
     counters: wgpu::Buffer,
     mem_off: wgpu::Buffer,
     result: wgpu::Buffer,
+    prev: wgpu::Buffer,
     scratch: wgpu::Buffer,
     t: usize,
     k_cap: usize,
@@ -64,8 +89,30 @@ struct Run<'a> {
     /// Scan of the member offsets, for the cluster count it was bound for (changes per split).
     mem_scan: Option<(usize, ScanJob)>,
     large: u32,
-    rounds: u32,
+    rounds: std::cell::Cell<u32>,
+    skipped: u64,
+    /// BFS levels to record up front: the last assignment's depth plus two.
+    levels: std::cell::Cell<usize>,
+    /// Kernel seconds of the assignments (added to `timing` at the end).
+    kernel: std::cell::Cell<f64>,
 }
+
+/// The update kernels' entry points.
+const UPDATE_ENTRIES: &[&str] = &[
+    "clear_counters",
+    "dirty_clear",
+    "medoid_index",
+    "dirty_mark",
+    "remember",
+    "mem_clear",
+    "mem_count",
+    "mem_scatter",
+    "update",
+    "mark_clear",
+    "mark",
+    "place",
+    "dist_partial",
+];
 
 /// Runs fast-mode k-medoids on the GPU.
 pub fn cluster(
@@ -90,29 +137,37 @@ pub fn cluster(
     }
     let ak = AdjacencyKernels::new(gpu);
     let (adj, adj_timing) = ak.build(gpu, mesh)?;
-    let kernels = Kernels::new(
+    // One SIMD row per update workgroup on lavapipe (see `UW` in the WGSL).
+    let uw = if gpu.is_cpu() { 8.0 } else { 64.0 };
+    let kernels = Kernels::with_constants(
         gpu,
         "kmedoids",
         include_str!("../../wgsl/kmedoids.wgsl"),
-        15,
-        &[
-            "clear",
-            "clear_counters",
-            "seed",
-            "bfs_round",
-            "mem_clear",
-            "mem_count",
-            "mem_scatter",
-            "update",
-            "mark_clear",
-            "mark",
-            "place",
-            "stats",
-            "dist_partial",
-        ],
+        14,
+        UPDATE_ENTRIES,
+        &[("UW", uw)],
+    );
+    let assign_kernels = Kernels::new(
+        gpu,
+        "assign",
+        include_str!("../../wgsl/assign.wgsl"),
+        8,
+        &["clear", "seed", "push"],
+    );
+    let split_kernels = Kernels::new(
+        gpu,
+        "split",
+        include_str!("../../wgsl/split.wgsl"),
+        10,
+        &["stats"],
     );
     let scan = Scan::new(gpu);
-    let mut run = Run::new(gpu, &kernels, &scan, &adj, limits)?;
+    let family = Family {
+        update: &kernels,
+        assign: &assign_kernels,
+        split: &split_kernels,
+    };
+    let mut run = Run::new(gpu, family, &scan, &adj, limits)?;
     run.timing.upload += adj_timing.upload;
     run.timing.kernel += adj_timing.kernel;
     run.timing.readback += adj_timing.readback;
@@ -121,7 +176,9 @@ pub fn cluster(
     let mut host_dual: Option<Csr> = None;
     loop {
         run.upload_medoids(&medoids)?;
-        if run.assign(medoids.len())? == 0 {
+        let mut b = Batch::new(gpu);
+        run.record_assign(&mut b, medoids.len());
+        if run.finish_assign(b, medoids.len(), &[])?.0 == 0 {
             break;
         }
         // Components without a medoid (rare): the host floods them, as the CPU does.
@@ -158,7 +215,9 @@ pub fn cluster(
         medoids.sort_unstable();
         medoids.dedup();
         run.upload_medoids(&medoids)?;
-        run.assign(medoids.len())?;
+        let mut b = Batch::new(gpu);
+        run.record_assign(&mut b, medoids.len());
+        run.finish_assign(b, medoids.len(), &[])?;
         medoids = run.converge(
             medoids,
             cfg.split_iterations,
@@ -185,11 +244,13 @@ pub fn cluster(
         },
         timing: Timing {
             readback: run.timing.readback + run.readback.get(),
+            kernel: run.timing.kernel + run.kernel.get(),
             ..run.timing
         },
         adjacency_kernel: adj_timing.kernel,
         large_updates: run.large,
-        bfs_rounds: run.rounds,
+        bfs_rounds: run.rounds.get(),
+        skipped_updates: run.skipped,
         seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -197,7 +258,7 @@ pub fn cluster(
 impl<'a> Run<'a> {
     fn new(
         gpu: &'a Gpu,
-        kernels: &'a Kernels,
+        family: Family<'a>,
         scan: &'a Scan,
         adj: &DeviceAdjacency,
         limits: Limits,
@@ -221,7 +282,12 @@ impl<'a> Run<'a> {
                 )
             });
         let mem_items = gpu.zeros("members", t);
-        let bind = kernels.bind(
+        // No triangle remembers a medoid before the first update: every cluster starts changed.
+        let mut prev = vec![u32::MAX; t + k_cap];
+        prev[t..].fill(1);
+        let prev = gpu.upload("previous medoids", &prev);
+        let frontier = gpu.zeros("frontier", 2 * t);
+        let bind = family.update.bind(
             gpu,
             &[
                 &adj.dual_offsets,
@@ -237,22 +303,54 @@ impl<'a> Run<'a> {
                 &result,
                 &flags,
                 &scratch,
+                &prev,
+            ],
+        );
+        let split_bind = family.split.bind(
+            gpu,
+            &[
+                &mem_off,
+                &mem_items,
+                &labels,
+                &dist,
+                &result,
                 &adj.indices.a,
                 &adj.indices.b,
+                &adj.vt_offsets,
+                &adj.vt_items.a,
+                &adj.vt_items.b,
+            ],
+        );
+        let assign_bind = family.assign.bind(
+            gpu,
+            &[
+                &adj.dual_offsets,
+                &adj.dual_items.a,
+                &adj.dual_items.b,
+                &labels,
+                &dist,
+                &medoids,
+                &counters,
+                &frontier,
             ],
         );
         let flag_scan = scan.bind(gpu, &flags, t + 1);
         Ok(Self {
             gpu,
-            kernels,
+            kernels: family.update,
+            assign_kernels: family.assign,
+            split_kernels: family.split,
             scan,
             bind,
+            assign_bind,
+            split_bind,
             labels,
             dist,
             medoids,
             counters,
             mem_off,
             result,
+            prev,
             scratch,
             t,
             k_cap,
@@ -265,7 +363,10 @@ impl<'a> Run<'a> {
             flag_scan,
             mem_scan: None,
             large: 0,
-            rounds: 0,
+            rounds: std::cell::Cell::new(0),
+            skipped: 0,
+            levels: std::cell::Cell::new(16),
+            kernel: std::cell::Cell::new(0.0),
         })
     }
 
@@ -307,40 +408,64 @@ impl<'a> Run<'a> {
         Ok(())
     }
 
-    /// Multi-source BFS from the k medoids on the GPU; returns the number of unreached triangles.
-    fn assign(&mut self, k: usize) -> Result<usize, GpuError> {
-        let (kern, bind, t) = (self.kernels, &self.bind, self.t);
-        let mut b = Batch::new(self.gpu);
-        b.threads(kern, "clear", bind, self.params(k, 0, 0), t);
-        b.threads(kern, "seed", bind, self.params(k, 0, 0), k);
-        self.timing.kernel += b.run()?;
-        let mut reached = k;
-        let mut d = 0u32;
-        loop {
-            let mut b = Batch::new(self.gpu);
-            b.threads(kern, "clear_counters", bind, self.params(k, 0, 0), COUNTERS);
-            for r in 0..ROUNDS {
-                b.threads(
-                    kern,
-                    "bfs_round",
-                    bind,
-                    self.params(k, d + r as u32, 8 + r as u32),
-                    t,
-                );
-            }
-            self.timing.kernel += b.run()?;
-            let c = self.read(&self.counters, 8, ROUNDS)?;
-            for (r, &n) in c.iter().enumerate() {
-                reached += n as usize;
-                if n == 0 {
-                    self.rounds += d + r as u32 + 1;
-                    return Ok(t - reached);
-                }
-            }
-            d += ROUNDS as u32;
+    /// Records the multi-source BFS from the k medoids: clear, seed and the expected number of
+    /// levels (the host checks the frontier sizes afterwards, [`Run::finish_assign`]).
+    fn record_assign<'b>(&'b self, b: &mut Batch<'b>, k: usize) {
+        let (kern, bind, t) = (self.assign_kernels, &self.assign_bind, self.t);
+        let p = self.params(k, 0, 0);
+        b.groups(kern, "clear", bind, p, self.gpu.stride_groups(t));
+        b.groups(kern, "seed", bind, p, self.gpu.stride_groups(k));
+        self.record_levels(b, k, 0, self.levels.get().min(MAX_LEVELS));
+    }
+
+    fn record_levels<'b>(&'b self, b: &mut Batch<'b>, k: usize, from: usize, n: usize) {
+        let groups = self.gpu.stride_groups(self.t);
+        for d in from..from + n {
+            let p = self.params(k, d as u32, 0);
+            b.groups(self.assign_kernels, "push", &self.assign_bind, p, groups);
         }
     }
 
+    /// Runs `b` (which ends with [`Run::record_assign`]) and reads the update counters, the
+    /// frontier sizes and `reads` in the same round trip; records more levels while the frontier
+    /// is not empty. Returns the unreached triangles, the update counters and the reads.
+    fn finish_assign(
+        &self,
+        b: Batch<'_>,
+        k: usize,
+        reads: &[(&wgpu::Buffer, usize, usize)],
+    ) -> Result<Assigned, GpuError> {
+        let mut all = vec![(&self.counters, 0, COUNTERS)];
+        all.extend_from_slice(reads);
+        let (time, mut out) = b.run_read(&all)?;
+        self.kernel.set(self.kernel.get() + time);
+        let counters = out.remove(0);
+        let mut recorded = self.levels.get().min(MAX_LEVELS);
+        let mut sizes = counters.clone();
+        // Level d's frontier size is slot d % RING; level 0's is k.
+        let mut reached = k;
+        let mut d = 1;
+        loop {
+            if d > recorded {
+                // Deeper than recorded: more levels, another round trip.
+                let more = MAX_LEVELS;
+                let mut b = Batch::new(self.gpu);
+                self.record_levels(&mut b, k, recorded, more);
+                let (time, mut r) = b.run_read(&[(&self.counters, 0, COUNTERS)])?;
+                self.kernel.set(self.kernel.get() + time);
+                sizes = r.remove(0);
+                recorded += more;
+            }
+            let n = sizes[SIZES + d % RING] as usize;
+            reached += n;
+            if n == 0 {
+                self.rounds.set(self.rounds.get() + d as u32);
+                self.levels.set(d + 2);
+                return Ok((self.t - reached, counters, out));
+            }
+            d += 1;
+        }
+    }
     /// Members CSR of the current labels (recorded into `b`).
     fn record_members<'b>(&'b self, b: &mut Batch<'b>, k: usize, job: &'b ScanJob) {
         let (kern, bind, t) = (self.kernels, &self.bind, self.t);
@@ -350,7 +475,6 @@ impl<'a> Run<'a> {
         b.threads(kern, "mem_scatter", bind, self.params(k, 0, 0), t);
     }
 
-    /// The update plus the medoid sort; returns (shift sum, changed count).
     /// Binds the member-offset scan for `k` clusters (once per cluster count).
     fn bind_mem_scan(&mut self, k: usize) {
         if self.mem_scan.as_ref().is_none_or(|(n, _)| *n != k) {
@@ -358,24 +482,31 @@ impl<'a> Run<'a> {
         }
     }
 
-    fn update(&mut self, k: usize) -> Result<(u64, u32), GpuError> {
+    /// One iteration as one submission: which clusters changed, the medoid update, the medoid
+    /// sort, then the assignment. Returns (shift sum, medoids changed).
+    fn iterate(&mut self, k: usize) -> Result<(u64, u32), GpuError> {
         self.bind_mem_scan(k);
-        let time = {
-            let mem_scan = &self.mem_scan.as_ref().expect("bound").1;
-            let (kern, bind, t) = (self.kernels, &self.bind, self.t);
-            let mut b = Batch::new(self.gpu);
-            b.threads(kern, "clear_counters", bind, self.params(k, 0, 0), COUNTERS);
-            self.record_members(&mut b, k, mem_scan);
-            b.groups(kern, "update", bind, self.params(k, 0, 0), k as u32);
-            b.threads(kern, "mark_clear", bind, self.params(k, 0, 0), t + 1);
-            b.threads(kern, "mark", bind, self.params(k, 0, 0), k);
-            self.scan.record(&mut b, &self.flag_scan);
-            b.threads(kern, "place", bind, self.params(k, 0, 0), k);
-            b.run()?
-        };
-        self.timing.kernel += time;
-        let c = self.read(&self.counters, 0, 3)?;
+        let (kern, bind, t) = (self.kernels, &self.bind, self.t);
+        let mem_scan = &self.mem_scan.as_ref().expect("bound").1;
+        let p = self.params(k, 0, 0);
+        let mut b = Batch::new(self.gpu);
+        b.threads(kern, "clear_counters", bind, p, COUNTERS);
+        b.threads(kern, "dirty_clear", bind, p, k);
+        b.threads(kern, "medoid_index", bind, p, k);
+        b.threads(kern, "dirty_mark", bind, p, t);
+        self.record_members(&mut b, k, mem_scan);
+        b.groups(kern, "update", bind, p, k as u32);
+        b.threads(kern, "mark_clear", bind, p, t + 1);
+        b.threads(kern, "mark", bind, p, k);
+        self.scan.record(&mut b, &self.flag_scan);
+        b.threads(kern, "place", bind, p, k);
+        b.threads(kern, "remember", bind, p, t);
+        self.record_assign(&mut b, k);
+        // The dirty flags come back too, to count the skipped updates.
+        let dirty = (&self.prev, t, k);
+        let (_, c, r) = self.finish_assign(b, k, &[dirty])?;
         self.large += c[2];
+        self.skipped += r[0].iter().filter(|&&x| x == 0).count() as u64;
         Ok((c[0] as u64, c[1]))
     }
 
@@ -391,10 +522,9 @@ impl<'a> Run<'a> {
         let k = medoids.len();
         let mut moved = false;
         for _ in 0..max_iter {
-            let (shift, changed) = self.update(k)?;
+            let (shift, changed) = self.iterate(k)?;
             *iterations += 1;
             moved = true;
-            self.assign(k)?;
             let mean_shift = shift as f64 / k.max(1) as f64;
             if changed == 0 || mean_shift <= threshold {
                 break;
@@ -410,16 +540,11 @@ impl<'a> Run<'a> {
     fn distance_sum(&mut self) -> Result<u64, GpuError> {
         let groups = self.t.div_ceil(super::WG as usize);
         let mut b = Batch::new(self.gpu);
-        b.threads(
-            self.kernels,
-            "dist_partial",
-            &self.bind,
-            self.params(0, 0, 0),
-            self.t,
-        );
-        self.timing.kernel += b.run()?;
-        let parts = self.read(&self.scratch, 0, groups)?;
-        Ok(parts.iter().map(|&x| x as u64).sum())
+        let p = self.params(0, 0, 0);
+        b.threads(self.kernels, "dist_partial", &self.bind, p, self.t);
+        let (time, parts) = b.run_read(&[(&self.scratch, 0, groups)])?;
+        self.timing.kernel += time;
+        Ok(parts[0].iter().map(|&x| x as u64).sum())
     }
 
     /// Per cluster: triangles, distinct vertices (within the triangle limit), farthest member.
@@ -429,19 +554,13 @@ impl<'a> Run<'a> {
             let mem_scan = &self.mem_scan.as_ref().expect("bound").1;
             let mut b = Batch::new(self.gpu);
             self.record_members(&mut b, k, mem_scan);
-            b.groups(
-                self.kernels,
-                "stats",
-                &self.bind,
-                self.params(k, 0, 0),
-                k as u32,
-            );
-            b.run()?
+            let p = self.params(k, 0, 0);
+            b.threads(self.split_kernels, "stats", &self.split_bind, p, k);
+            b.run_read(&[(&self.mem_off, 0, k + 1), (&self.result, 2 * k, 2 * k)])?
         };
-        self.timing.kernel += time;
-        let off = self.read(&self.mem_off, 0, k + 1)?;
+        self.timing.kernel += time.0;
+        let (off, r) = (&time.1[0], &time.1[1]);
         let triangles = off.windows(2).map(|w| w[1] - w[0]).collect();
-        let r = self.read(&self.result, 2 * k, 2 * k)?;
         Ok((triangles, r[..k].to_vec(), r[k..].to_vec()))
     }
 }

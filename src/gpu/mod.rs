@@ -20,6 +20,8 @@ mod scan;
 pub mod select;
 
 use bytemuck::Pod;
+use std::collections::BTreeMap;
+use std::sync::Mutex;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
@@ -76,6 +78,49 @@ pub struct Gpu {
     period_ns: f32,
     /// Per-dispatch [`Params`] at a 256-byte stride, bound with dynamic offsets.
     params: wgpu::Buffer,
+    /// Host-side counts since the last [`Gpu::take_profile`].
+    profile: Mutex<Profile>,
+    /// Whether every dispatch gets its own timestamps (see [`Gpu::time_each_kernel`]).
+    per_kernel: std::sync::atomic::AtomicBool,
+}
+
+/// Where GPU time went: host-side counts of submissions, dispatches and round trips, and, when
+/// [`Gpu::time_each_kernel`] is on, GPU time per kernel entry point.
+#[derive(Clone, Debug, Default)]
+pub struct Profile {
+    /// Command-buffer submissions.
+    pub submissions: u64,
+    /// Compute dispatches recorded.
+    pub dispatches: u64,
+    /// Times the host blocked until the GPU was idle (every readback is one).
+    pub round_trips: u64,
+    /// Host wall time spent blocked in those waits, in seconds.
+    pub wait_seconds: f64,
+    /// Kernel time from timestamps, in seconds (whole passes, or the sum of the per-kernel times).
+    pub kernel_seconds: f64,
+    /// Per entry point: dispatches and GPU seconds (only filled while timing each kernel).
+    pub per_kernel: BTreeMap<&'static str, (u64, f64)>,
+}
+
+impl Profile {
+    /// The difference `self - earlier` (counts since `earlier` was taken).
+    pub fn since(&self, earlier: &Profile) -> Profile {
+        let mut per_kernel = self.per_kernel.clone();
+        for (k, (n, s)) in &earlier.per_kernel {
+            let e = per_kernel.entry(k).or_insert((0, 0.0));
+            e.0 -= n;
+            e.1 -= s;
+        }
+        per_kernel.retain(|_, e| e.0 > 0);
+        Profile {
+            submissions: self.submissions - earlier.submissions,
+            dispatches: self.dispatches - earlier.dispatches,
+            round_trips: self.round_trips - earlier.round_trips,
+            wait_seconds: self.wait_seconds - earlier.wait_seconds,
+            kernel_seconds: self.kernel_seconds - earlier.kernel_seconds,
+            per_kernel,
+        }
+    }
 }
 
 impl Gpu {
@@ -134,7 +179,52 @@ impl Gpu {
             info,
             timestamps,
             period_ns,
+            profile: Mutex::new(Profile::default()),
+            per_kernel: std::sync::atomic::AtomicBool::new(
+                std::env::var_os("MESHLETLAB_GPU_PROFILE").is_some(),
+            ),
         })
+    }
+
+    /// Times every dispatch on its own (one compute pass each, same submissions), so the
+    /// [`Profile`] splits kernel time by entry point. Costs a little: passes end in barriers.
+    /// `MESHLETLAB_GPU_PROFILE=1` turns it on from the start and prints the profile at exit of
+    /// `parity`.
+    pub fn time_each_kernel(&self, on: bool) {
+        self.per_kernel
+            .store(on, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// Whether each dispatch is timed on its own.
+    pub fn timing_each_kernel(&self) -> bool {
+        self.per_kernel.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// The counts so far (they keep running; diff two with [`Profile::since`]).
+    pub fn profile(&self) -> Profile {
+        self.profile.lock().expect("profile lock").clone()
+    }
+
+    fn count(&self, f: impl FnOnce(&mut Profile)) {
+        f(&mut self.profile.lock().expect("profile lock"));
+    }
+
+    /// Whether the adapter is a CPU rasteriser (lavapipe): it runs a workgroup's invocations as
+    /// 8-wide SIMD rows on the host's cores, so kernels size their workgroups and grids for that.
+    pub fn is_cpu(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// Workgroups for a grid-stride kernel over `threads` elements: one per 64 on a GPU; on a CPU
+    /// adapter a few per core, since each workgroup costs a coroutine start there and the
+    /// elements are looped over anyway.
+    pub fn stride_groups(&self, threads: usize) -> u32 {
+        let groups = (threads as u32).div_ceil(WG).max(1);
+        if self.is_cpu() {
+            groups.min(32)
+        } else {
+            groups
+        }
     }
 
     /// "name (driver, type)".
@@ -190,7 +280,17 @@ impl Gpu {
         });
         let mut enc = self.device.create_command_encoder(&Default::default());
         enc.copy_buffer_to_buffer(buf, 4 * offset as u64, &staging, 0, size);
+        self.submit(enc);
+        self.map_read(&staging)
+    }
+
+    fn submit(&self, enc: wgpu::CommandEncoder) {
+        self.count(|p| p.submissions += 1);
         self.queue.submit([enc.finish()]);
+    }
+
+    /// Maps `staging` (already submitted to be filled), waits, and returns its words.
+    fn map_read(&self, staging: &wgpu::Buffer) -> Result<Vec<u32>, GpuError> {
         let slice = staging.slice(..);
         let (tx, rx) = std::sync::mpsc::channel();
         slice.map_async(wgpu::MapMode::Read, move |r| {
@@ -210,12 +310,20 @@ impl Gpu {
         Ok(out)
     }
 
-    /// Blocks until all submitted work is done.
+    /// Blocks until all submitted work is done (one host round trip).
     pub fn wait(&self) -> Result<(), GpuError> {
-        self.device
+        let t = Instant::now();
+        let r = self
+            .device
             .poll(wgpu::PollType::wait_indefinitely())
             .map(|_| ())
-            .map_err(|e| GpuError::Readback(e.to_string()))
+            .map_err(|e| GpuError::Readback(e.to_string()));
+        let s = t.elapsed().as_secs_f64();
+        self.count(|p| {
+            p.round_trips += 1;
+            p.wait_seconds += s;
+        });
+        r
     }
 }
 
@@ -302,11 +410,24 @@ impl Kernels {
         storage: u32,
         entries: &[&'static str],
     ) -> Self {
+        Self::with_constants(gpu, label, source, storage, entries, &[])
+    }
+
+    /// [`Kernels::new`] with values for the module's `override` constants.
+    pub fn with_constants(
+        gpu: &Gpu,
+        label: &str,
+        source: &str,
+        storage: u32,
+        entries: &[&'static str],
+        constants: &[(&str, f64)],
+    ) -> Self {
         let device = &gpu.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        let desc = wgpu::ShaderModuleDescriptor {
             label: Some(label),
             source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
+        };
+        let module = device.create_shader_module(desc);
         let mut layout_entries = vec![wgpu::BindGroupLayoutEntry {
             binding: 0,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -348,7 +469,7 @@ impl Kernels {
                         // Every kernel writes its workgroup memory before reading it; zeroing
                         // 25 KiB per workgroup cost more than the medoid update itself on lavapipe.
                         zero_initialize_workgroup_memory: false,
-                        ..Default::default()
+                        constants,
                     },
                     cache: None,
                 });
@@ -464,23 +585,43 @@ impl<'a> Batch<'a> {
     /// Records, submits and waits; returns the kernel time in seconds: GPU timestamps around the
     /// pass when available, else wall time from submit to idle.
     pub fn run(self) -> Result<f64, GpuError> {
-        let mut total = 0.0;
-        if std::env::var_os("MESHLETLAB_GPU_PROFILE").is_some() {
-            // One submission per dispatch, each timed: a profile, not a benchmark.
-            for s in &self.steps {
-                let t = self.run_chunk(std::slice::from_ref(s))?;
-                eprintln!("gpu profile: {:<14} {:>9.3} ms", s.entry, t * 1e3);
-                total += t;
-            }
-            return Ok(total);
-        }
-        for chunk in self.steps.chunks(PARAM_SLOTS as usize) {
-            total += self.run_chunk(chunk)?;
-        }
-        Ok(total)
+        Ok(self.run_read(&[])?.0)
     }
 
-    fn run_chunk(&self, steps: &[Step<'a>]) -> Result<f64, GpuError> {
+    /// [`Batch::run`], then copies each `(buffer, offset, len)` range (in u32) back to the host
+    /// in the same submission: one host round trip for the dispatches, the timestamps and the
+    /// reads together.
+    pub fn run_read(
+        self,
+        reads: &[(&wgpu::Buffer, usize, usize)],
+    ) -> Result<(f64, Vec<Vec<u32>>), GpuError> {
+        let per_kernel = self.gpu.timing_each_kernel();
+        // Two timestamps per step when timing each kernel; a query set holds at most 4096.
+        let chunk = if per_kernel {
+            2048
+        } else {
+            PARAM_SLOTS as usize
+        };
+        let mut total = 0.0;
+        let mut out = Vec::new();
+        let n = self.steps.len().div_ceil(chunk).max(1);
+        for i in 0..n {
+            let steps = &self.steps
+                [(i * chunk).min(self.steps.len())..((i + 1) * chunk).min(self.steps.len())];
+            let last = i + 1 == n;
+            let (t, r) = self.run_chunk(steps, if last { reads } else { &[] }, per_kernel)?;
+            total += t;
+            out = r;
+        }
+        Ok((total, out))
+    }
+
+    fn run_chunk(
+        &self,
+        steps: &[Step<'a>],
+        reads: &[(&wgpu::Buffer, usize, usize)],
+        per_kernel: bool,
+    ) -> Result<(f64, Vec<Vec<u32>>), GpuError> {
         let gpu = self.gpu;
         let mut bytes = vec![0u8; PARAM_STRIDE as usize * steps.len()];
         for (i, s) in steps.iter().enumerate() {
@@ -491,54 +632,126 @@ impl<'a> Batch<'a> {
         if !bytes.is_empty() {
             gpu.queue.write_buffer(&gpu.params, 0, &bytes);
         }
-        let queries = gpu.timestamps.then(|| {
-            let set = gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+        // Timestamps: around the one pass, or around each dispatch's own pass.
+        let stamps = if per_kernel { 2 * steps.len() } else { 2 };
+        let queries = (gpu.timestamps && !steps.is_empty()).then(|| {
+            gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
                 label: Some("kernel time"),
                 ty: wgpu::QueryType::Timestamp,
-                count: 2,
-            });
-            let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("timestamps"),
-                size: 16,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            (set, resolve)
+                count: stamps as u32,
+            })
         });
+        let stamp_words = if queries.is_some() { 2 * stamps } else { 0 };
+        let read_words: usize = reads.iter().map(|r| r.2).sum();
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        {
+        let writes = |i: usize, first: bool| {
+            queries
+                .as_ref()
+                .map(|set| wgpu::ComputePassTimestampWrites {
+                    query_set: set,
+                    beginning_of_pass_write_index: first.then_some(2 * i as u32),
+                    end_of_pass_write_index: Some(2 * i as u32 + 1),
+                })
+        };
+        let dispatch = |pass: &mut wgpu::ComputePass, i: usize, s: &Step| {
+            pass.set_pipeline(s.kernels.pipeline(s.entry));
+            pass.set_bind_group(0, s.bind, &[(i as u64 * PARAM_STRIDE) as u32]);
+            pass.dispatch_workgroups(s.dims[0], s.dims[1], s.dims[2]);
+        };
+        if per_kernel {
+            for (i, s) in steps.iter().enumerate() {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some(s.entry),
+                    timestamp_writes: writes(i, true),
+                });
+                dispatch(&mut pass, i, s);
+            }
+        } else if !steps.is_empty() {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: None,
-                timestamp_writes: queries.as_ref().map(|(set, _)| {
-                    wgpu::ComputePassTimestampWrites {
+                timestamp_writes: queries
+                    .as_ref()
+                    .map(|set| wgpu::ComputePassTimestampWrites {
                         query_set: set,
                         beginning_of_pass_write_index: Some(0),
                         end_of_pass_write_index: Some(1),
-                    }
-                }),
+                    }),
             });
             for (i, s) in steps.iter().enumerate() {
-                pass.set_pipeline(s.kernels.pipeline(s.entry));
-                pass.set_bind_group(0, s.bind, &[(i as u64 * PARAM_STRIDE) as u32]);
-                pass.dispatch_workgroups(s.dims[0], s.dims[1], s.dims[2]);
+                dispatch(&mut pass, i, s);
             }
         }
-        if let Some((set, resolve)) = &queries {
-            enc.resolve_query_set(set, 0..2, resolve, 0);
+        // One staging buffer: the requested ranges, then the timestamps.
+        let staging_words = read_words + stamp_words;
+        let staging = (staging_words > 0).then(|| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size: 4 * staging_words as u64,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        if let Some(staging) = &staging {
+            let mut at = 0u64;
+            for &(buf, offset, len) in reads {
+                if len > 0 {
+                    enc.copy_buffer_to_buffer(buf, 4 * offset as u64, staging, at, 4 * len as u64);
+                }
+                at += 4 * len as u64;
+            }
+            if let Some(set) = &queries {
+                let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("timestamps"),
+                    size: 8 * stamps as u64,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                enc.resolve_query_set(set, 0..stamps as u32, &resolve, 0);
+                enc.copy_buffer_to_buffer(&resolve, 0, staging, at, 8 * stamps as u64);
+            }
         }
+        gpu.count(|p| p.dispatches += steps.len() as u64);
         let t = Instant::now();
-        gpu.queue.submit([enc.finish()]);
-        gpu.wait()?;
-        let wall = t.elapsed().as_secs_f64();
-        match &queries {
-            Some((_, resolve)) => {
-                let ts = gpu.read(resolve, 0, 4)?;
-                let begin = ts[0] as u64 | (ts[1] as u64) << 32;
-                let end = ts[2] as u64 | (ts[3] as u64) << 32;
-                Ok(end.saturating_sub(begin) as f64 * gpu.period_ns as f64 * 1e-9)
+        gpu.submit(enc);
+        let words = match &staging {
+            Some(staging) => gpu.map_read(staging)?,
+            None => {
+                gpu.wait()?;
+                Vec::new()
             }
-            None => Ok(wall),
+        };
+        let wall = t.elapsed().as_secs_f64();
+        let mut out = Vec::with_capacity(reads.len());
+        let mut at = 0;
+        for r in reads {
+            out.push(words[at..at + r.2].to_vec());
+            at += r.2;
         }
+        let stamp = |q: usize| words[at + 2 * q] as u64 | (words[at + 2 * q + 1] as u64) << 32;
+        let ns = gpu.period_ns as f64 * 1e-9;
+        let time = if queries.is_none() {
+            wall
+        } else if per_kernel {
+            let mut total = 0.0;
+            let mut times = Vec::with_capacity(steps.len());
+            for (i, s) in steps.iter().enumerate() {
+                let dt = stamp(2 * i + 1).saturating_sub(stamp(2 * i)) as f64 * ns;
+                total += dt;
+                times.push((s.entry, dt));
+            }
+            gpu.count(|p| {
+                for (e, dt) in times {
+                    let k = p.per_kernel.entry(e).or_insert((0, 0.0));
+                    k.0 += 1;
+                    k.1 += dt;
+                }
+            });
+            total
+        } else {
+            stamp(1).saturating_sub(stamp(0)) as f64 * ns
+        };
+        gpu.count(|p| p.kernel_seconds += time);
+        Ok((time, out))
     }
 }
 

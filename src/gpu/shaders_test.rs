@@ -18,6 +18,14 @@ fn every_wgsl_file_validates_and_emits_spirv() {
         )
         .validate(&module)
         .unwrap_or_else(|e| panic!("{}: {e:?}", p.display()));
+        // Override constants (workgroup sizes) at their defaults, as a pipeline without values.
+        let (module, info) = naga::back::pipeline_constants::process_overrides(
+            &module,
+            &info,
+            None,
+            &Default::default(),
+        )
+        .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
         let spv = naga::back::spv::write_vec(&module, &info, &Default::default(), None)
             .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
         assert_eq!(spv[0], 0x0723_0203, "{}: SPIR-V magic", p.display());
