@@ -134,6 +134,11 @@ var<workgroup> ladj: array<u32, 1024>;
 var<workgroup> reach: array<u32, 4096>;
 var<workgroup> lvl_old: array<u32, 256>;
 var<workgroup> sums: array<u32, 256>;
+var<workgroup> cnt: array<u32, 256>;
+// Packed (sum << 8 | local index) keys: the best member whose sum is final, and the smallest lower
+// bound of the others.
+var<workgroup> w_full: atomic<u32>;
+var<workgroup> w_lb: atomic<u32>;
 var<workgroup> w_m: u32;
 var<workgroup> w_go: u32;
 var<workgroup> w_changed: atomic<u32>;
@@ -233,7 +238,12 @@ fn update(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index
         for (var w = 0u; w < words; w++) { reach[v * words + w] = 0u; }
         reach[v * words + v / 32u] = 1u << (v % 32u);
         sums[v] = 0u;
+        cnt[v] = 1u;
         lvl_old[v] = NONE;
+    }
+    if (lid == 0u) {
+        atomicStore(&w_full, NONE);
+        atomicStore(&w_lb, NONE);
     }
     workgroupBarrier();
     if (lid == 0u) { lvl_old[old] = 0u; }
@@ -268,23 +278,34 @@ fn update(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index
             }
             if (grew != 0u) {
                 sums[v] += (d + 1u) * grew;
+                cnt[v] += grew;
                 atomicStore(&w_changed, 1u);
+            }
+            // Early stop: a member reached by every source has its final sum; any other has at
+            // least its sum so far plus d + 2 hops per missing source. Once no such bound can beat
+            // (or tie below) the best final sum, the remaining levels would only finish the sums
+            // of members that cannot win: central members fill at about the cluster's radius,
+            // the BFS would otherwise run to its diameter.
+            if (cnt[v] == m) {
+                atomicMin(&w_full, (sums[v] << 8u) | v);
+            } else {
+                atomicMin(&w_lb, ((sums[v] + (d + 2u) * (m - cnt[v])) << 8u) | v);
             }
         }
         workgroupBarrier();
         if (lid == 0u) {
-            w_go = atomicLoad(&w_changed);
+            w_go = atomicLoad(&w_changed) * u32(atomicLoad(&w_lb) < atomicLoad(&w_full));
             atomicStore(&w_changed, 0u);
+            atomicStore(&w_lb, NONE);
         }
         cur = nxt;
         d++;
         if (workgroupUniformLoad(&w_go) == 0u) { break; }
     }
     for (var v = lid; v < m; v += UW) {
-        var reached = 0u;
-        for (var w = 0u; w < words; w++) { reached += countOneBits(reach[cur + v * words + w]); }
-        // Unreachable members cost the member count each, as on the CPU.
-        let total = sums[v] + (m - reached) * m;
+        // Unreachable members cost the member count each, as on the CPU. After an early stop a
+        // member not yet reached by every source gets a total above its bound, so it loses.
+        let total = sums[v] + (m - cnt[v]) * m;
         atomicMin(&w_best, (total << 8u) | v);
     }
     workgroupBarrier();

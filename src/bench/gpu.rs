@@ -10,7 +10,7 @@ use super::kmedoids::PAPER_TIMES;
 use super::plot::{line_chart, Axes, Series};
 use super::{machine_note, today};
 use crate::adjacency::{dual_graph, vertex_triangles};
-use crate::gpu::{self, timed as secs, Gpu};
+use crate::gpu::{self, timed as secs, Gpu, Profile};
 use crate::mesh::{self, subdivide::subdivide, Mesh};
 use crate::meshlet::{Limits, Meshlets};
 use crate::strategy::kmedoids::{cluster, Config as KConfig};
@@ -29,8 +29,10 @@ pub struct Config {
     pub out: PathBuf,
     /// Meshlet limits.
     pub limits: Limits,
-    /// Above this many triangles, skip the GPU and one-thread k-medoids (rayon still runs).
+    /// Above this many triangles, skip the GPU k-medoids (rayon still runs).
     pub kmedoids_gpu_max: usize,
+    /// Above this many triangles, skip the one-thread CPU runs and the GPU grower.
+    pub one_thread_max: usize,
     /// Skip the subdivided dragons (a quick run).
     pub quick: bool,
     /// No progress output.
@@ -44,11 +46,63 @@ struct Row {
     adj_gpu: gpu::adjacency::Timing,
     km_cpu1: Option<f64>,
     km_rayon: f64,
-    km_gpu: Option<(f64, gpu::adjacency::Timing, u32)>,
+    km_gpu: Option<KGpu>,
+    /// Per-kernel profile of a second GPU k-medoids run (bunny and the dragon).
+    profile: Option<Profile>,
     meshlets: usize,
     iterations: u32,
     grow: Vec<GrowRow>,
 }
+
+/// A timed GPU k-medoids run.
+#[derive(Clone)]
+struct KGpu {
+    seconds: f64,
+    timing: gpu::adjacency::Timing,
+    large: u32,
+    /// Host-side counts of the timed run (per-kernel timing off).
+    host: Profile,
+    updates: u64,
+    skipped: u64,
+}
+
+/// Meshes whose GPU k-medoids is also run with every kernel timed on its own.
+const PROFILED: &[&str] = &["stanford_bunny", "stanford_dragon_vrip"];
+
+/// What each k-medoids kernel does, as the CPU step it mirrors.
+const STEPS: &[(&str, &str)] = &[
+    ("vt_count", "adjacency: vertex -> triangle counts"),
+    ("vt_scatter", "adjacency: vertex -> triangle rows"),
+    ("vt_sort", "adjacency: sort each row"),
+    (
+        "dual_count",
+        "adjacency: dual-graph row sizes and side flags",
+    ),
+    ("dual_fill", "adjacency: dual-graph rows"),
+    ("block_sums", "prefix sum (every CSR)"),
+    ("scan_sums", "prefix sum (every CSR)"),
+    ("scan_blocks", "prefix sum (every CSR)"),
+    ("clear", "assign: reset labels and distances"),
+    ("seed", "assign: medoids at distance 0"),
+    ("push", "assign: one BFS level from the frontier"),
+    ("clear_counters", "update: reset counters"),
+    ("dirty_clear", "update: which clusters changed (cache test)"),
+    (
+        "medoid_index",
+        "update: which clusters changed (cache test)",
+    ),
+    ("dirty_mark", "update: which clusters changed (cache test)"),
+    ("mem_clear", "members CSR"),
+    ("mem_count", "members CSR"),
+    ("mem_scatter", "members CSR"),
+    ("update", "update: all-pairs BFS in each changed cluster"),
+    ("mark_clear", "update: sort the new medoids"),
+    ("mark", "update: sort the new medoids"),
+    ("place", "update: sort the new medoids"),
+    ("remember", "update: remember each triangle's medoid"),
+    ("stats", "split: distinct vertices, farthest member"),
+    ("dist_partial", "objective"),
+];
 
 /// One strategy's meshlets on one mesh, for the parallel-grower comparison.
 struct GrowRow {
@@ -131,30 +185,52 @@ pub fn run(cfg: &Config) -> Result<()> {
         }
         drop((vt, host));
         pb.set_message(format!("{name} ({t} triangles): growers"));
-        let grow = growers(&g, m, &dual, cfg.limits, small_grow(cfg, t), &one)
+        let grow = growers(&g, m, &dual, cfg.limits, t <= cfg.one_thread_max, &one)
             .with_context(|| format!("{name}: parallel grower"))?;
         drop(dual);
         pb.set_message(format!("{name} ({t} triangles): k-medoids, rayon"));
         let (cr, km_rayon) = secs(|| cluster(m, cfg.limits, &kc));
-        let small = t <= cfg.kmedoids_gpu_max;
-        let km_cpu1 = if small {
+        let km_cpu1 = if t <= cfg.one_thread_max {
             pb.set_message(format!("{name} ({t} triangles): k-medoids, one thread"));
             Some(secs(|| one.install(|| cluster(m, cfg.limits, &kc))).1)
         } else {
             None
         };
-        let km_gpu = if small {
+        let km_gpu = if t <= cfg.kmedoids_gpu_max {
             pb.set_message(format!("{name} ({t} triangles): k-medoids, GPU"));
+            let before = g.profile();
             let r = gpu::kmedoids::cluster(&g, m, cfg.limits, &kc)?;
             if r.clustering.labels != cr.labels || r.clustering.meshlets != cr.meshlets {
                 bail!("{name}: GPU k-medoids differs from the CPU's");
             }
-            Some((r.seconds, r.timing, r.large_updates))
+            Some(KGpu {
+                seconds: r.seconds,
+                timing: r.timing,
+                large: r.large_updates,
+                host: g.profile().since(&before),
+                updates: r.updates,
+                skipped: r.skipped_updates,
+            })
+        } else {
+            None
+        };
+        // The profile: the same run again with every dispatch timed on its own (its pass
+        // boundaries cost a little, so its times are not the table's).
+        let profile = if km_gpu.is_some() && PROFILED.contains(&name.as_str()) {
+            pb.set_message(format!("{name} ({t} triangles): k-medoids, GPU profile"));
+            g.time_each_kernel(true);
+            let before = g.profile();
+            let r = gpu::kmedoids::cluster(&g, m, cfg.limits, &kc);
+            g.time_each_kernel(false);
+            if r?.clustering.labels != cr.labels {
+                bail!("{name}: profiled GPU k-medoids differs from the CPU's");
+            }
+            Some(g.profile().since(&before))
         } else {
             None
         };
         pb.finish_and_clear();
-        say(format!("{name}: adjacency cpu {adj_cpu:.3}s gpu kernel {:.3}s; k-medoids rayon {km_rayon:.2}s gpu {:?}", adj_gpu.kernel, km_gpu.map(|k| k.0)));
+        say(format!("{name}: adjacency cpu {adj_cpu:.3}s gpu kernel {:.3}s; k-medoids rayon {km_rayon:.2}s gpu {:?}", adj_gpu.kernel, km_gpu.as_ref().map(|k| k.seconds)));
         rows.push(Row {
             mesh: name.clone(),
             triangles: t,
@@ -163,6 +239,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             km_cpu1,
             km_rayon,
             km_gpu,
+            profile,
             meshlets: cr.meshlets.len(),
             iterations: cr.iterations,
             grow,
@@ -208,11 +285,6 @@ pub fn run(cfg: &Config) -> Result<()> {
         ));
     }
     write(cfg, &g, &rows, &curve, &sweep)
-}
-
-/// Whether the GPU and one-thread grower runs fit the benchmark's time (same cut as k-medoids).
-fn small_grow(cfg: &Config, t: usize) -> bool {
-    t <= cfg.kmedoids_gpu_max
 }
 
 /// The serial growers, meshoptimizer and the parallel grower (CPU one thread, rayon, GPU; the
@@ -266,6 +338,93 @@ fn growers(
 
 type Curve = (u32, f64, f64, f64, f64, f64);
 
+/// Where the GPU k-medoids time goes: host traffic per iteration for every mesh, then kernel time
+/// per entry point for the profiled meshes.
+fn write_profile(md: &mut String, rows: &[Row]) -> Result<()> {
+    writeln!(
+        md,
+        "### Where the GPU time goes
+"
+    )?;
+    writeln!(md, "Host traffic of the timed runs above: submissions, dispatches and round trips (the host blocking until the GPU is idle, every readback being one) per k-medoids iteration; GPU idle = wall time minus kernel time (host work, launches, transfers).
+")?;
+    writeln!(md, "| mesh | iterations | submissions / iteration | dispatches / iteration | round trips / iteration | host blocked s | kernel s | GPU idle s |")?;
+    writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|")?;
+    for r in rows {
+        let Some(k) = &r.km_gpu else { continue };
+        let it = r.iterations.max(1) as f64;
+        writeln!(
+            md,
+            "| {} | {} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} | {:.2} |",
+            r.mesh,
+            r.iterations,
+            k.host.submissions as f64 / it,
+            k.host.dispatches as f64 / it,
+            k.host.round_trips as f64 / it,
+            k.host.wait_seconds,
+            k.timing.kernel,
+            (k.seconds - k.timing.kernel).max(0.0)
+        )?;
+    }
+    let profiled: Vec<&Row> = rows.iter().filter(|r| r.profile.is_some()).collect();
+    if profiled.is_empty() {
+        return Ok(());
+    }
+    writeln!(md, "
+Kernel time per entry point (GPU timestamps around each dispatch, in a second run of the same clustering; adjacency included), largest first on the last mesh:
+")?;
+    let mut head = String::from("| kernel | CPU step it mirrors |");
+    let mut rule = String::from("|---|---|");
+    for r in &profiled {
+        write!(
+            head,
+            " {} dispatches | ms | ms / iteration | share |",
+            r.mesh
+        )?;
+        rule.push_str("---:|---:|---:|---:|");
+    }
+    writeln!(
+        md,
+        "{head}
+{rule}"
+    )?;
+    let last = profiled
+        .last()
+        .and_then(|r| r.profile.as_ref())
+        .expect("profiled");
+    let mut names: Vec<&&str> = last.per_kernel.keys().collect();
+    for r in &profiled {
+        for k in r.profile.as_ref().expect("profiled").per_kernel.keys() {
+            if !names.contains(&k) {
+                names.push(k);
+            }
+        }
+    }
+    names.sort_by(|a, b| {
+        let t = |n: &&&str| last.per_kernel.get(**n).map_or(0.0, |e| e.1);
+        t(b).total_cmp(&t(a)).then(a.cmp(b))
+    });
+    for name in names {
+        let step = STEPS.iter().find(|(k, _)| k == name).map_or("", |(_, s)| s);
+        let mut line = format!("| `{name}` | {step} |");
+        for r in &profiled {
+            let p = r.profile.as_ref().expect("profiled");
+            let total: f64 = p.per_kernel.values().map(|e| e.1).sum();
+            let (n, s) = p.per_kernel.get(*name).copied().unwrap_or((0, 0.0));
+            write!(
+                line,
+                " {n} | {:.1} | {:.2} | {:.1} % |",
+                s * 1e3,
+                s * 1e3 / r.iterations.max(1) as f64,
+                100.0 * s / total.max(f64::MIN_POSITIVE)
+            )?;
+        }
+        writeln!(md, "{line}")?;
+    }
+    writeln!(md)?;
+    Ok(())
+}
+
 fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) -> Result<()> {
     std::fs::create_dir_all(&cfg.out)?;
     let opt =
@@ -308,9 +467,13 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
             r.adj_gpu.readback,
             r.km_cpu1.map(|x| format!("{x:.4}")).unwrap_or_default(),
             r.km_rayon,
-            r.km_gpu.map(|x| format!("{:.4}", x.0)).unwrap_or_default(),
             r.km_gpu
-                .map(|x| format!("{:.4}", x.1.kernel))
+                .as_ref()
+                .map(|x| format!("{:.4}", x.seconds))
+                .unwrap_or_default(),
+            r.km_gpu
+                .as_ref()
+                .map(|x| format!("{:.4}", x.timing.kernel))
                 .unwrap_or_default(),
             r.meshlets,
             r.iterations
@@ -322,27 +485,32 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
         "## k-medoids (fast mode, {}/{}), whole run including adjacency\n",
         cfg.limits.max_vertices, cfg.limits.max_triangles
     )?;
-    writeln!(md, "| mesh | triangles | meshlets | iterations | CPU 1 thread s | CPU rayon s | GPU s | GPU kernel s | GPU / rayon | one-thread updates |")?;
-    writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+    writeln!(md, "| mesh | triangles | meshlets | iterations | CPU 1 thread s | CPU rayon s | GPU s | GPU kernel s | GPU / rayon | cluster updates run / skipped | one-thread updates |")?;
+    writeln!(
+        md,
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    )?;
     for r in rows {
+        let k = r.km_gpu.as_ref();
         writeln!(
             md,
-            "| {} | {} | {} | {} | {} | {:.2} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {:.2} | {} | {} | {} | {} | {} |",
             r.mesh,
             r.triangles,
             r.meshlets,
             r.iterations,
             opt(r.km_cpu1, &|x| format!("{x:.2}")),
             r.km_rayon,
-            opt(r.km_gpu.map(|k| k.0), &|x| format!("{x:.2}")),
-            opt(r.km_gpu.map(|k| k.1.kernel), &|x| format!("{x:.2}")),
-            opt(r.km_gpu.map(|k| k.0 / r.km_rayon), &|x| format!("{x:.2}x")),
-            r.km_gpu
-                .map(|k| k.2.to_string())
-                .unwrap_or_else(|| "-".into())
+            opt(k.map(|k| k.seconds), &|x| format!("{x:.2}")),
+            opt(k.map(|k| k.timing.kernel), &|x| format!("{x:.2}")),
+            opt(k.map(|k| k.seconds / r.km_rayon), &|x| format!("{x:.2}x")),
+            k.map(|k| format!("{} / {}", k.updates - k.skipped, k.skipped))
+                .unwrap_or_else(|| "-".into()),
+            k.map(|k| k.large.to_string()).unwrap_or_else(|| "-".into())
         )?;
     }
-    writeln!(md, "\n\"skipped\": above {} triangles the GPU and one-thread runs are left out (`--kmedoids-gpu-max`) to keep the benchmark short; rayon runs on every mesh. Target: k-medoids on the 14 M-triangle mesh in under 5 minutes.\n", cfg.kmedoids_gpu_max)?;
+    writeln!(md, "\n\"skipped\": above {} triangles the one-thread CPU runs (and the GPU grower) are left out (`--one-thread-max`), above {} the GPU k-medoids (`--kmedoids-gpu-max`), to keep the benchmark short; rayon runs on every mesh. Targets: GPU / rayon <= 1.0; k-medoids on the 14 M-triangle mesh on the GPU in under 5 minutes. A cluster update is skipped when its members are those it had at the last update (the CPU's cache, the same test on the GPU).\n", cfg.one_thread_max, cfg.kmedoids_gpu_max)?;
+    write_profile(&mut md, rows)?;
     writeln!(
         md,
         "### Beside the paper's Table 4 (their k-medoids, their machine)\n"
@@ -363,7 +531,9 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
             near.mesh,
             near.triangles,
             near.km_rayon,
-            opt(near.km_gpu.map(|k| k.0), &|x| format!("{x:.2}"))
+            opt(near.km_gpu.as_ref().map(|k| k.seconds), &|x| format!(
+                "{x:.2}"
+            ))
         )?;
     }
     writeln!(md, "\n## Run time against error (bunny)\n")?;
@@ -441,7 +611,7 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
             },
             Series {
                 label: "k-medoids GPU (lavapipe)".into(),
-                points: pts(&|r| r.km_gpu.map(|k| k.0)),
+                points: pts(&|r| r.km_gpu.as_ref().map(|k| k.seconds)),
             },
             Series {
                 label: "adjacency CPU".into(),

@@ -39,9 +39,12 @@ pub enum BenchCommand {
         /// Meshlet limits.
         #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
         limits: Limits,
-        /// Above this many triangles, skip the GPU and one-thread k-medoids (rayon still runs).
-        #[arg(long, default_value_t = 4_000_000)]
+        /// Above this many triangles, skip the GPU k-medoids (rayon still runs).
+        #[arg(long, default_value_t = 16_000_000)]
         kmedoids_gpu_max: usize,
+        /// Above this many triangles, skip the one-thread CPU runs and the GPU grower.
+        #[arg(long, default_value_t = 4_000_000)]
+        one_thread_max: usize,
         /// Leave out the subdivided dragons (3.5 M and 14 M triangles).
         #[arg(long)]
         quick: bool,
@@ -246,6 +249,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             out,
             limits,
             kmedoids_gpu_max,
+            one_thread_max,
             quick,
         } => {
             let cfg = bench::gpu::Config {
@@ -253,6 +257,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
                 out,
                 limits,
                 kmedoids_gpu_max,
+                one_thread_max,
                 quick,
                 quiet: q,
             };

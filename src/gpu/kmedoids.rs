@@ -44,6 +44,8 @@ pub struct GpuClustering {
     pub large_updates: u32,
     /// BFS levels run in total (dispatches of `push` that had a frontier).
     pub bfs_rounds: u32,
+    /// Cluster updates over all iterations (clusters times iterations), skipped ones included.
+    pub updates: u64,
     /// Cluster updates skipped because the members had not changed.
     pub skipped_updates: u64,
     /// Wall time of the whole run in seconds.
@@ -90,6 +92,7 @@ struct Run<'a> {
     mem_scan: Option<(usize, ScanJob)>,
     large: u32,
     rounds: std::cell::Cell<u32>,
+    updates: u64,
     skipped: u64,
     /// BFS levels to record up front: the last assignment's depth plus two.
     levels: std::cell::Cell<usize>,
@@ -250,6 +253,7 @@ pub fn cluster(
         adjacency_kernel: adj_timing.kernel,
         large_updates: run.large,
         bfs_rounds: run.rounds.get(),
+        updates: run.updates,
         skipped_updates: run.skipped,
         seconds: start.elapsed().as_secs_f64(),
     })
@@ -364,6 +368,7 @@ impl<'a> Run<'a> {
             mem_scan: None,
             large: 0,
             rounds: std::cell::Cell::new(0),
+            updates: 0,
             skipped: 0,
             levels: std::cell::Cell::new(16),
             kernel: std::cell::Cell::new(0.0),
@@ -506,6 +511,7 @@ impl<'a> Run<'a> {
         let dirty = (&self.prev, t, k);
         let (_, c, r) = self.finish_assign(b, k, &[dirty])?;
         self.large += c[2];
+        self.updates += k as u64;
         self.skipped += r[0].iter().filter(|&&x| x == 0).count() as u64;
         Ok((c[0] as u64, c[1]))
     }

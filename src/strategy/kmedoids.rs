@@ -427,18 +427,22 @@ pub fn update_cached(
             let local = LocalGraph::new(dual, labels, c as u32, m);
             let mut dist = vec![u32::MAX; m.len()];
             let mut queue = Vec::with_capacity(m.len());
-            let mut best = (u64::MAX, 0usize);
-            for s in 0..m.len() {
-                let sum = local.bfs(s, &mut dist, &mut queue);
-                if sum < best.0 {
-                    best = (sum, s);
-                }
-            }
-            // Shift: hops from the new medoid to the old one, inside the cluster.
-            local.bfs(best.1, &mut dist, &mut queue);
             let old = m
                 .binary_search(&medoids[c])
                 .expect("a medoid belongs to its own cluster");
+            // The old medoid first: its sum is usually near the best, so most other BFS stop
+            // early. The minimum (sum, member) does not depend on the order.
+            let first = local.bfs(old, &mut dist, &mut queue, None);
+            let mut best = (first.expect("no bound, no early stop"), old);
+            for s in (0..m.len()).filter(|&s| s != old) {
+                if let Some(sum) = local.bfs(s, &mut dist, &mut queue, Some(best)) {
+                    if (sum, s) < best {
+                        best = (sum, s);
+                    }
+                }
+            }
+            // Shift: hops from the new medoid to the old one, inside the cluster.
+            local.bfs(best.1, &mut dist, &mut queue, None);
             (m[best.1], dist[old])
         })
         .collect();
@@ -476,26 +480,43 @@ impl LocalGraph {
     }
 
     /// BFS from local node `s`; returns the sum of distances (unreachable members count as the
-    /// member count, so a disconnected cluster is never preferred).
-    fn bfs(&self, s: usize, dist: &mut [u32], queue: &mut Vec<u32>) -> u64 {
+    /// member count, so a disconnected cluster is never preferred). With `beat = (sum, node)`
+    /// it stops early, returning `None`, once `(sum, s)` cannot come below `beat`: the members
+    /// not yet queued are at least one hop beyond the node being expanded.
+    fn bfs(
+        &self,
+        s: usize,
+        dist: &mut [u32],
+        queue: &mut Vec<u32>,
+        beat: Option<(u64, usize)>,
+    ) -> Option<u64> {
+        let m = dist.len() as u64;
         dist.fill(u32::MAX);
         queue.clear();
         dist[s] = 0;
         queue.push(s as u32);
         let mut head = 0;
+        // Sum over queued members (each is added when queued).
         let mut sum = 0u64;
         while head < queue.len() {
             let u = queue[head] as usize;
             head += 1;
-            sum += dist[u] as u64;
+            let next = dist[u] + 1;
+            if let Some(b) = beat {
+                let bound = sum + next as u64 * (m - queue.len() as u64);
+                if (bound, s) > b {
+                    return None;
+                }
+            }
             for &n in &self.items[self.offsets[u] as usize..self.offsets[u + 1] as usize] {
                 if dist[n as usize] == u32::MAX {
-                    dist[n as usize] = dist[u] + 1;
+                    dist[n as usize] = next;
+                    sum += next as u64;
                     queue.push(n);
                 }
             }
         }
-        sum + (dist.len() - queue.len()) as u64 * dist.len() as u64
+        Some(sum + (m - queue.len() as u64) * m)
     }
 }
 
