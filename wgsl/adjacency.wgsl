@@ -1,7 +1,8 @@
 // Adjacency on the GPU, mirroring src/adjacency (CPU reference):
 //   vt_count -> scan -> vt_scatter -> vt_sort   vertex -> triangles CSR, rows ascending
 //   dual_count -> scan -> dual_fill             triangle dual graph CSR, rows ascending, no
-//                                               duplicates; per-side edge flags
+//                                               duplicates; per-side edge flags (dual_fill copies
+//                                               the rows dual_count gathered)
 // Large arrays are split in two bindings of at most 2^25 u32 (lavapipe's 128 MiB binding limit).
 
 struct Params { n: u32, t: u32, w2: u32, w3: u32, w4: u32, w5: u32, w6: u32, w7: u32 }
@@ -18,6 +19,10 @@ struct Params { n: u32, t: u32, w2: u32, w3: u32, w4: u32, w5: u32, w6: u32, w7:
 @group(0) @binding(9) var<storage, read_write> dual_b: array<u32>;
 @group(0) @binding(10) var<storage, read_write> side_flags: array<u32>;
 @group(0) @binding(11) var<storage, read_write> degenerate: array<u32>;
+// Three words per triangle: dual_count's sorted neighbours (NONE-padded) for dual_fill to copy, or
+// COMPLEX first when the triangle has a non-manifold side.
+@group(0) @binding(12) var<storage, read_write> near_a: array<u32>;
+@group(0) @binding(13) var<storage, read_write> near_b: array<u32>;
 
 const PART: u32 = 33554432u; // 2^25
 const NONE: u32 = 0xffffffffu;
@@ -26,6 +31,9 @@ fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART
 fn vt(i: u32) -> u32 { if (i < PART) { return vt_a[i]; } return vt_b[i - PART]; }
 fn set_vt(i: u32, v: u32) { if (i < PART) { vt_a[i] = v; } else { vt_b[i - PART] = v; } }
 fn set_dual(i: u32, v: u32) { if (i < PART) { dual_a[i] = v; } else { dual_b[i - PART] = v; } }
+fn near(i: u32) -> u32 { if (i < PART) { return near_a[i]; } return near_b[i - PART]; }
+fn set_near(i: u32, v: u32) { if (i < PART) { near_a[i] = v; } else { near_b[i - PART] = v; } }
+const COMPLEX: u32 = 0xfffffffeu;
 
 fn flat(gid: vec3<u32>) -> u32 { return gid.x + gid.y * 65535u * 64u; }
 
@@ -165,6 +173,10 @@ fn dual_count(@builtin(global_invocation_id) gid: vec3<u32>) {
     let v = tri(t);
     let g = gather(t, v);
     var count = gathered_count(g);
+    // Kept for dual_fill, which then copies instead of gathering again.
+    set_near(3u * t, select(g.nb.x, COMPLEX, g.complex));
+    set_near(3u * t + 1u, g.nb.y);
+    set_near(3u * t + 2u, g.nb.z);
     if (g.complex) {
         count = 0u;
         var u = next_neighbour(t, v, 0u);
@@ -181,14 +193,13 @@ fn dual_count(@builtin(global_invocation_id) gid: vec3<u32>) {
 fn dual_fill(@builtin(global_invocation_id) gid: vec3<u32>) {
     let t = flat(gid);
     if (t >= p.t) { return; }
-    let v = tri(t);
-    let g = gather(t, v);
     var at = dual_off[t];
-    if (!g.complex) {
-        let c = gathered_count(g);
-        for (var k = 0u; k < c; k++) { set_dual(at + k, g.nb[k]); }
+    if (near(3u * t) != COMPLEX) {
+        let c = dual_off[t + 1u] - at;
+        for (var k = 0u; k < c; k++) { set_dual(at + k, near(3u * t + k)); }
         return;
     }
+    let v = tri(t);
     var u = next_neighbour(t, v, 0u);
     while (u != NONE) {
         set_dual(at, u);

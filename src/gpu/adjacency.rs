@@ -70,7 +70,7 @@ impl AdjacencyKernels {
                 gpu,
                 "adjacency",
                 include_str!("../../wgsl/adjacency.wgsl"),
-                11,
+                13,
                 &[
                     "vt_count",
                     "vt_scatter",
@@ -98,11 +98,12 @@ impl AdjacencyKernels {
                 gpu.zeros("dual offsets", t + 1),
                 gpu.zeros("side flags", t),
                 gpu.zeros("degenerate", t),
+                Split::zeros(gpu, "gathered neighbours", 3 * t)?,
             );
             gpu.wait()?;
             Ok(r)
         });
-        let (indices, vt_offsets, vt_items, cursor, dual_offsets, side_flags, degenerate) =
+        let (indices, vt_offsets, vt_items, cursor, dual_offsets, side_flags, degenerate, near) =
             uploaded?;
         timing.upload += up;
         let placeholder = (gpu.zeros("dual a", 1), gpu.zeros("dual b", 1));
@@ -121,6 +122,8 @@ impl AdjacencyKernels {
                     db,
                     &side_flags,
                     &degenerate,
+                    &near.a,
+                    &near.b,
                 ],
             )
         };
