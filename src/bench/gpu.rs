@@ -141,6 +141,12 @@ pub fn run(cfg: &Config) -> Result<()> {
         }
     };
     say(format!("GPU: {}", g.describe()));
+    // Warm-up: lavapipe compiles each pipeline with LLVM on first use (seconds per kernel family,
+    // then cached on disk); a small mesh through every timed path keeps that out of the tables.
+    let warm = mesh::generate::terrain(24, 1);
+    gpu::adjacency::adjacency(&g, &warm)?;
+    gpu::kmedoids::cluster(&g, &warm, cfg.limits, &KConfig::default())?;
+    gpu::grow::grow(&g, &warm, cfg.limits, parallel::DEFAULT_SPACING)?;
     let load = |stem: &str| -> Result<Mesh> {
         let p = cfg.meshes.join(format!("{stem}.ply.zst"));
         mesh::load(&p).with_context(|| format!("bench gpu needs {}", p.display()))
