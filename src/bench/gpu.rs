@@ -215,7 +215,7 @@ pub fn run(cfg: &Config) -> Result<()> {
                 large: r.large_updates,
                 host: g.profile().since(&before),
                 updates: r.updates,
-                skipped: r.skipped_updates,
+                skipped: r.clustering.skipped_updates as u64,
             })
         } else {
             None

@@ -44,10 +44,9 @@ pub struct GpuClustering {
     pub large_updates: u32,
     /// BFS levels run in total (dispatches of `push` that had a frontier).
     pub bfs_rounds: u32,
-    /// Cluster updates over all iterations (clusters times iterations), skipped ones included.
+    /// Cluster updates over all iterations (clusters times iterations), the skipped ones
+    /// (`clustering.skipped_updates`) included.
     pub updates: u64,
-    /// Cluster updates skipped because the members had not changed.
-    pub skipped_updates: u64,
     /// Wall time of the whole run in seconds.
     pub seconds: f64,
 }
@@ -243,6 +242,7 @@ pub fn cluster(
             initial_mean_distance,
             initial_iterations,
             initial_seconds,
+            skipped_updates: run.skipped as u32,
             meshlets,
         },
         timing: Timing {
@@ -254,7 +254,6 @@ pub fn cluster(
         large_updates: run.large,
         bfs_rounds: run.rounds.get(),
         updates: run.updates,
-        skipped_updates: run.skipped,
         seconds: start.elapsed().as_secs_f64(),
     })
 }

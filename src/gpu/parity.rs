@@ -125,7 +125,14 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
     let cpu = &km;
     let (g, gpu_s) = timed(|| super::kmedoids::cluster(gpu, mesh, limits, &cfg));
     let g = g?.clustering;
-    let counts = |c: &kmedoids::Clustering| [c.iterations, c.splits, c.initial_iterations];
+    let counts = |c: &kmedoids::Clustering| {
+        [
+            c.iterations,
+            c.splits,
+            c.initial_iterations,
+            c.skipped_updates,
+        ]
+    };
     out.push(check(
         "k-medoids: medoids, labels, distances, counts, objective, meshlets",
         cpu_s,
@@ -135,7 +142,7 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
             first_difference("labels", &g.labels, &cpu.labels),
             first_difference("distances", &g.distances, &cpu.distances),
             first_difference(
-                "iterations/splits/initial iterations",
+                "iterations/splits/initial iterations/skipped updates",
                 &counts(&g),
                 &counts(cpu),
             ),

@@ -132,6 +132,9 @@ pub struct Clustering {
     pub initial_iterations: u32,
     /// Wall time of the initial clustering (adjacency, seeding, iterations), in seconds.
     pub initial_seconds: f64,
+    /// Cluster updates skipped because the members were those of the last update (cache hits;
+    /// the GPU's changed-cluster test must find the same).
+    pub skipped_updates: u32,
     /// The packed meshlets.
     pub meshlets: Meshlets,
 }
@@ -174,10 +177,12 @@ pub fn cluster(mesh: &Mesh, limits: Limits, cfg: &Config) -> Clustering {
     let mut iterations = 0;
     cover_components(&dual, &mut medoids);
     let mut cache = UpdateCache::default();
+    let mut skipped_updates = 0;
     let mut converge = |medoids: &mut Vec<u32>, max_iter: u32, iterations: &mut u32| {
         let mut state = assign(&dual, medoids);
         for _ in 0..max_iter {
             let up = update_cached(&dual, &state.0, medoids, &mut cache);
+            skipped_updates += up.skipped;
             *iterations += 1;
             let changed = up.medoids != *medoids;
             *medoids = sorted(up.medoids);
@@ -241,6 +246,7 @@ pub fn cluster(mesh: &Mesh, limits: Limits, cfg: &Config) -> Clustering {
         initial_mean_distance,
         initial_iterations,
         initial_seconds,
+        skipped_updates,
         meshlets,
     }
 }
@@ -389,6 +395,8 @@ pub struct Update {
     pub medoids: Vec<u32>,
     /// Mean hop distance between old and new medoids.
     pub mean_shift: f64,
+    /// Clusters whose result came from the cache.
+    pub skipped: u32,
 }
 
 /// New medoid per cluster: the member with the smallest sum of hop distances to the other members
@@ -415,13 +423,13 @@ pub fn update_cached(
 ) -> Update {
     let k = medoids.len();
     let mem = members(labels, k);
-    let results: Vec<(u32, u32)> = (0..k)
+    let results: Vec<(u32, u32, bool)> = (0..k)
         .into_par_iter()
         .map(|c| {
             let m = mem.row(c);
             if let Some((prev, new, shift)) = cache.entries.get(&medoids[c]) {
                 if prev.as_slice() == m {
-                    return (*new, *shift);
+                    return (*new, *shift, true);
                 }
             }
             let local = LocalGraph::new(dual, labels, c as u32, m);
@@ -443,9 +451,10 @@ pub fn update_cached(
             }
             // Shift: hops from the new medoid to the old one, inside the cluster.
             local.bfs(best.1, &mut dist, &mut queue, None);
-            (m[best.1], dist[old])
+            (m[best.1], dist[old], false)
         })
         .collect();
+    let skipped = results.iter().filter(|r| r.2).count() as u32;
     let mean_shift = results.iter().map(|r| r.1 as f64).sum::<f64>() / k.max(1) as f64;
     // Keyed by the medoid the next iteration will see for each cluster.
     cache.entries = (0..k)
@@ -454,6 +463,7 @@ pub fn update_cached(
     Update {
         medoids: results.into_iter().map(|r| r.0).collect(),
         mean_shift,
+        skipped,
     }
 }
 
@@ -642,6 +652,9 @@ mod tests {
         };
         assert_eq!(key(&par), key(&ser));
         assert_eq!(par.initial_mean_distance, ser.initial_mean_distance);
+        // Converged clusters are not updated again (the cache), the same on one thread.
+        assert!(par.skipped_updates > 0);
+        assert_eq!(par.skipped_updates, ser.skipped_updates);
         validate(&m, &par.meshlets, limits).unwrap();
         assert!(overflowing(&m, &par.labels, par.medoids.len(), limits).is_empty());
         let paper = cluster(
