@@ -285,10 +285,9 @@ impl<'a> Run<'a> {
                 )
             });
         let mem_items = gpu.zeros("members", t);
-        // No triangle remembers a medoid before the first update: every cluster starts changed.
-        let mut prev = vec![u32::MAX; t + k_cap];
-        prev[t..].fill(1);
-        let prev = gpu.upload("previous medoids", &prev);
+        // No triangle remembers a medoid before the first update, so dirty_mark finds every
+        // cluster changed (the flags after T are written before they are read).
+        let prev = gpu.upload("previous medoids", &vec![u32::MAX; t + k_cap]);
         let frontier = gpu.zeros("frontier", 2 * t);
         let bind = family.update.bind(
             gpu,
