@@ -52,6 +52,32 @@ fn randomised_generated_meshes_and_limits() {
 }
 
 #[test]
+fn deep_assignment_spans_several_submissions() {
+    // A straight strip of 4000 triangles: its dual graph is a path, and 256-triangle clusters put
+    // medoids about 256 hops apart, so an assignment runs ~128 BFS levels, more than one
+    // submission records (the host reads the frontier sizes and records more).
+    let n = 2000u32;
+    let mut m = Mesh {
+        positions: (0..=n)
+            .flat_map(|i| [[i as f32, 0.0, 0.0], [i as f32, 1.0, 0.0]])
+            .collect(),
+        indices: Vec::new(),
+    };
+    for i in 0..n {
+        let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+        m.indices.extend([a, b, c, b, d, c]);
+    }
+    let limits = Limits::new(256, 256).unwrap();
+    let cpu = meshletlab::strategy::kmedoids::cluster(&m, limits, &Default::default());
+    let depth = cpu.distances.iter().max().copied().unwrap();
+    assert!(
+        depth > 64,
+        "the strip should need a deep assignment, got {depth} levels"
+    );
+    assert_parity(&gpu(), "strip", &m, limits);
+}
+
+#[test]
 fn non_manifold_degenerate_and_disconnected_input() {
     let gpu = gpu();
     // A fan of 5 triangles on one edge, a degenerate triangle, an isolated triangle, and an
