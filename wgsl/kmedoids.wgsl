@@ -34,10 +34,12 @@ struct Params { t: u32, k: u32, d: u32, slot: u32, max_v: u32, max_t: u32, w6: u
 
 const PART: u32 = 33554432u;
 const NONE: u32 = 0xffffffffu;
-// counters: 0 shift sum, 1 medoids changed, 2 large clusters, 8.. per-round BFS updates.
+// counters: 0 shift sum, 1 medoids changed, 2 large clusters, 3 updates skipped as unchanged;
+// 8.. assign.wgsl's frontier sizes.
 const SHIFT: u32 = 0u;
 const CHANGED: u32 = 1u;
 const LARGE: u32 = 2u;
+const SKIPPED: u32 = 3u;
 
 fn nb(i: u32) -> u32 { if (i < PART) { return dual_a[i]; } return dual_b[i - PART]; }
 fn flat(gid: vec3<u32>) -> u32 { return gid.x + gid.y * 65535u * 64u; }
@@ -184,6 +186,7 @@ fn update(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index
         if (lid == 0u) {
             result[c] = medoids[c];
             result[p.k + c] = 0u;
+            atomicAdd(&counters[SKIPPED], 1u);
         }
         return;
     }

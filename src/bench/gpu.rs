@@ -55,7 +55,6 @@ struct Row {
 }
 
 /// A timed GPU k-medoids run.
-#[derive(Clone)]
 struct KGpu {
     seconds: f64,
     timing: gpu::adjacency::Timing,

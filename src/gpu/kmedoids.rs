@@ -27,6 +27,12 @@ use std::time::Instant;
 /// Frontier-size counters (a ring in `wgsl/assign.wgsl`, after 8 update counters).
 const RING: usize = 64;
 const SIZES: usize = 8;
+/// Update counters (see `wgsl/kmedoids.wgsl`): shift sum, medoids changed, one-thread updates,
+/// updates skipped as unchanged.
+const SHIFT: usize = 0;
+const CHANGED: usize = 1;
+const LARGE: usize = 2;
+const SKIPPED: usize = 3;
 const COUNTERS: usize = SIZES + RING;
 /// Most BFS levels recorded in one submission (fewer than the ring, so no slot is reused before
 /// the host reads it).
@@ -53,8 +59,6 @@ pub struct GpuClustering {
 
 /// Per cluster: triangles, distinct vertices, farthest member.
 type ClusterStats = (Vec<u32>, Vec<u32>, Vec<u32>);
-/// After an assignment: unreached triangles, the counters, and the extra reads.
-type Assigned = (usize, Vec<u32>, Vec<Vec<u32>>);
 
 /// The three kernel modules of a run.
 struct Family<'a> {
@@ -65,9 +69,7 @@ struct Family<'a> {
 
 struct Run<'a> {
     gpu: &'a Gpu,
-    kernels: &'a Kernels,
-    assign_kernels: &'a Kernels,
-    split_kernels: &'a Kernels,
+    family: Family<'a>,
     scan: &'a Scan,
     bind: wgpu::BindGroup,
     assign_bind: wgpu::BindGroup,
@@ -78,7 +80,6 @@ struct Run<'a> {
     counters: wgpu::Buffer,
     mem_off: wgpu::Buffer,
     result: wgpu::Buffer,
-    prev: wgpu::Buffer,
     scratch: wgpu::Buffer,
     t: usize,
     k_cap: usize,
@@ -95,7 +96,7 @@ struct Run<'a> {
     skipped: u64,
     /// BFS levels to record up front: the last assignment's depth plus two.
     levels: std::cell::Cell<usize>,
-    /// Kernel seconds of the assignments (added to `timing` at the end).
+    /// Kernel seconds (added to `timing`, which holds the adjacency's, at the end).
     kernel: std::cell::Cell<f64>,
 }
 
@@ -178,9 +179,7 @@ pub fn cluster(
     let mut host_dual: Option<Csr> = None;
     loop {
         run.upload_medoids(&medoids)?;
-        let mut b = Batch::new(gpu);
-        run.record_assign(&mut b, medoids.len());
-        if run.finish_assign(b, medoids.len(), &[])?.0 == 0 {
+        if run.assign(medoids.len())? == 0 {
             break;
         }
         // Components without a medoid (rare): the host floods them, as the CPU does.
@@ -217,9 +216,7 @@ pub fn cluster(
         medoids.sort_unstable();
         medoids.dedup();
         run.upload_medoids(&medoids)?;
-        let mut b = Batch::new(gpu);
-        run.record_assign(&mut b, medoids.len());
-        run.finish_assign(b, medoids.len(), &[])?;
+        run.assign(medoids.len())?;
         medoids = run.converge(
             medoids,
             cfg.split_iterations,
@@ -339,9 +336,7 @@ impl<'a> Run<'a> {
         let flag_scan = scan.bind(gpu, &flags, t + 1);
         Ok(Self {
             gpu,
-            kernels: family.update,
-            assign_kernels: family.assign,
-            split_kernels: family.split,
+            family,
             scan,
             bind,
             assign_bind,
@@ -352,7 +347,6 @@ impl<'a> Run<'a> {
             counters,
             mem_off,
             result,
-            prev,
             scratch,
             t,
             k_cap,
@@ -414,7 +408,7 @@ impl<'a> Run<'a> {
     /// Records the multi-source BFS from the k medoids: clear, seed and the expected number of
     /// levels (the host checks the frontier sizes afterwards, [`Run::finish_assign`]).
     fn record_assign<'b>(&'b self, b: &mut Batch<'b>, k: usize) {
-        let (kern, bind, t) = (self.assign_kernels, &self.assign_bind, self.t);
+        let (kern, bind, t) = (self.family.assign, &self.assign_bind, self.t);
         let p = self.params(k, 0, 0);
         b.groups(kern, "clear", bind, p, self.gpu.stride_groups(t));
         b.groups(kern, "seed", bind, p, self.gpu.stride_groups(k));
@@ -425,24 +419,22 @@ impl<'a> Run<'a> {
         let groups = self.gpu.stride_groups(self.t);
         for d in from..from + n {
             let p = self.params(k, d as u32, 0);
-            b.groups(self.assign_kernels, "push", &self.assign_bind, p, groups);
+            b.groups(self.family.assign, "push", &self.assign_bind, p, groups);
         }
     }
 
-    /// Runs `b` (which ends with [`Run::record_assign`]) and reads the update counters, the
-    /// frontier sizes and `reads` in the same round trip; records more levels while the frontier
-    /// is not empty. Returns the unreached triangles, the update counters and the reads.
-    fn finish_assign(
-        &self,
-        b: Batch<'_>,
-        k: usize,
-        reads: &[(&wgpu::Buffer, usize, usize)],
-    ) -> Result<Assigned, GpuError> {
-        let mut all = vec![(&self.counters, 0, COUNTERS)];
-        all.extend_from_slice(reads);
-        let (time, mut out) = b.run_read(&all)?;
-        self.kernel.set(self.kernel.get() + time);
-        let counters = out.remove(0);
+    /// The multi-source BFS alone; returns the number of unreached triangles.
+    fn assign(&self, k: usize) -> Result<usize, GpuError> {
+        let mut b = Batch::new(self.gpu);
+        self.record_assign(&mut b, k);
+        Ok(self.finish_assign(b, k)?.0)
+    }
+
+    /// Runs `b` (which ends with [`Run::record_assign`]) and reads the update counters and the
+    /// frontier sizes in the same round trip; records more levels while the frontier is not
+    /// empty. Returns the unreached triangles and the counters.
+    fn finish_assign(&self, b: Batch<'_>, k: usize) -> Result<(usize, Vec<u32>), GpuError> {
+        let counters = self.run(b, &[(&self.counters, 0, COUNTERS)])?.remove(0);
         let mut recorded = self.levels.get().min(MAX_LEVELS);
         let mut sizes = counters.clone();
         // Level d's frontier size is slot d % RING; level 0's is k.
@@ -454,9 +446,7 @@ impl<'a> Run<'a> {
                 let more = MAX_LEVELS;
                 let mut b = Batch::new(self.gpu);
                 self.record_levels(&mut b, k, recorded, more);
-                let (time, mut r) = b.run_read(&[(&self.counters, 0, COUNTERS)])?;
-                self.kernel.set(self.kernel.get() + time);
-                sizes = r.remove(0);
+                sizes = self.run(b, &[(&self.counters, 0, COUNTERS)])?.remove(0);
                 recorded += more;
             }
             let n = sizes[SIZES + d % RING] as usize;
@@ -464,14 +454,25 @@ impl<'a> Run<'a> {
             if n == 0 {
                 self.rounds.set(self.rounds.get() + d as u32);
                 self.levels.set(d + 2);
-                return Ok((self.t - reached, counters, out));
+                return Ok((self.t - reached, counters));
             }
             d += 1;
         }
     }
+    /// Runs `b`, adding its kernel time, and returns the `reads`.
+    fn run(
+        &self,
+        b: Batch<'_>,
+        reads: &[(&wgpu::Buffer, usize, usize)],
+    ) -> Result<Vec<Vec<u32>>, GpuError> {
+        let (time, out) = b.run_read(reads)?;
+        self.kernel.set(self.kernel.get() + time);
+        Ok(out)
+    }
+
     /// Members CSR of the current labels (recorded into `b`).
     fn record_members<'b>(&'b self, b: &mut Batch<'b>, k: usize, job: &'b ScanJob) {
-        let (kern, bind, t) = (self.kernels, &self.bind, self.t);
+        let (kern, bind, t) = (self.family.update, &self.bind, self.t);
         b.threads(kern, "mem_clear", bind, self.params(k, 0, 0), k + 1);
         b.threads(kern, "mem_count", bind, self.params(k, 0, 0), t);
         self.scan.record(b, job);
@@ -489,7 +490,7 @@ impl<'a> Run<'a> {
     /// sort, then the assignment. Returns (shift sum, medoids changed).
     fn iterate(&mut self, k: usize) -> Result<(u64, u32), GpuError> {
         self.bind_mem_scan(k);
-        let (kern, bind, t) = (self.kernels, &self.bind, self.t);
+        let (kern, bind, t) = (self.family.update, &self.bind, self.t);
         let mem_scan = &self.mem_scan.as_ref().expect("bound").1;
         let p = self.params(k, 0, 0);
         let mut b = Batch::new(self.gpu);
@@ -505,13 +506,11 @@ impl<'a> Run<'a> {
         b.threads(kern, "place", bind, p, k);
         b.threads(kern, "remember", bind, p, t);
         self.record_assign(&mut b, k);
-        // The dirty flags come back too, to count the skipped updates.
-        let dirty = (&self.prev, t, k);
-        let (_, c, r) = self.finish_assign(b, k, &[dirty])?;
-        self.large += c[2];
+        let (_, c) = self.finish_assign(b, k)?;
+        self.large += c[LARGE];
         self.updates += k as u64;
-        self.skipped += r[0].iter().filter(|&&x| x == 0).count() as u64;
-        Ok((c[0] as u64, c[1]))
+        self.skipped += c[SKIPPED] as u64;
+        Ok((c[SHIFT] as u64, c[CHANGED]))
     }
 
     /// The CPU's `converge` after its first assign (already run): update, sort, assign, until no
@@ -545,25 +544,24 @@ impl<'a> Run<'a> {
         let groups = self.t.div_ceil(super::WG as usize);
         let mut b = Batch::new(self.gpu);
         let p = self.params(0, 0, 0);
-        b.threads(self.kernels, "dist_partial", &self.bind, p, self.t);
-        let (time, parts) = b.run_read(&[(&self.scratch, 0, groups)])?;
-        self.timing.kernel += time;
+        b.threads(self.family.update, "dist_partial", &self.bind, p, self.t);
+        let parts = self.run(b, &[(&self.scratch, 0, groups)])?;
         Ok(parts[0].iter().map(|&x| x as u64).sum())
     }
 
     /// Per cluster: triangles, distinct vertices (within the triangle limit), farthest member.
     fn stats(&mut self, k: usize) -> Result<ClusterStats, GpuError> {
         self.bind_mem_scan(k);
-        let time = {
-            let mem_scan = &self.mem_scan.as_ref().expect("bound").1;
-            let mut b = Batch::new(self.gpu);
-            self.record_members(&mut b, k, mem_scan);
-            let p = self.params(k, 0, 0);
-            b.threads(self.split_kernels, "stats", &self.split_bind, p, k);
-            b.run_read(&[(&self.mem_off, 0, k + 1), (&self.result, 2 * k, 2 * k)])?
-        };
-        self.timing.kernel += time.0;
-        let (off, r) = (&time.1[0], &time.1[1]);
+        let mem_scan = &self.mem_scan.as_ref().expect("bound").1;
+        let mut b = Batch::new(self.gpu);
+        self.record_members(&mut b, k, mem_scan);
+        let p = self.params(k, 0, 0);
+        b.threads(self.family.split, "stats", &self.split_bind, p, k);
+        let out = self.run(
+            b,
+            &[(&self.mem_off, 0, k + 1), (&self.result, 2 * k, 2 * k)],
+        )?;
+        let (off, r) = (&out[0], &out[1]);
         let triangles = off.windows(2).map(|w| w[1] - w[0]).collect();
         Ok((triangles, r[..k].to_vec(), r[k..].to_vec()))
     }

@@ -78,7 +78,7 @@ pub struct Gpu {
     period_ns: f32,
     /// Per-dispatch [`Params`] at a 256-byte stride, bound with dynamic offsets.
     params: wgpu::Buffer,
-    /// Host-side counts since the last [`Gpu::take_profile`].
+    /// Running host-side counts (see [`Gpu::profile`]).
     profile: Mutex<Profile>,
     /// Whether every dispatch gets its own timestamps (see [`Gpu::time_each_kernel`]).
     per_kernel: std::sync::atomic::AtomicBool,
@@ -261,7 +261,7 @@ impl Gpu {
         })
     }
 
-    /// Reads `len` u32 from `buf` at element `offset`.
+    /// Reads `len` u32 from `buf` at element `offset` (an empty [`Batch`] with one read).
     pub fn read(
         &self,
         buf: &wgpu::Buffer,
@@ -271,17 +271,8 @@ impl Gpu {
         if len == 0 {
             return Ok(Vec::new());
         }
-        let size = 4 * len as u64;
-        let staging = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = self.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(buf, 4 * offset as u64, &staging, 0, size);
-        self.submit(enc);
-        self.map_read(&staging)
+        let (_, mut out) = Batch::new(self).run_read(&[(buf, offset, len)])?;
+        Ok(out.remove(0))
     }
 
     fn submit(&self, enc: wgpu::CommandEncoder) {
@@ -423,11 +414,10 @@ impl Kernels {
         constants: &[(&str, f64)],
     ) -> Self {
         let device = &gpu.device;
-        let desc = wgpu::ShaderModuleDescriptor {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(label),
             source: wgpu::ShaderSource::Wgsl(source.into()),
-        };
-        let module = device.create_shader_module(desc);
+        });
         let mut layout_entries = vec![wgpu::BindGroupLayoutEntry {
             binding: 0,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -644,12 +634,13 @@ impl<'a> Batch<'a> {
         let stamp_words = if queries.is_some() { 2 * stamps } else { 0 };
         let read_words: usize = reads.iter().map(|r| r.2).sum();
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        let writes = |i: usize, first: bool| {
+        // Pass i writes timestamps 2i and 2i + 1 (the one pass of a batch is pass 0).
+        let writes = |i: usize| {
             queries
                 .as_ref()
                 .map(|set| wgpu::ComputePassTimestampWrites {
                     query_set: set,
-                    beginning_of_pass_write_index: first.then_some(2 * i as u32),
+                    beginning_of_pass_write_index: Some(2 * i as u32),
                     end_of_pass_write_index: Some(2 * i as u32 + 1),
                 })
         };
@@ -662,20 +653,14 @@ impl<'a> Batch<'a> {
             for (i, s) in steps.iter().enumerate() {
                 let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some(s.entry),
-                    timestamp_writes: writes(i, true),
+                    timestamp_writes: writes(i),
                 });
                 dispatch(&mut pass, i, s);
             }
         } else if !steps.is_empty() {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: None,
-                timestamp_writes: queries
-                    .as_ref()
-                    .map(|set| wgpu::ComputePassTimestampWrites {
-                        query_set: set,
-                        beginning_of_pass_write_index: Some(0),
-                        end_of_pass_write_index: Some(1),
-                    }),
+                timestamp_writes: writes(0),
             });
             for (i, s) in steps.iter().enumerate() {
                 dispatch(&mut pass, i, s);
@@ -729,7 +714,9 @@ impl<'a> Batch<'a> {
         }
         let stamp = |q: usize| words[at + 2 * q] as u64 | (words[at + 2 * q + 1] as u64) << 32;
         let ns = gpu.period_ns as f64 * 1e-9;
-        let time = if queries.is_none() {
+        let time = if steps.is_empty() {
+            0.0
+        } else if queries.is_none() {
             wall
         } else if per_kernel {
             let mut total = 0.0;
