@@ -22,9 +22,16 @@ pub enum BenchCommand {
         /// Output folder.
         #[arg(long, default_value = "results")]
         out: PathBuf,
-        /// Only these strategies (repeatable; default all but the slow kmedoids-paper).
+        /// Only these strategies (repeatable; default all but the slow kmedoids-paper, plus the
+        /// `+refine` rows and the per-preset count comparison).
         #[arg(short, long)]
         strategy: Vec<String>,
+        /// Skip the `+refine` rows and the per-preset count comparison (64/84, 128/128).
+        #[arg(long)]
+        no_refined: bool,
+        /// Skip the `+refine-max` rows (they take minutes on the biggest meshes).
+        #[arg(long)]
+        no_refine_max: bool,
         #[command(flatten)]
         args: StrategyArgs,
     },
@@ -321,6 +328,8 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             runs,
             out,
             strategy,
+            no_refined,
+            no_refine_max,
             args,
         } => {
             let cfg = bench::build::Config {
@@ -331,6 +340,8 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
                 strategies: strategy,
                 options: args.options(),
                 quiet: q,
+                refined: !no_refined,
+                refine_max: !no_refine_max,
             };
             let rows = bench::build::run(&cfg)?;
             println!(

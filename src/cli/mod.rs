@@ -30,7 +30,9 @@ use std::time::Duration;
 ///
 /// Meshes: PLY (ASCII/binary), OBJ, glTF 2.0 (.gltf/.glb), each optionally zstd-compressed (.zst).
 /// Strategies: nvidia, nvidia+tipsify, greedy, bsphere, bsphere-coherent, bsphere-parallel, kmedoids, kmedoids-paper,
-/// compact, meshopt, meshopt-scan, meshopt-spatial ("all" = all but the slow kmedoids-paper).
+/// compact, meshopt, meshopt-scan, meshopt-spatial, qem ("all" = all but the slow kmedoids-paper); any of
+/// them followed by "+refine" (e.g. meshopt+refine) refines its output to fewer meshlets
+/// ("+refine-fast": one cheap round; "+refine-max": with simulated annealing, the fewest).
 /// Limits are VERTICES/TRIANGLES per meshlet; default 64/126 (the JCGT paper's).
 #[derive(Parser, Debug)]
 #[command(name = "meshletlab", version, about, long_about)]

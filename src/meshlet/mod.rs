@@ -118,6 +118,41 @@ impl Limits {
         },
     ];
 
+    /// The presets of the meshlet-count comparison: 64/126 (vertex-bound: a 64-vertex patch holds
+    /// about 100 triangles), 64/84 (nearly triangle-bound) and 128/128 (triangle-bound).
+    pub const COUNT_PRESETS: [Limits; 3] = [
+        Limits::DEFAULT,
+        Limits {
+            max_vertices: 64,
+            max_triangles: 84,
+        },
+        Limits {
+            max_vertices: 128,
+            max_triangles: 128,
+        },
+    ];
+
+    /// No partition of `triangles` triangles has fewer meshlets than this (a hard bound).
+    pub fn min_meshlets(&self, triangles: usize) -> usize {
+        triangles.div_ceil(self.max_triangles as usize)
+    }
+
+    /// Triangles in the roundest `max_vertices`-vertex patch of a regular triangulation: a
+    /// hexagon of side k has V = 3k² + 3k + 1 vertices, B = 6k = sqrt(12V - 3) - 3 of them on its
+    /// boundary, and by Euler's formula T = 2V - B - 2 triangles (about 101.3 at 64 vertices).
+    pub fn disc_triangles(&self) -> f64 {
+        let v = self.max_vertices as f64;
+        2.0 * v - ((12.0 * v - 3.0).sqrt() - 3.0) - 2.0
+    }
+
+    /// The meshlet count if every meshlet were as full as the limits and [`Self::disc_triangles`]
+    /// allow. Not a hard bound: irregular or open meshes can pack more triangles per vertex; it
+    /// says how far a count is from the best that regular, closed meshes permit.
+    pub fn disc_meshlets(&self, triangles: usize) -> usize {
+        let per = self.disc_triangles().min(self.max_triangles as f64);
+        (triangles as f64 / per).ceil() as usize
+    }
+
     /// Checked constructor.
     pub fn new(max_vertices: u32, max_triangles: u32) -> Result<Self, String> {
         if !(3..=256).contains(&max_vertices) {
@@ -180,5 +215,23 @@ mod tests {
         assert!("64/257".parse::<Limits>().is_err());
         assert!("257/10".parse::<Limits>().is_err());
         assert_eq!(Limits::PRESETS[2].to_string(), "64/84");
+    }
+
+    #[test]
+    fn count_bounds() {
+        // Hexagons of side 1, 2, 3 on the triangular lattice: 6k² triangles on 3k² + 3k + 1 vertices.
+        for k in 1..=3u32 {
+            let l = Limits::new(3 * k * k + 3 * k + 1, 256).unwrap();
+            assert!((l.disc_triangles() - (6 * k * k) as f64).abs() < 1e-9);
+        }
+        let l = Limits::DEFAULT;
+        assert_eq!(l.min_meshlets(126), 1);
+        assert_eq!(l.min_meshlets(127), 2);
+        // Vertex-bound at 64/126: about 101 triangles per meshlet, not 126.
+        assert_eq!(l.disc_meshlets(1013), 10);
+        assert_eq!(l.disc_meshlets(1014), 11);
+        // Triangle-bound at 128/128: the disc holds more than 128.
+        let l = Limits::COUNT_PRESETS[2];
+        assert_eq!(l.disc_meshlets(1280), l.min_meshlets(1280));
     }
 }

@@ -12,6 +12,7 @@ mod meshopt;
 mod nvidia;
 pub mod parallel;
 pub mod qem;
+pub mod refine;
 pub mod tipsify;
 
 pub use self::meshopt::{Meshopt, MeshoptScan, MeshoptSpatial};
@@ -68,7 +69,32 @@ impl Default for Options {
     }
 }
 
-/// Names accepted by [`by_name`], in table order.
+/// Appended to any strategy name, these send its output through [`refine`] at an effort level:
+/// `meshopt+refine` (full), `meshopt+refine-fast`, `meshopt+refine-max`.
+pub const REFINE_SUFFIXES: [(&str, refine::Effort); 3] = [
+    ("+refine-fast", refine::Effort::Fast),
+    ("+refine-max", refine::Effort::Max),
+    ("+refine", refine::Effort::Full),
+];
+
+/// Splits a refined name into its base strategy, the effort and the name as a `'static` string
+/// (strategy names are `'static`; the refined ones are made once).
+fn refined(name: &str) -> Option<(&str, refine::Effort, &'static str)> {
+    static REFINED: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+    let (base, effort) = REFINE_SUFFIXES
+        .iter()
+        .find_map(|&(suffix, e)| name.strip_suffix(suffix).map(|b| (b, e)))?;
+    let all = REFINED.get_or_init(|| {
+        NAMES
+            .iter()
+            .flat_map(|n| REFINE_SUFFIXES.iter().map(move |(s, _)| format!("{n}{s}")))
+            .collect()
+    });
+    let full = all.iter().find(|n| n.as_str() == name)?;
+    Some((base, effort, full.as_str()))
+}
+
+/// Names accepted by [`by_name`], in table order (each also with one of [`REFINE_SUFFIXES`]).
 pub const NAMES: &[&str] = &[
     "nvidia",
     "nvidia+tipsify",
@@ -131,12 +157,19 @@ pub(crate) fn mark_used(mesh: &Mesh, t: u32, used: &mut [bool], live: &mut [u32]
 
 /// A name that no strategy answers to.
 #[derive(Debug, Error)]
-#[error("unknown strategy '{0}' (known: {known})", known = NAMES.join(", "))]
+#[error("unknown strategy '{0}' (known: {known}; any of them followed by +refine, +refine-fast or +refine-max)", known = NAMES.join(", "))]
 pub struct UnknownStrategy(pub String);
 
 /// Looks a strategy up by name; the ordering options wrap it in a post-pass.
 pub fn by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, UnknownStrategy> {
-    let inner = base_by_name(name, opts)?;
+    let inner = match refined(name) {
+        Some((base, effort, full_name)) => Box::new(refine::Refined {
+            inner: base_by_name(base, opts).map_err(|_| UnknownStrategy(name.to_string()))?,
+            config: refine::Config::new(effort),
+            name: full_name,
+        }),
+        None => base_by_name(name, opts)?,
+    };
     if !opts.local_order && opts.meshlet_order == MeshletOrder::AsBuilt {
         return Ok(inner);
     }
