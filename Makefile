@@ -26,6 +26,7 @@ test: setup lint
 # Regenerates every table and plot in results/ from the shared real meshes.
 bench: setup
 	$(CARGO) run --release --quiet -- bench build
+	$(CARGO) run --release --quiet -- bench fidelity
 	$(CARGO) run --release --quiet -- bench kmedoids
 	$(CARGO) run --release --quiet -- bench gpu
 	$(CARGO) run --release --quiet -- bench stability

@@ -58,7 +58,9 @@ pub const BUNNY: &[PaperBunny] = &[
     },
 ];
 
-/// The paper's row for one of our strategies.
+/// The paper's row for one of our strategies; a `-paper` variant (the published code's behaviour,
+/// e.g. `greedy-paper`) answers to the same row.
 pub fn bunny_row(ours: &str) -> Option<&'static PaperBunny> {
-    BUNNY.iter().find(|r| r.ours == ours)
+    let base = ours.strip_suffix("-paper").unwrap_or(ours);
+    BUNNY.iter().find(|r| r.ours == base)
 }

@@ -403,6 +403,84 @@ impl<'a> Grower<'a> {
     }
 }
 
+/// `bsphere-paper`: the bounding-sphere grower as the paper's published code runs it
+/// (Senbyo/meshletmaker, `meshletMeshDescriptor.cpp`, strategy 24), bugs included:
+/// - the radius never decides: the shadowed variable leaves every one-new-vertex candidate at the
+///   same stale radius, so the first candidate in scan order (the meshlet's vertices oldest first,
+///   each vertex's triangles in index order) with the highest score wins;
+/// - the island bonus counts a triangle whose edge neighbours are all used by *any* meshlet (ours:
+///   by this one), and it is added before the one-vertex filter, so an island touching the meshlet
+///   at one vertex is a candidate;
+/// - the best candidate is chosen before the fit test; when it does not fit, one pass adds every
+///   unused triangle that still fits and the meshlet closes; the next one seeds at the first unused
+///   triangle of the current sorted vertex (ours: the smallest sphere among its triangles).
+///
+/// Like `bsphere`, an empty border continues the same meshlet at the next sorted vertex.
+pub struct BoundingSpherePaper;
+
+impl Strategy for BoundingSpherePaper {
+    fn name(&self) -> &'static str {
+        "bsphere-paper"
+    }
+
+    fn summary(&self) -> &'static str {
+        "bsphere as the paper's published code runs it: ties to scan order, island bonus for any meshlet"
+    }
+
+    fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
+        let vt = vertex_triangles(mesh);
+        let dual = dual_graph(mesh, &vt);
+        let order = sorted_vertices(mesh);
+        let mut used = vec![false; mesh.triangle_count()];
+        let mut b = MeshletBuilder::new(mesh.vertex_count(), limits);
+        let mut i = 0;
+        while i < order.len() {
+            // Highest score, first in scan order (a strictly greater score replaces it).
+            let mut best: Option<(u32, u32)> = None;
+            for k in 0..b.open_size().1 {
+                let w = b.open_vertices()[k];
+                for &t in vt.row(w as usize) {
+                    if used[t as usize] {
+                        continue;
+                    }
+                    let tri = mesh.triangle(t as usize);
+                    let inside = tri.iter().filter(|&&v| b.contains_vertex(v)).count() as u32;
+                    let island = dual.row(t as usize).iter().all(|&n| used[n as usize]);
+                    let score = inside + island as u32;
+                    if score == 1 {
+                        continue;
+                    }
+                    if best.is_none_or(|(s, _)| score > s) {
+                        best = Some((score, t));
+                    }
+                }
+            }
+            let t = match best {
+                Some((_, t)) => t,
+                None => {
+                    let seed = order[i];
+                    match vt.row(seed as usize).iter().find(|&&t| !used[t as usize]) {
+                        Some(&t) => t,
+                        None => {
+                            i += 1;
+                            continue;
+                        }
+                    }
+                }
+            };
+            let tri = mesh.triangle(t as usize);
+            if !b.fits(tri) {
+                super::greedy::add_fitting_triangles(mesh, &vt, &mut b, &mut used);
+                b.flush();
+                continue;
+            }
+            b.push(tri);
+            used[t as usize] = true;
+        }
+        b.finish()
+    }
+}
+
 /// Triangle centroids bucketed in a uniform grid for nearest-unused queries; used triangles are
 /// skipped, and each cell drops its used entries lazily.
 ///

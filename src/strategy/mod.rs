@@ -16,9 +16,9 @@ pub mod refine;
 pub mod tipsify;
 
 pub use self::meshopt::{Meshopt, MeshoptScan, MeshoptSpatial};
-pub use bsphere::BoundingSphere;
+pub use bsphere::{BoundingSphere, BoundingSpherePaper};
 pub use compact::Compact;
-pub use greedy::Greedy;
+pub use greedy::{Greedy, GreedyPaper};
 pub use kmedoids::KMedoids;
 pub use nvidia::Nvidia;
 pub use parallel::ParallelGrower;
@@ -99,7 +99,9 @@ pub const NAMES: &[&str] = &[
     "nvidia",
     "nvidia+tipsify",
     "greedy",
+    "greedy-paper",
     "bsphere",
+    "bsphere-paper",
     "bsphere-coherent",
     "bsphere-parallel",
     "kmedoids",
@@ -213,6 +215,10 @@ fn base_by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, Unknown
             tipsify_cache: Some(opts.cache_size),
         }),
         "greedy" => Box::new(Greedy),
+        "greedy-paper" => Box::new(GreedyPaper {
+            close_on_empty_queue: false,
+        }),
+        "bsphere-paper" => Box::new(BoundingSpherePaper),
         "bsphere" => Box::new(BoundingSphere { coherent: false }),
         "bsphere-coherent" => Box::new(BoundingSphere { coherent: true }),
         "bsphere-parallel" => Box::new(ParallelGrower {

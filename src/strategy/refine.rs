@@ -23,7 +23,8 @@
 //!    path (a breadth-first search over meshlets, each hop passing one boundary triangle on) ends
 //!    at a meshlet with room. A victim that cannot be emptied is rolled back from a move journal.
 //! 5. **Annealing** (`anneal_steps`, effort `max`): simulated annealing over the same moves, first
-//!    to shorten boundaries globally, then to remove meshlets in batches: the emptiest few are
+//!    to shorten boundaries globally (a cold anneal then drives out any overflow the hot one left,
+//!    or the input's boundaries come back), then to remove meshlets in batches: the emptiest few are
 //!    handed to their neighbours regardless of the limits, and the annealer must drive the overflow
 //!    (vertices and triangles over the limits, weighted [`OVERFLOW_WEIGHT`]) back to zero within
 //!    its budget, or the batch is undone. Boundary moves alone cannot move vertex capacity far (a
@@ -239,8 +240,15 @@ pub fn refine_with_stats(
     let floor = limits.min_meshlets(mesh.triangle_count());
     s.improve(&all);
     if steps > 0 && s.live > floor {
-        // Shorter boundaries first: the capacity the batches below live on.
-        s.anneal(steps, (1.0, 0.05), &mut rng, false);
+        // Shorter boundaries first: the capacity the batches below live on. Its uphill moves may
+        // end with a meshlet over a limit, which the output would have to split; a cold anneal
+        // drives that overflow out, and when it cannot, the boundaries go back to the input's.
+        let snapshot = s.label.clone();
+        let feasible = s.anneal(steps, (1.0, 0.05), &mut rng, false)
+            || s.anneal(steps, (0.05, 0.01), &mut rng, true);
+        if !feasible {
+            s.restore(&snapshot);
+        }
         s.improve(&all);
     }
     for _ in 0..config.rounds {
@@ -269,7 +277,10 @@ pub fn refine_with_stats(
     }
     stats.moves = s.moves;
     stats.search_work = s.work;
+    let live = s.live;
     let out = s.into_meshlets(&seq);
+    // Every step ends within the limits, so no meshlet is split on the way out.
+    debug_assert_eq!(out.len(), live, "a refined meshlet broke a limit");
     stats.meshlets_after = out.len();
     stats.vertices_after = out.vertices.len();
     (out, stats)

@@ -1,0 +1,253 @@
+//! `meshletlab bench fidelity`: why our greedy and bounding-sphere counts on the bunny differ from
+//! the JCGT paper's (Tables 4, 7, 8), by experiment -> results/fidelity.md and fidelity.csv.
+//!
+//! Each row changes one thing against the paper's text as we implement it (`greedy`, `bsphere`):
+//! the published code's behaviour (`greedy-paper`, `bsphere-paper`; what differs is listed in their
+//! docs), one of its traits alone (`greedy-paper-closing`: the code, but closing a meshlet when its
+//! queue empties, as the text does), and the code's default primitive limit (125) beside ours (126).
+//! Counts are also scaled by the paper's triangle count over ours (69,666 / 69,451), since both
+//! growers fill meshlets to the same size whatever the bunny.
+
+use super::build::mesh_name;
+use super::{evaluate, machine_note, median, paper, right_align_numbers, today, Evaluation};
+use crate::mesh;
+use crate::meshlet::Limits;
+use crate::strategy::{self, GreedyPaper, Options, Strategy};
+use anyhow::{bail, Context, Result};
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// Triangles of the paper's bunny (its fills equal 69,666 / (count x 126)).
+pub const PAPER_BUNNY_TRIANGLES: usize = 69_666;
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// The bunny (the paper's figures are for it).
+    pub mesh: PathBuf,
+    /// Builds per row (the median time is reported).
+    pub runs: usize,
+    /// Output folder.
+    pub out: PathBuf,
+}
+
+/// One measured row.
+#[derive(Clone, Debug)]
+pub struct Row {
+    /// The strategy as built, its limits and metrics.
+    pub eval: Evaluation,
+    /// The paper's strategy this row is compared with ("greedy" or "bsphere").
+    pub paper_strategy: &'static str,
+    /// Our count scaled to the paper's triangle count.
+    pub scaled: f64,
+}
+
+impl Row {
+    /// Scaled count over the paper's, minus one (0.01 = 1 % more meshlets than the paper).
+    pub fn gap(&self) -> f64 {
+        let p = paper::bunny_row(self.paper_strategy)
+            .and_then(|p| p.meshlets)
+            .expect("the paper has greedy and bsphere counts");
+        self.scaled / p as f64 - 1.0
+    }
+}
+
+/// The strategies of the experiment, each with the paper row it answers to.
+fn strategies() -> Vec<(Box<dyn Strategy>, &'static str)> {
+    let opts = Options::default();
+    let named = |n: &str| strategy::by_name(n, &opts).expect("known strategy");
+    vec![
+        (named("greedy"), "greedy"),
+        (
+            Box::new(GreedyPaper {
+                close_on_empty_queue: true,
+            }),
+            "greedy",
+        ),
+        (named("greedy-paper"), "greedy"),
+        (named("bsphere"), "bsphere"),
+        (named("bsphere-paper"), "bsphere"),
+    ]
+}
+
+/// Runs the experiment and writes fidelity.md and fidelity.csv; returns the rows.
+pub fn run(cfg: &Config) -> Result<Vec<Row>> {
+    let m = mesh::load(&cfg.mesh).with_context(|| format!("loading {}", cfg.mesh.display()))?;
+    let limits_125 = Limits::new(64, 125).map_err(anyhow::Error::msg)?;
+    let mut rows = Vec::new();
+    for limits in [Limits::DEFAULT, limits_125] {
+        for (s, paper_strategy) in strategies() {
+            let eval = evaluate(&m, s.as_ref(), limits, cfg.runs);
+            if let Some(e) = &eval.invalid {
+                bail!("{} {limits}: invalid output: {e}", s.name());
+            }
+            let scaled = eval.metrics.meshlets as f64 * PAPER_BUNNY_TRIANGLES as f64
+                / m.triangle_count() as f64;
+            rows.push(Row {
+                eval,
+                paper_strategy,
+                scaled,
+            });
+        }
+    }
+    std::fs::create_dir_all(&cfg.out).with_context(|| format!("creating {}", cfg.out.display()))?;
+    let md = cfg.out.join("fidelity.md");
+    std::fs::write(&md, markdown(cfg, &mesh_name(&cfg.mesh), &m, &rows))
+        .with_context(|| format!("writing {}", md.display()))?;
+    let csv = cfg.out.join("fidelity.csv");
+    std::fs::write(&csv, csv_text(&rows)).with_context(|| format!("writing {}", csv.display()))?;
+    Ok(rows)
+}
+
+fn paper_ms(strategy: &str) -> f64 {
+    paper::bunny_row(strategy)
+        .and_then(|p| p.time_ms)
+        .expect("the paper times greedy and bsphere")
+}
+
+fn csv_text(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "strategy,limits,time_ms_median,meshlets,scaled_meshlets,paper_meshlets,gap,primitive_fill,\
+         primitive_fill_over_126,vertex_fill,mean_radius_rel,cone_cullable,connected\n",
+    );
+    for r in rows {
+        let m = &r.eval.metrics;
+        let p = paper::bunny_row(r.paper_strategy).and_then(|p| p.meshlets);
+        let _ = writeln!(
+            s,
+            "{},{},{:.3},{},{:.1},{},{:.4},{:.4},{:.4},{:.4},{:.5},{:.4},{:.4}",
+            r.eval.strategy,
+            r.eval.limits,
+            median(&r.eval.times_ms),
+            m.meshlets,
+            r.scaled,
+            p.map(|p| p.to_string()).unwrap_or_default(),
+            r.gap(),
+            m.primitive_fill,
+            m.mean_triangles / 126.0,
+            m.vertex_fill,
+            m.mean_radius_rel,
+            m.cone_cullable,
+            m.connected
+        );
+    }
+    s
+}
+
+fn markdown(cfg: &Config, name: &str, m: &mesh::Mesh, rows: &[Row]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Paper fidelity: greedy and bounding sphere on the bunny\n"
+    );
+    let _ = writeln!(
+        s,
+        "Written by `meshletlab bench fidelity --runs {}` on {} from {name} ({} triangles). Do not edit.\n",
+        cfg.runs,
+        today(),
+        m.triangle_count()
+    );
+    let _ = writeln!(s, "Machine: {}.\n", machine_note());
+    let _ = writeln!(
+        s,
+        "Paper: Jensen, Frisvad, Bærentzen, JCGT 12(2), 2023, Tables 4, 7, 8 (their bunny: {PAPER_BUNNY_TRIANGLES} \
+         triangles, their machine). `greedy` and `bsphere` follow the paper's text; `greedy-paper` and \
+         `bsphere-paper` follow its published code (Senbyo/meshletmaker, strategies 12 and 24), whose differences \
+         from the text are listed in their rustdoc; `greedy-paper-closing` is the code with one trait reverted (the \
+         meshlet closes when its breadth-first queue empties). The code's default primitive limit is 125 and its \
+         report divides the mean triangle count by 126, hence both limits and the `pfill/126` column. scaled = \
+         meshlets x {PAPER_BUNNY_TRIANGLES} / {}; gap = scaled over the paper's count, minus 1.\n",
+        m.triangle_count()
+    );
+    let mut t = comfy_table::Table::new();
+    t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
+    t.set_header([
+        "limits",
+        "strategy",
+        "ms",
+        "paper ms",
+        "speed-up",
+        "meshlets",
+        "scaled",
+        "paper",
+        "gap",
+        "pfill",
+        "pfill/126",
+        "paper pfill",
+        "vfill",
+        "radius/diag",
+        "cullable",
+        "connected",
+    ]);
+    for r in rows {
+        let p = paper::bunny_row(r.paper_strategy).expect("paper row");
+        let mm = &r.eval.metrics;
+        let ms = median(&r.eval.times_ms);
+        let opt = |x: Option<String>| x.unwrap_or_else(|| "—".into());
+        t.add_row([
+            r.eval.limits.to_string(),
+            r.eval.strategy.clone(),
+            format!("{ms:.2}"),
+            opt(p.time_ms.map(|v| format!("{v:.2}"))),
+            opt(p.time_ms.map(|v| format!("{:.1}x", v / ms))),
+            mm.meshlets.to_string(),
+            format!("{:.0}", r.scaled),
+            opt(p.meshlets.map(|v| v.to_string())),
+            format!("{:+.1} %", 100.0 * r.gap()),
+            format!("{:.3}", mm.primitive_fill),
+            format!("{:.3}", mm.mean_triangles / 126.0),
+            opt(p.primitive_fill.map(|v| format!("{v:.3}"))),
+            format!("{:.3}", mm.vertex_fill),
+            format!("{:.4}", mm.mean_radius_rel),
+            format!("{:.3}", mm.cone_cullable),
+            format!("{:.3}", mm.connected),
+        ]);
+    }
+    right_align_numbers(&mut t, 2..16);
+    let _ = writeln!(s, "{t}\n");
+    let row = |n: &str| {
+        rows.iter()
+            .find(|r| r.eval.strategy == n && r.eval.limits == Limits::DEFAULT)
+            .expect("every strategy runs at 64/126")
+    };
+    let (g, gp, gc) = (
+        row("greedy"),
+        row("greedy-paper"),
+        row("greedy-paper-closing"),
+    );
+    let (b, bp) = (row("bsphere"), row("bsphere-paper"));
+    let same_at_125 = rows
+        .iter()
+        .filter(|r| r.eval.limits == Limits::DEFAULT)
+        .all(|r| {
+            rows.iter().any(|q| {
+                q.eval.limits != Limits::DEFAULT
+                    && q.eval.strategy == r.eval.strategy
+                    && q.eval.metrics.meshlets == r.eval.metrics.meshlets
+            })
+        });
+    let _ = writeln!(
+        s,
+        "At 64/126 the gap to the paper's count is {:+.1} % for greedy as the text describes it and {:+.1} % as the \
+         code runs it; the code with meshlets closed when the queue empties is at {:+.1} %, so the trait that \
+         matters is not closing ({:.0} % of the code's meshlets are in pieces). The bounding sphere goes from \
+         {:+.1} % to {:+.1} % (mean radius {:.4} against {:.4}). The 125-triangle limit {} \
+         `bsphere` runs {:.1}x faster than the paper's time, `bsphere-paper` {:.1}x (this machine, theirs).\n",
+        100.0 * g.gap(),
+        100.0 * gp.gap(),
+        100.0 * gc.gap(),
+        100.0 * (1.0 - gp.eval.metrics.connected),
+        100.0 * b.gap(),
+        100.0 * bp.gap(),
+        bp.eval.metrics.mean_radius_rel,
+        b.eval.metrics.mean_radius_rel,
+        if same_at_125 {
+            "changes no count (all of these growers are vertex-bound here)."
+        } else {
+            "changes some counts (see the table)."
+        },
+        paper_ms("bsphere") / median(&b.eval.times_ms),
+        paper_ms("bsphere") / median(&bp.eval.times_ms),
+    );
+    s
+}
