@@ -17,6 +17,27 @@ fn pieces(ml: &Meshlets) -> usize {
         .count()
 }
 
+/// A refined output validates and has no more meshlets, nor more meshlets in pieces, than its input.
+fn check_refined(
+    m: &meshletlab::mesh::Mesh,
+    input: &Meshlets,
+    out: &Meshlets,
+    limits: Limits,
+    what: &str,
+) {
+    validate(m, out, limits).unwrap_or_else(|e| panic!("{what}: {e}"));
+    assert!(
+        out.len() <= input.len(),
+        "{what}: {} -> {}",
+        input.len(),
+        out.len()
+    );
+    assert!(
+        pieces(out) <= pieces(input),
+        "{what}: more meshlets in pieces"
+    );
+}
+
 fn metrics(m: &meshletlab::mesh::Mesh, ml: &Meshlets, limits: Limits) -> Metrics {
     Metrics::compute(m, ml, limits, &bounds::compute_bounds(m, ml), None)
 }
@@ -68,17 +89,7 @@ fn refine_every_output(small: bool) {
                 let config = refine::Config::new(effort);
                 let out = refine::refine(&m, &input, limits, config);
                 let what = format!("{} {name}+refine {effort:?} {limits}", f.display());
-                validate(&m, &out, limits).unwrap_or_else(|e| panic!("{what}: {e}"));
-                assert!(
-                    out.len() <= input.len(),
-                    "{what}: {} -> {}",
-                    input.len(),
-                    out.len()
-                );
-                assert!(
-                    pieces(&out) <= pieces(&input),
-                    "{what}: more meshlets in pieces"
-                );
+                check_refined(&m, &input, &out, limits, &what);
                 if full {
                     // Determinism: the same on one thread (the input too) and run to run.
                     let again = one.install(|| {
@@ -130,13 +141,7 @@ fn refine_max_never_adds_meshlets() {
                 .build(&m, limits);
             let out = refine::refine(&m, &input, limits, refine::Config::new(refine::Effort::Max));
             let what = format!("{} meshopt+refine-max {limits}", f.display());
-            validate(&m, &out, limits).unwrap_or_else(|e| panic!("{what}: {e}"));
-            assert!(
-                out.len() <= input.len(),
-                "{what}: {} -> {}",
-                input.len(),
-                out.len()
-            );
+            check_refined(&m, &input, &out, limits, &what);
         }
     }
 }

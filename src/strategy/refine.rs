@@ -39,6 +39,7 @@
 //! negative-gain passes in step 1 (annealing plays that role), and no pair swaps (a swap is two
 //! moves, which annealing makes).
 
+use super::parallel::distinct;
 use super::Strategy;
 use crate::adjacency::{dual_graph, vertex_triangles, Csr};
 use crate::mesh::Mesh;
@@ -309,19 +310,6 @@ fn labels_of(mesh: &Mesh, vt: &Csr, ml: &Meshlets) -> (Vec<u32>, Vec<u32>) {
         }
     }
     (labels, seq)
-}
-
-/// The distinct vertices of a triangle (a degenerate one has fewer).
-#[inline]
-fn distinct(tri: [u32; 3]) -> impl Iterator<Item = u32> {
-    let [a, b, c] = tri;
-    [
-        Some(a),
-        (b != a).then_some(b),
-        (c != a && c != b).then_some(c),
-    ]
-    .into_iter()
-    .flatten()
 }
 
 /// One journaled move: the triangle, where it came from and went, and both meshlets' change
