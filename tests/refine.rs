@@ -1,7 +1,7 @@
 //! `+refine` on the shared real meshes: every refined output validates, never has more meshlets or
-//! more meshlets in pieces than its input, and does not depend on the thread count; with annealing
-//! it beats meshoptimizer's count on the bunny at no worse radius and cullability, and k-medoids
-//! reaches the fills the refinement issue asks for.
+//! more meshlets in pieces than its input, and does not depend on the thread count; at the default
+//! effort it beats meshoptimizer's count on the bunny at no worse radius and cullability, and
+//! k-medoids reaches the fills the refinement issue asks for.
 
 mod common;
 
@@ -147,9 +147,10 @@ fn refine_max_never_adds_meshlets() {
 }
 
 /// The issue's goal on the bunny: fewer meshlets than every meshoptimizer builder at 64/126, with
-/// mean radius and number of meshlets that cannot be cone-culled no worse than `meshopt`'s.
+/// mean radius and number of meshlets that cannot be cone-culled no worse than `meshopt`'s, at the
+/// default effort (its per-victim anneal).
 #[test]
-fn annealed_refinement_beats_meshoptimizer_on_the_bunny() {
+fn refinement_beats_meshoptimizer_on_the_bunny() {
     let m = common::load("stanford_bunny");
     let opts = Options::default();
     let limits = Limits::DEFAULT;
@@ -160,7 +161,7 @@ fn annealed_refinement_beats_meshoptimizer_on_the_bunny() {
         .min()
         .unwrap();
     let base = metrics(&m, &peer("meshopt"), limits);
-    let s = strategy::by_name("meshopt+refine-max", &opts).unwrap();
+    let s = strategy::by_name("meshopt+refine", &opts).unwrap();
     let ml = s.build(&m, limits);
     validate(&m, &ml, limits).unwrap();
     let ours = metrics(&m, &ml, limits);
@@ -177,11 +178,13 @@ fn annealed_refinement_beats_meshoptimizer_on_the_bunny() {
         non_cullable(&ours) <= non_cullable(&base),
         "{ours:?} vs {base:?}"
     );
-    assert_eq!(ours.connected, 1.0);
+    // meshoptimizer leaves some meshlets in pieces; the refinement never adds one.
+    let in_pieces = |x: &Metrics| ((1.0 - x.connected) * x.meshlets as f64).round();
+    assert!(in_pieces(&ours) <= in_pieces(&base), "{ours:?} vs {base:?}");
 }
 
-/// k-medoids keeps its small radii and, refined, fills its meshlets: vertex fill >= 0.95 and
-/// primitive fill >= 0.74 on the bunny (k-medoids alone: 0.81 / 0.58).
+/// k-medoids keeps its small radii and, refined at the default effort, fills its meshlets: vertex
+/// fill >= 0.95 and primitive fill >= 0.74 on the bunny (k-medoids alone: 0.81 / 0.58).
 #[test]
 fn refined_kmedoids_fills_its_meshlets() {
     let m = common::load("stanford_bunny");
@@ -194,7 +197,7 @@ fn refined_kmedoids_fills_its_meshlets() {
             .build(&m, limits),
         limits,
     );
-    let ml = strategy::by_name("kmedoids+refine-max", &opts)
+    let ml = strategy::by_name("kmedoids+refine", &opts)
         .unwrap()
         .build(&m, limits);
     validate(&m, &ml, limits).unwrap();
