@@ -72,6 +72,21 @@ pub(crate) fn grow(mesh: &Mesh, limits: Limits, scoring: Scoring, coherent: bool
     Grower::new(mesh, &vt, &dual, limits, scoring).run(&order, coherent)
 }
 
+/// A triangle's standing as a border candidate of the open meshlet (see `Grower::cand`).
+#[derive(Clone, Copy, Default)]
+struct Cand {
+    /// The meshlet (`Grower::gen`) the counts below belong to.
+    gen: u32,
+    /// Edge neighbours (its dual row's length).
+    neighbours: u32,
+    /// Edge neighbours in the open meshlet.
+    in_meshlet_neighbours: u32,
+    /// Its distinct vertices in the open meshlet.
+    inside: u8,
+    /// Its distinct vertices (fewer than 3 when degenerate).
+    distinct: u8,
+}
+
 /// Ritter's incremental sphere: the smallest sphere containing the old one and `p`.
 #[inline]
 pub(crate) fn grow_sphere(c: DVec3, r: f64, p: DVec3) -> (DVec3, f64) {
@@ -91,12 +106,11 @@ struct Grower<'a> {
     b: MeshletBuilder,
     used: Vec<bool>,
     live: Vec<u32>,
-    /// Vertices of t inside the current meshlet, valid when `inside_gen[t] == gen`. Kept
-    /// incrementally so that only candidates with two or more vertices inside are ever scanned.
-    inside: Vec<u8>,
-    inside_gen: Vec<u32>,
-    /// `in_meshlet[t] == gen`: t belongs to the current meshlet.
-    in_meshlet: Vec<u32>,
+    /// Per triangle, what scoring it as a candidate needs, kept incrementally and valid when its
+    /// `gen` is the open meshlet's: a border scan then reads one small record per candidate
+    /// instead of the triangle, its dual row and each neighbour (measured: those random reads
+    /// were two thirds of bsphere's time).
+    cand: Vec<Cand>,
     border: Vec<u32>,
     /// Scratch: candidates tied at the best score.
     tied: Vec<u32>,
@@ -122,9 +136,13 @@ impl<'a> Grower<'a> {
             b: MeshletBuilder::new(mesh.vertex_count(), limits),
             used: vec![false; t],
             live: live_counts(vt),
-            inside: vec![0; t],
-            inside_gen: vec![u32::MAX; t],
-            in_meshlet: vec![u32::MAX; t],
+            cand: vec![
+                Cand {
+                    gen: u32::MAX,
+                    ..Cand::default()
+                };
+                t
+            ],
             border: Vec::new(),
             tied: Vec::new(),
             gen: 0,
@@ -155,29 +173,35 @@ impl<'a> Grower<'a> {
                     grow_sphere(self.center, self.radius, p)
                 };
                 for &n in self.vt.row(v as usize) {
-                    let n = n as usize;
-                    if self.used[n] {
+                    if self.used[n as usize] {
                         continue;
                     }
-                    if self.inside_gen[n] != self.gen {
-                        self.inside_gen[n] = self.gen;
-                        self.inside[n] = 0;
-                    }
-                    self.inside[n] += 1;
+                    let c = self.touch(n);
+                    c.inside += 1;
+                    let inside = c.inside;
                     // It becomes a candidate (once) with two vertices inside (compact: one).
                     let threshold = if self.scoring == Scoring::Compact {
                         1
                     } else {
                         2
                     };
-                    if self.inside[n] == threshold {
-                        self.border.push(n as u32);
+                    if inside == threshold {
+                        self.border.push(n);
                     }
                 }
             }
         }
+        for &n in self.dual.row(t as usize) {
+            if !self.used[n as usize] {
+                self.touch(n).in_meshlet_neighbours += 1;
+            }
+        }
+        // The only way a border triangle gets used: drop it here instead of filtering the border
+        // by `used` on every step. (Order does not matter: both rankings break ties by id.)
+        if let Some(i) = self.border.iter().position(|&b| b == t) {
+            self.border.swap_remove(i);
+        }
         self.b.push(tri);
-        self.in_meshlet[t as usize] = self.gen;
         self.placed += 1;
         mark_used(self.mesh, t, &mut self.used, &mut self.live);
     }
@@ -208,30 +232,22 @@ impl<'a> Grower<'a> {
         let mut top_score = 0u32;
         let mut blocked = false;
         self.tied.clear();
-        self.prune_border();
+        let (tris, verts) = self.b.open_size();
+        let limits = self.b.limits();
         for i in 0..self.border.len() {
             let t = self.border[i];
-            let [a, b, c] = self.mesh.triangle(t as usize);
-            let distinct = 1 + (b != a) as usize + (c != a && c != b) as usize;
-            let inside = self.inside[t as usize] as usize;
-            let (tris, verts) = self.b.open_size();
-            let limits = self.b.limits();
+            let c = self.cand[t as usize];
+            let inside = c.inside as usize;
             if tris >= limits.max_triangles as usize
-                || verts + distinct - inside > limits.max_vertices as usize
+                || verts + c.distinct as usize - inside > limits.max_vertices as usize
             {
                 blocked = true;
                 continue;
             }
-            // Island bonus (+1): every edge neighbour is already in this meshlet. Skipped when even
-            // the bonus could not reach the current top score.
+            // Island bonus (+1): every edge neighbour is already in this meshlet (dual rows have
+            // no repeats, so counting them is the same test).
             let mut score = inside as u32;
-            if score + 1 >= top_score
-                && self
-                    .dual
-                    .row(t as usize)
-                    .iter()
-                    .all(|&n| self.in_meshlet[n as usize] == self.gen)
-            {
+            if c.in_meshlet_neighbours == c.neighbours {
                 score += 1;
             }
             if score > top_score {
@@ -263,13 +279,12 @@ impl<'a> Grower<'a> {
         let (tris, verts) = self.b.open_size();
         let limits = self.b.limits();
         let centroid = self.sum / verts.max(1) as f64;
-        self.prune_border();
         for i in 0..self.border.len() {
             let t = self.border[i];
             let tri = self.mesh.triangle(t as usize);
             let [a, b, c] = tri;
-            let distinct = 1 + (b != a) as usize + (c != a && c != b) as usize;
-            let new = distinct - self.inside[t as usize] as usize;
+            let cand = self.cand[t as usize];
+            let new = (cand.distinct - cand.inside) as usize;
             let fits =
                 tris < limits.max_triangles as usize && verts + new <= limits.max_vertices as usize;
             let dangling = tri.iter().any(|&v| self.live[v as usize] == 1);
@@ -302,11 +317,21 @@ impl<'a> Grower<'a> {
         best.map(|b| b.2).ok_or(overflow)
     }
 
-    /// Drops border triangles that another step has used. (Order does not matter: both rankings
-    /// break ties by triangle id.)
-    fn prune_border(&mut self) {
-        let used = &self.used;
-        self.border.retain(|&t| !used[t as usize]);
+    /// `t`'s candidate record, reset first when it is from an earlier meshlet.
+    #[inline]
+    fn touch(&mut self, t: u32) -> &mut Cand {
+        let c = &mut self.cand[t as usize];
+        if c.gen != self.gen {
+            let [a, b, d] = self.mesh.triangle(t as usize);
+            *c = Cand {
+                gen: self.gen,
+                neighbours: self.dual.row(t as usize).len() as u32,
+                in_meshlet_neighbours: 0,
+                inside: 0,
+                distinct: 1 + (b != a) as u8 + (d != a && d != b) as u8,
+            };
+        }
+        c
     }
 
     /// Corner-first seed for the next meshlet: the just-closed meshlet's vertex with the fewest
