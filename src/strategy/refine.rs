@@ -158,15 +158,15 @@ impl Config {
                 search_nodes: 1024,
                 search_work: SEARCH_WORK_FULL,
                 // A light anneal per victim: on the bunny it takes k-medoids' output from 754
-                // meshlets (no annealing) to 720 and meshoptimizer's from 720 to 718-719, at
-                // about 1.5 s; 4 failures in a row end it, as later victims rarely go.
+                // meshlets (no annealing) to 721 and meshoptimizer's from 720 to 718, in 2-3 s;
+                // 4 failures in a row end it, as later victims rarely go.
                 anneal_steps: 200,
                 anneal_failures: 4,
                 global_anneal: false,
                 seed: 1,
             },
             // 430 proposals per triangle: more per victim goes further (bunny, after the global
-            // anneal: 200 -> 716, 430 -> 710 meshlets); 16 failures in a row, since a failed
+            // anneal: 200 -> 716, 430 -> 710-712 meshlets); 16 failures in a row, since a failed
             // victim costs only its neighbourhood.
             Effort::Max => Self {
                 anneal_steps: 430,
@@ -266,8 +266,9 @@ pub fn refine_with_stats(
         // end with a meshlet over a limit, which the output would have to split; a cold anneal
         // drives that overflow out, and when it cannot, the boundaries go back to the input's.
         let snapshot = s.label.clone();
-        let feasible = s.anneal(None, steps, (1.0, 0.05), &mut rng, false)
-            || s.anneal(None, steps, (0.05, 0.01), &mut rng, true);
+        let scale = s.spread_scale();
+        let feasible = s.anneal(None, steps, ((1.0, 0.05), scale), &mut rng, false)
+            || s.anneal(None, steps, ((0.05, 0.01), scale), &mut rng, true);
         if !feasible {
             s.restore(&snapshot);
         }
@@ -966,8 +967,11 @@ impl<'a> State<'a> {
             + (t as i64 - self.limits.max_triangles as i64).max(0)
     }
 
-    /// Mean squared distance of a triangle centroid to its meshlet's centroid (the spread's scale).
-    fn mean_spread(&self) -> f64 {
+    /// [`SPREAD_WEIGHT`] over the mean squared distance of a triangle centroid to its meshlet's
+    /// centroid: the weight of a spread change in the annealer's energy. A pass over the mesh, so
+    /// it is measured once per annealing stage, not per victim (on the 871 k-triangle dragon that
+    /// pass cost more than a victim's anneal).
+    fn spread_scale(&self) -> f64 {
         let mut sum = 0.0;
         for (t, &m) in self.label.iter().enumerate() {
             let n = self.tcount[m as usize] as f64;
@@ -976,22 +980,22 @@ impl<'a> State<'a> {
                 .map(|i| (self.centroid[t][i] - c[i] / n).powi(2))
                 .sum::<f64>();
         }
-        sum / self.label.len() as f64
+        SPREAD_WEIGHT / (sum / self.label.len() as f64).max(f64::MIN_POSITIVE)
     }
 
-    /// Simulated annealing over boundary moves with the energy vertex total + overflow × weight +
-    /// normalised spread × weight, temperature falling geometrically from `temps.0` to `temps.1`.
-    /// Never empties a meshlet. With `stop_when_feasible` it ends as soon as nothing overflows.
-    /// True when it ends without overflow.
+    /// Simulated annealing over boundary moves of the triangles in `pool` (all when `None`) with
+    /// the energy vertex total + overflow × weight + spread × `scale` ([`Self::spread_scale`]),
+    /// temperature falling geometrically from `temps.0` to `temps.1`. Never empties a meshlet.
+    /// With `stop_when_feasible` it ends as soon as nothing overflows. True when it ends without
+    /// overflow.
     fn anneal(
         &mut self,
         pool: Option<&[u32]>,
         steps: u64,
-        temps: (f64, f64),
+        (temps, scale): ((f64, f64), f64),
         rng: &mut XorShiftRng,
         stop_when_feasible: bool,
     ) -> bool {
-        let scale = SPREAD_WEIGHT / self.mean_spread().max(f64::MIN_POSITIVE);
         let mut over: i64 = (0..self.tcount.len() as u32)
             .map(|m| self.overflow(m))
             .sum();
@@ -1054,8 +1058,8 @@ impl<'a> State<'a> {
     /// [`ANNEAL_RINGS`] of it drives the overflow back to zero within `steps_per_triangle`
     /// proposals per triangle there, or the hand-over is undone. Ends after `failures` victims in
     /// a row could not go. Confining the anneal makes a failed victim cost its neighbourhood, not
-    /// the mesh: on the bunny the same budget per triangle dissolves more (720 -> 710 meshlets
-    /// instead of 714) in less than half the time of annealing the whole mesh per attempt.
+    /// the mesh: on the bunny the same budget per triangle dissolves more (720 -> 710-712
+    /// meshlets instead of 714) in two thirds of the time of annealing the whole mesh per attempt.
     fn anneal_dissolve(
         &mut self,
         steps_per_triangle: u64,
@@ -1065,6 +1069,7 @@ impl<'a> State<'a> {
     ) {
         let mut failed = vec![false; self.tcount.len()];
         let mut in_a_row = 0;
+        let scale = self.spread_scale();
         while in_a_row < failures {
             if self.live <= self.limits.min_meshlets(self.label.len()) {
                 return;
@@ -1084,13 +1089,13 @@ impl<'a> State<'a> {
                 .flat_map(|&m| self.members[m as usize].iter().copied())
                 .collect();
             // Moderate, nearly constant temperature: hot enough to carry overflow through full
-            // meshlets, cool enough to keep the boundaries the first anneal shortened.
+            // meshlets, cool enough to keep the boundaries shortened so far.
             ok = ok
                 && !pool.is_empty()
                 && self.anneal(
                     Some(&pool),
                     steps_per_triangle * pool.len() as u64,
-                    (0.4, 0.2),
+                    ((0.4, 0.2), scale),
                     rng,
                     true,
                 );
