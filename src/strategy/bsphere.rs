@@ -73,7 +73,7 @@ pub(crate) fn grow(mesh: &Mesh, limits: Limits, scoring: Scoring, coherent: bool
 }
 
 /// A triangle's standing as a border candidate of the open meshlet (see `Grower::cand`).
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy)]
 struct Cand {
     /// The meshlet (`Grower::gen`) the counts below belong to.
     gen: u32,
@@ -81,10 +81,39 @@ struct Cand {
     neighbours: u32,
     /// Edge neighbours in the open meshlet.
     in_meshlet_neighbours: u32,
+    /// Its slot in `Grower::border` (`NOT_ON_BORDER` when it is not there), so that adding it
+    /// removes it from the border without a search.
+    slot: u32,
+    /// XOR of its distinct vertices not yet in the open meshlet: with one left, that vertex's id,
+    /// which is all the sphere tie-break needs (no triangle or membership reads).
+    rest: u32,
+    /// XOR of its distinct vertices (what `rest` starts from; fixed, like the next two).
+    all: u32,
     /// Its distinct vertices in the open meshlet.
     inside: u8,
     /// Its distinct vertices (fewer than 3 when degenerate).
     distinct: u8,
+}
+
+/// `Cand::gen` of a placed triangle: the hot loops test it there instead of in `used` (one
+/// random read per neighbour instead of two).
+const PLACED: u32 = u32::MAX;
+
+/// `Cand::gen` before a triangle is first touched (no meshlet has this number).
+const UNTOUCHED: u32 = u32::MAX - 1;
+
+/// `Cand::slot` of a triangle that is not on the border.
+const NOT_ON_BORDER: u32 = u32::MAX;
+
+/// The radius [`grow_sphere`] gives, without the centre.
+#[inline]
+fn radius_after(c: DVec3, r: f64, p: DVec3) -> f64 {
+    let d2 = (p - c).length_squared();
+    if d2 <= r * r {
+        r
+    } else {
+        (r + d2.sqrt()) * 0.5
+    }
 }
 
 /// Ritter's incremental sphere: the smallest sphere containing the old one and `p`.
@@ -136,13 +165,25 @@ impl<'a> Grower<'a> {
             b: MeshletBuilder::new(mesh.vertex_count(), limits),
             used: vec![false; t],
             live: live_counts(vt),
-            cand: vec![
-                Cand {
-                    gen: u32::MAX,
-                    ..Cand::default()
-                };
-                t
-            ],
+            // The fixed fields in one linear pass, so that the first touch of a triangle in a
+            // meshlet reads neither the triangle nor its dual row.
+            cand: (0..t)
+                .map(|t| {
+                    let [a, b, d] = mesh.triangle(t);
+                    let distinct = 1 + (b != a) as u8 + (d != a && d != b) as u8;
+                    Cand {
+                        gen: UNTOUCHED,
+                        neighbours: dual.row(t).len() as u32,
+                        in_meshlet_neighbours: 0,
+                        slot: NOT_ON_BORDER,
+                        rest: 0,
+                        // Only read when all three are distinct.
+                        all: a ^ b ^ d,
+                        inside: 0,
+                        distinct,
+                    }
+                })
+                .collect(),
             border: Vec::new(),
             tied: Vec::new(),
             gen: 0,
@@ -173,11 +214,12 @@ impl<'a> Grower<'a> {
                     grow_sphere(self.center, self.radius, p)
                 };
                 for &n in self.vt.row(v as usize) {
-                    if self.used[n as usize] {
+                    if self.cand[n as usize].gen == PLACED {
                         continue;
                     }
                     let c = self.touch(n);
                     c.inside += 1;
+                    c.rest ^= v;
                     let inside = c.inside;
                     // It becomes a candidate (once) with two vertices inside (compact: one).
                     let threshold = if self.scoring == Scoring::Compact {
@@ -186,20 +228,32 @@ impl<'a> Grower<'a> {
                         2
                     };
                     if inside == threshold {
+                        self.cand[n as usize].slot = self.border.len() as u32;
                         self.border.push(n);
                     }
                 }
             }
         }
         for &n in self.dual.row(t as usize) {
-            if !self.used[n as usize] {
+            if self.cand[n as usize].gen != PLACED {
                 self.touch(n).in_meshlet_neighbours += 1;
             }
         }
         // The only way a border triangle gets used: drop it here instead of filtering the border
         // by `used` on every step. (Order does not matter: both rankings break ties by id.)
-        if let Some(i) = self.border.iter().position(|&b| b == t) {
+        let c = &mut self.cand[t as usize];
+        let slot = if c.gen == self.gen {
+            c.slot
+        } else {
+            NOT_ON_BORDER
+        };
+        c.gen = PLACED;
+        if slot != NOT_ON_BORDER {
+            let i = slot as usize;
             self.border.swap_remove(i);
+            if let Some(&moved) = self.border.get(i) {
+                self.cand[moved as usize].slot = i as u32;
+            }
         }
         self.b.push(tri);
         self.placed += 1;
@@ -258,10 +312,17 @@ impl<'a> Grower<'a> {
                 self.tied.push(t);
             }
         }
-        // Pass 2: smallest resulting sphere, then lowest triangle id.
+        // Pass 2: smallest resulting sphere, then lowest triangle id. A candidate has two or three
+        // distinct vertices inside, so at most one new vertex: `rest` names it.
         let mut best: Option<(f64, u32)> = None;
         for &t in &self.tied {
-            let r = self.radius_with(self.mesh.triangle(t as usize));
+            let c = self.cand[t as usize];
+            let r = match (c.distinct, c.inside) {
+                (3, 3) => self.radius,
+                (3, _) => radius_after(self.center, self.radius, self.pos(c.rest)),
+                // Degenerate (a repeated vertex): the general way.
+                _ => self.radius_with(self.mesh.triangle(t as usize)),
+            };
             if best.is_none_or(|(br, bt)| r < br || (r == br && t < bt)) {
                 best = Some((r, t));
             }
@@ -317,19 +378,17 @@ impl<'a> Grower<'a> {
         best.map(|b| b.2).ok_or(overflow)
     }
 
-    /// `t`'s candidate record, reset first when it is from an earlier meshlet.
+    /// `t`'s candidate record (never a placed triangle's), reset first when it is from an earlier
+    /// meshlet.
     #[inline]
     fn touch(&mut self, t: u32) -> &mut Cand {
         let c = &mut self.cand[t as usize];
         if c.gen != self.gen {
-            let [a, b, d] = self.mesh.triangle(t as usize);
-            *c = Cand {
-                gen: self.gen,
-                neighbours: self.dual.row(t as usize).len() as u32,
-                in_meshlet_neighbours: 0,
-                inside: 0,
-                distinct: 1 + (b != a) as u8 + (d != a && d != b) as u8,
-            };
+            c.gen = self.gen;
+            c.in_meshlet_neighbours = 0;
+            c.slot = NOT_ON_BORDER;
+            c.rest = c.all;
+            c.inside = 0;
         }
         c
     }
