@@ -368,6 +368,9 @@ struct State<'a> {
     seen: Vec<u32>,
     /// Scratch for vertex counts: the epoch a vertex was last seen in.
     vseen: Vec<u32>,
+    /// Scratch for an augmenting search: a vertex's triangles in the expanded meshlet, valid
+    /// where `vseen` holds the search step's epoch.
+    vuse: Vec<u32>,
     epoch: u32,
     /// Triangles the augmenting-path searches have looked at.
     work: u64,
@@ -418,6 +421,7 @@ impl<'a> State<'a> {
             centroid,
             seen: vec![0; t_count],
             vseen: vec![0; mesh.vertex_count()],
+            vuse: vec![0; mesh.vertex_count()],
             epoch: 0,
             work: 0,
             queued: vec![false; t_count],
@@ -904,14 +908,31 @@ impl<'a> State<'a> {
                 break;
             }
             self.work += self.members[y as usize].len() as u64;
+            // y's use count of each of its vertices, counted once for all its members (nothing
+            // moves during the search): scanning each vertex's triangles per member was most of
+            // a refinement's time on openfoam_motorbike.
+            self.epoch += 1;
+            let e = self.epoch;
+            for &s in &self.members[y as usize] {
+                for v in distinct(self.mesh.triangle(s as usize)) {
+                    let v = v as usize;
+                    if self.vseen[v] != e {
+                        self.vseen[v] = e;
+                        self.vuse[v] = 0;
+                    }
+                    self.vuse[v] += 1;
+                }
+            }
             for i in 0..self.members[y as usize].len() {
                 let s = self.members[y as usize][i];
                 // s_in must still touch y when it arrives: never pass on one of its neighbours.
                 if self.dual.row(s_in as usize).contains(&s) {
                     continue;
                 }
+                // The stamp is this step's: stays_connected below bumps the epoch but only
+                // stamps triangles.
                 let freed = distinct(self.mesh.triangle(s as usize))
-                    .filter(|&v| !in_v.contains(&v) && self.uses(v, y) == 1)
+                    .filter(|&v| !in_v.contains(&v) && self.vuse[v as usize] == 1)
                     .count() as u32;
                 if self.vcount[y as usize] + add_in > self.limits.max_vertices + freed {
                     continue;
