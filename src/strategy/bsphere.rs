@@ -81,8 +81,8 @@ struct Cand {
     neighbours: u32,
     /// Edge neighbours in the open meshlet.
     in_meshlet_neighbours: u32,
-    /// Its slot in `Grower::border` (`NOT_ON_BORDER` when it is not there), so that adding it
-    /// removes it from the border without a search.
+    /// Its slot in its border list (`NOT_ON_BORDER` when it is on none), so that it moves
+    /// between lists and leaves the border without a search.
     slot: u32,
     /// XOR of its distinct vertices not yet in the open meshlet: with one left, that vertex's id,
     /// which is all the sphere tie-break needs (no triangle or membership reads).
@@ -93,6 +93,8 @@ struct Cand {
     inside: u8,
     /// Its distinct vertices (fewer than 3 when degenerate).
     distinct: u8,
+    /// Which of `Grower::border`'s lists it is on (valid while `slot` is).
+    list: u8,
 }
 
 /// `Cand::gen` of a placed triangle: the hot loops test it there instead of in `used` (one
@@ -104,6 +106,12 @@ const UNTOUCHED: u32 = u32::MAX - 1;
 
 /// `Cand::slot` of a triangle that is not on the border.
 const NOT_ON_BORDER: u32 = u32::MAX;
+
+/// Border lists: `bsphere`'s candidates are kept on one list per (score - 2, new vertices), i.e.
+/// `2 * (score - 2) + new` with score 2..=4 and new 0..=1, so that the best score that fits is
+/// the first non-empty list and no step scans the whole border (that scan was a quarter of the
+/// grower's time); `compact` ranks by distance and keeps everything on list 0.
+const LISTS: usize = 6;
 
 /// The radius [`grow_sphere`] gives, without the centre.
 #[inline]
@@ -140,9 +148,8 @@ struct Grower<'a> {
     /// instead of the triangle, its dual row and each neighbour (measured: those random reads
     /// were two thirds of bsphere's time).
     cand: Vec<Cand>,
-    border: Vec<u32>,
-    /// Scratch: candidates tied at the best score.
-    tied: Vec<u32>,
+    /// The open meshlet's candidates, on the lists described at [`LISTS`].
+    border: [Vec<u32>; LISTS],
     gen: u32,
     center: DVec3,
     radius: f64,
@@ -181,11 +188,11 @@ impl<'a> Grower<'a> {
                         all: a ^ b ^ d,
                         inside: 0,
                         distinct,
+                        list: 0,
                     }
                 })
                 .collect(),
-            border: Vec::new(),
-            tied: Vec::new(),
+            border: Default::default(),
             gen: 0,
             center: DVec3::ZERO,
             radius: -1.0,
@@ -228,8 +235,9 @@ impl<'a> Grower<'a> {
                         2
                     };
                     if inside == threshold {
-                        self.cand[n as usize].slot = self.border.len() as u32;
-                        self.border.push(n);
+                        self.enlist(n);
+                    } else if inside > threshold {
+                        self.relist(n);
                     }
                 }
             }
@@ -237,27 +245,60 @@ impl<'a> Grower<'a> {
         for &n in self.dual.row(t as usize) {
             if self.cand[n as usize].gen != PLACED {
                 self.touch(n).in_meshlet_neighbours += 1;
+                self.relist(n);
             }
         }
         // The only way a border triangle gets used: drop it here instead of filtering the border
         // by `used` on every step. (Order does not matter: both rankings break ties by id.)
-        let c = &mut self.cand[t as usize];
-        let slot = if c.gen == self.gen {
-            c.slot
-        } else {
-            NOT_ON_BORDER
-        };
-        c.gen = PLACED;
-        if slot != NOT_ON_BORDER {
-            let i = slot as usize;
-            self.border.swap_remove(i);
-            if let Some(&moved) = self.border.get(i) {
-                self.cand[moved as usize].slot = i as u32;
-            }
+        let c = self.cand[t as usize];
+        if c.gen == self.gen && c.slot != NOT_ON_BORDER {
+            self.delist(t);
         }
+        self.cand[t as usize].gen = PLACED;
         self.b.push(tri);
         self.placed += 1;
         mark_used(self.mesh, t, &mut self.used, &mut self.live);
+    }
+
+    /// The border list of a candidate with record `c` (see [`LISTS`]).
+    fn list_of(&self, c: &Cand) -> u8 {
+        if self.scoring == Scoring::Compact {
+            return 0;
+        }
+        // Island bonus (+1): every edge neighbour is already in this meshlet (dual rows have no
+        // repeats, so counting them is the same test).
+        let score = c.inside + (c.in_meshlet_neighbours == c.neighbours) as u8;
+        2 * (score - 2) + (c.distinct - c.inside)
+    }
+
+    /// Puts `t` (on no list) on its border list.
+    fn enlist(&mut self, t: u32) {
+        let list = self.list_of(&self.cand[t as usize]);
+        let l = &mut self.border[list as usize];
+        let c = &mut self.cand[t as usize];
+        c.list = list;
+        c.slot = l.len() as u32;
+        l.push(t);
+    }
+
+    /// Takes `t` off its border list.
+    fn delist(&mut self, t: u32) {
+        let c = &mut self.cand[t as usize];
+        let (i, l) = (c.slot as usize, &mut self.border[c.list as usize]);
+        c.slot = NOT_ON_BORDER;
+        l.swap_remove(i);
+        if let Some(&moved) = l.get(i) {
+            self.cand[moved as usize].slot = i as u32;
+        }
+    }
+
+    /// Moves `t` to the list its record now calls for, when it is on the border.
+    fn relist(&mut self, t: u32) {
+        let c = self.cand[t as usize];
+        if c.slot != NOT_ON_BORDER && self.list_of(&c) != c.list {
+            self.delist(t);
+            self.enlist(t);
+        }
     }
 
     /// Radius after adding `tri`'s vertices that are not yet inside.
@@ -281,41 +322,31 @@ impl<'a> Grower<'a> {
         if self.scoring == Scoring::Compact {
             return self.best_compact();
         }
-        // Pass 1: scores (cheap). The radius only breaks ties, so it is computed in pass 2 for the
-        // top-scoring candidates alone.
-        let mut top_score = 0u32;
-        let mut blocked = false;
-        self.tied.clear();
+        // Whether a candidate fits depends only on its list: with a free triangle slot, one with
+        // no new vertex always does and one with a new vertex does while a vertex slot is free.
         let (tris, verts) = self.b.open_size();
         let limits = self.b.limits();
-        for i in 0..self.border.len() {
-            let t = self.border[i];
-            let c = self.cand[t as usize];
-            let inside = c.inside as usize;
-            if tris >= limits.max_triangles as usize
-                || verts + c.distinct as usize - inside > limits.max_vertices as usize
-            {
-                blocked = true;
-                continue;
-            }
-            // Island bonus (+1): every edge neighbour is already in this meshlet (dual rows have
-            // no repeats, so counting them is the same test).
-            let mut score = inside as u32;
-            if c.in_meshlet_neighbours == c.neighbours {
-                score += 1;
-            }
-            if score > top_score {
-                top_score = score;
-                self.tied.clear();
-            }
-            if score == top_score {
-                self.tied.push(t);
-            }
+        let any = self.border.iter().any(|l| !l.is_empty());
+        if tris >= limits.max_triangles as usize {
+            return Err(any);
         }
-        // Pass 2: smallest resulting sphere, then lowest triangle id. A candidate has two or three
-        // distinct vertices inside, so at most one new vertex: `rest` names it.
+        let room = verts < limits.max_vertices as usize;
+        let Some(score) = (0..3).rev().find(|&s| {
+            !self.border[2 * s].is_empty() || (room && !self.border[2 * s + 1].is_empty())
+        }) else {
+            // Candidates that do not fit, or none.
+            return Err(any);
+        };
+        let with_new: &[u32] = if room {
+            &self.border[2 * score + 1]
+        } else {
+            &[]
+        };
+        // The top score's candidates: smallest resulting sphere, then lowest triangle id. A
+        // candidate has two or three distinct vertices inside, so at most one new vertex: `rest`
+        // names it.
         let mut best: Option<(f64, u32)> = None;
-        for &t in &self.tied {
+        for &t in self.border[2 * score].iter().chain(with_new) {
             let c = self.cand[t as usize];
             let r = match (c.distinct, c.inside) {
                 (3, 3) => self.radius,
@@ -327,7 +358,7 @@ impl<'a> Grower<'a> {
                 best = Some((r, t));
             }
         }
-        best.map(|(_, t)| t).ok_or(blocked)
+        best.map(|(_, t)| t).ok_or(any)
     }
 
     /// `compact`'s choice: lexicographic (rank, distance to the centroid, id) with rank 0 for no new
@@ -340,8 +371,8 @@ impl<'a> Grower<'a> {
         let (tris, verts) = self.b.open_size();
         let limits = self.b.limits();
         let centroid = self.sum / verts.max(1) as f64;
-        for i in 0..self.border.len() {
-            let t = self.border[i];
+        for i in 0..self.border[0].len() {
+            let t = self.border[0][i];
             let tri = self.mesh.triangle(t as usize);
             let [a, b, c] = tri;
             let cand = self.cand[t as usize];
@@ -423,7 +454,9 @@ impl<'a> Grower<'a> {
     fn close(&mut self) -> Vec<u32> {
         let closed = self.b.open_vertices().to_vec();
         self.b.flush();
-        self.border.clear();
+        for l in &mut self.border {
+            l.clear();
+        }
         self.gen += 1;
         self.radius = -1.0;
         self.sum = DVec3::ZERO;
