@@ -91,7 +91,7 @@ pub enum Effort {
     /// `search_work`; from `nvidia`'s poor meshlets 0.5-0.7 s (2284 -> 845 meshlets).
     Fast,
     /// Rounds of rounder-meshlet moves, neighbourhood rebuilds, dissolving and a light anneal per
-    /// victim (0.1 to 47 s on the shared meshes at 64/126: `results/build.md`).
+    /// victim (0.05 to 36 s on the shared meshes at 64/126: `results/build.md`).
     #[default]
     Full,
     /// Full with a global anneal first and a larger budget per victim (seconds per 10 k
