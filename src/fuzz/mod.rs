@@ -290,6 +290,7 @@ pub fn kind_name(k: &MeshErrorKind) -> &'static str {
         MeshErrorKind::Truncated(_) => "truncated",
         MeshErrorKind::CountMismatch(_) => "count-mismatch",
         MeshErrorKind::Unsupported(_) => "unsupported",
+        MeshErrorKind::UnsupportedExtension { .. } => "unsupported-extension",
         MeshErrorKind::NonFinite { .. } => "non-finite",
         MeshErrorKind::IndexOutOfRange { .. } => "index-out-of-range",
         MeshErrorKind::Empty(_) => "empty",

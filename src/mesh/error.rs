@@ -42,6 +42,15 @@ pub enum MeshErrorKind {
     /// A valid but unsupported feature (property type, primitive mode, ...).
     #[error("unsupported: {0}")]
     Unsupported(String),
+    /// The file requires a glTF extension this reader does not apply (named in
+    /// `extensionsRequired`, or found where reading on without it would give wrong geometry).
+    #[error("requires glTF extension {name}, which meshletlab does not read{hint}")]
+    UnsupportedExtension {
+        /// The extension's name, as the file spells it.
+        name: String,
+        /// What to do about it (empty, or text starting with "; ").
+        hint: String,
+    },
     /// A vertex coordinate is NaN or infinite.
     #[error("vertex {vertex} has a non-finite coordinate ({value})")]
     NonFinite {

@@ -17,13 +17,75 @@
 //! twice is an error, so instancing cannot blow up exponentially). The baked output may be at most
 //! [`MAX_EXPANSION`] times the input plus [`EXPANSION_SLACK`] bytes: one accessor named by many
 //! primitives or meshes instanced by many nodes cannot allocate without bound.
+//!
+//! **What the glTF ecosystem writes.** Positions may be quantised (`KHR_mesh_quantization`: byte,
+//! unsigned byte, short or unsigned short, normalised or not), dequantised per the spec and then
+//! transformed by their nodes, where gltfpack and glTF-Transform put the dequantisation scale and
+//! offset. Buffer views may be meshopt-compressed (`EXT_meshopt_compression` and its KHR successor,
+//! decoded by meshoptimizer itself: see `gltf_meshopt`). Accessors are read per the spec: sparse
+//! substitution over the base values, and an accessor without a bufferView starts from zeros. A
+//! required extension outside [`READ_EXTENSIONS`] and [`GEOMETRY_NEUTRAL`] is refused up front with
+//! its name ([`MeshErrorKind::UnsupportedExtension`]), before any buffer is read, so a file never
+//! fails later with an error that blames something else; Draco (`KHR_draco_mesh_compression`) is
+//! refused that way, with the command that decompresses it.
 
 use super::error::{parse_err, MeshErrorKind};
+use super::gltf_meshopt;
 use glam::{Mat4, Quat, Vec3};
 use gltf::json::{self, accessor::ComponentType, accessor::Type, mesh::Mode, validation::Checked};
+use std::borrow::Cow;
+use std::cell::{Cell, OnceCell};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
+
+/// Extensions this reader applies to the geometry it reads.
+pub const READ_EXTENSIONS: [&str; 3] = [
+    "KHR_mesh_quantization",
+    gltf_meshopt::EXTENSIONS[0],
+    gltf_meshopt::EXTENSIONS[1],
+];
+
+/// Prefixes of extensions that change only materials, textures, lights or metadata: positions and
+/// triangles are the same without them, so a file that requires one (gltfpack's `-tc` requires
+/// `KHR_texture_basisu`) still loads. Anything else that is required and not read is refused.
+pub const GEOMETRY_NEUTRAL: [&str; 6] = [
+    "KHR_materials_",
+    "KHR_texture_",
+    "EXT_texture_",
+    "KHR_lights_",
+    "EXT_lights_",
+    "KHR_xmp",
+];
+
+/// Draco's extension: refused, with how to get a file this reader takes.
+const DRACO: &str = "KHR_draco_mesh_compression";
+const DRACO_HINT: &str = "; decompress it first, e.g. `gltf-transform cp IN.glb OUT.glb` \
+    (glTF-Transform decodes Draco and writes the geometry uncompressed) or re-export without Draco";
+
+/// Refuses a required extension that is neither read nor geometry-neutral, naming it.
+fn check_required(root: &json::Root) -> Result<(), MeshErrorKind> {
+    for name in &root.extensions_required {
+        let read = READ_EXTENSIONS.contains(&name.as_str());
+        let neutral = GEOMETRY_NEUTRAL.iter().any(|p| name.starts_with(p));
+        if read || neutral {
+            continue;
+        }
+        let hint = match name.as_str() {
+            DRACO => DRACO_HINT.to_string(),
+            "EXT_mesh_gpu_instancing" => "; re-export without GPU instancing (gltfpack without -mi)".into(),
+            _ => format!(
+                " (it reads {}, and ignores extensions that change only materials, textures or lights)",
+                READ_EXTENSIONS.join(", ")
+            ),
+        };
+        return Err(MeshErrorKind::UnsupportedExtension {
+            name: name.clone(),
+            hint,
+        });
+    }
+    Ok(())
+}
 
 /// Baked positions and indices may take at most this many times the file's bytes (plus
 /// [`EXPANSION_SLACK`]); real files instance far less, a hostile one could ask for any amount.
@@ -78,18 +140,18 @@ pub fn colours(data: &[u8], base: Option<&Path>) -> Result<Vec<[f32; 4]>, MeshEr
                 Type::Vec4 => 4,
                 _ => return Err(parse_err(&loc, "COLOR_0 is not VEC3 or VEC4")),
             };
-            let norm = match acc.component {
-                ComponentType::F32 => 1.0,
-                ComponentType::U8 if acc.normalized => 255.0,
-                ComponentType::U16 if acc.normalized => 65535.0,
-                _ => return Err(parse_err(&loc, "COLOR_0 component type")),
+            let colour_type = match acc.component {
+                ComponentType::F32 => true,
+                ComponentType::U8 | ComponentType::U16 => acc.normalized,
+                _ => false,
             };
+            if !colour_type {
+                return Err(parse_err(&loc, "COLOR_0 component type"));
+            }
             let raw = acc.read_f32(n)?;
             out.extend(raw.chunks_exact(n).map(|c| {
                 let mut rgba = [1.0; 4];
-                for (o, v) in rgba.iter_mut().zip(c) {
-                    *o = v / norm;
-                }
+                rgba[..n].copy_from_slice(c);
                 rgba
             }));
         }
@@ -176,11 +238,18 @@ struct Document {
     buffers: Vec<Rc<[u8]>>,
     /// Bytes read: the file and each distinct external buffer file (what the budget scales with).
     input_bytes: u64,
+    /// Buffers marked as a meshopt fallback: no bytes were loaded for them.
+    fallback: Vec<bool>,
+    /// Meshopt-compressed buffer views, decoded on first use (in 4-byte words).
+    decoded: Vec<OnceCell<Vec<u32>>>,
+    /// Bytes decoded or materialised so far, against [`Document::budget`].
+    spent: Cell<u64>,
 }
 
 /// An accessor checked for range against its buffer view: element `i` starts at `data[i * stride]`.
 struct Accessor<'a> {
-    data: &'a [u8],
+    /// The view's bytes, or a dense copy when the accessor is sparse or has no bufferView.
+    data: Cow<'a, [u8]>,
     count: usize,
     stride: usize,
     component: ComponentType,
@@ -209,9 +278,13 @@ fn type_len(t: Type) -> usize {
 }
 
 impl Accessor<'_> {
-    /// Component values as f32, `n` per element (components read little-endian; integers as is).
+    /// Component values as f32, `n` per element (components read little-endian). Integers are
+    /// taken as is, or, when the accessor is normalised, mapped to [0, 1] (unsigned) or [-1, 1]
+    /// (signed) by the glTF spec's formulas: `c / 255`, `max(c / 127, -1)`, `c / 65535`,
+    /// `max(c / 32767, -1)`.
     fn read_f32(&self, n: usize) -> Result<Vec<f32>, MeshErrorKind> {
         let size = component_size(self.component);
+        let norm = self.normalized;
         let mut out = Vec::with_capacity(self.count * n);
         for i in 0..self.count {
             let e = &self.data[i * self.stride..];
@@ -219,9 +292,15 @@ impl Accessor<'_> {
                 let b = &e[c * size..(c + 1) * size];
                 out.push(match self.component {
                     ComponentType::F32 => f32::from_le_bytes(b.try_into().expect("4 bytes")),
+                    ComponentType::U8 if norm => b[0] as f32 / 255.0,
                     ComponentType::U8 => b[0] as f32,
+                    ComponentType::I8 if norm => (b[0] as i8 as f32 / 127.0).max(-1.0),
                     ComponentType::I8 => b[0] as i8 as f32,
+                    ComponentType::U16 if norm => u16::from_le_bytes([b[0], b[1]]) as f32 / 65535.0,
                     ComponentType::U16 => u16::from_le_bytes([b[0], b[1]]) as f32,
+                    ComponentType::I16 if norm => {
+                        (i16::from_le_bytes([b[0], b[1]]) as f32 / 32767.0).max(-1.0)
+                    }
                     ComponentType::I16 => i16::from_le_bytes([b[0], b[1]]) as f32,
                     ComponentType::U32 => u32::from_le_bytes(b.try_into().expect("4 bytes")) as f32,
                 });
@@ -261,10 +340,7 @@ impl Document {
     /// Refuses instancing that would bake more than [`MAX_EXPANSION`] times the input (the file and
     /// its external buffers) plus [`EXPANSION_SLACK`]; sizes are summed before anything is allocated.
     fn check_budget(&self, instances: &[(usize, Mat4)]) -> Result<(), MeshErrorKind> {
-        let budget = self
-            .input_bytes
-            .saturating_mul(MAX_EXPANSION)
-            .saturating_add(EXPANSION_SLACK);
+        let budget = self.budget();
         let mut out_bytes = 0u64;
         for (mesh, _) in instances {
             for p in &self.root.meshes[*mesh].primitives {
@@ -285,6 +361,27 @@ impl Document {
         Ok(())
     }
 
+    /// Bytes of output (baked geometry, decoded views, dense accessor copies) a file may ask for.
+    fn budget(&self) -> u64 {
+        self.input_bytes
+            .saturating_mul(MAX_EXPANSION)
+            .saturating_add(EXPANSION_SLACK)
+    }
+
+    /// Counts `bytes` more of decoded or materialised data against the budget, before allocating.
+    fn spend(&self, bytes: u64, loc: &str) -> Result<(), MeshErrorKind> {
+        let total = self.spent.get().saturating_add(bytes);
+        if total > self.budget() {
+            return Err(MeshErrorKind::TooLarge(format!(
+                "{loc}: decoded data would exceed {} bytes ({MAX_EXPANSION}x the input plus {} MiB)",
+                self.budget(),
+                EXPANSION_SLACK >> 20
+            )));
+        }
+        self.spent.set(total);
+        Ok(())
+    }
+
     fn parse(data: &[u8], base: Option<&Path>) -> Result<Self, MeshErrorKind> {
         let (json_bytes, blob) = if data.starts_with(GLB_MAGIC) {
             split_glb(data)?
@@ -293,19 +390,36 @@ impl Document {
         };
         let root: json::Root = serde_json::from_slice(json_bytes)
             .map_err(|e| parse_err("glTF JSON", e.to_string()))?;
+        check_required(&root)?;
         let blob: Option<Rc<[u8]>> = blob.map(Rc::from);
         let mut files = HashMap::new();
+        let fallback: Vec<bool> = root
+            .buffers
+            .iter()
+            .map(|b| {
+                b.extensions
+                    .as_ref()
+                    .is_some_and(|e| gltf_meshopt::is_fallback(&e.others))
+            })
+            .collect();
         let buffers = root
             .buffers
             .iter()
             .enumerate()
-            .map(|(i, b)| load_buffer(i, b, blob.as_ref(), base, &mut files))
+            .map(|(i, b)| match fallback[i] {
+                // The extension lets a decoder ignore the fallback: it may not even exist.
+                true => Ok(Rc::from(&[][..])),
+                false => load_buffer(i, b, blob.as_ref(), base, &mut files),
+            })
             .collect::<Result<_, _>>()?;
         let external: u64 = files.values().map(|f| f.len() as u64).sum();
         Ok(Self {
+            decoded: root.buffer_views.iter().map(|_| OnceCell::new()).collect(),
             root,
             buffers,
             input_bytes: data.len() as u64 + external,
+            fallback,
+            spent: Cell::new(0),
         })
     }
 
@@ -381,7 +495,77 @@ impl Document {
         }
     }
 
-    /// Accessor `i`, with its bytes range-checked against its view and buffer.
+    /// The bytes of buffer view `vi` (decoded, if it is meshopt-compressed) and its byteStride.
+    fn view(&self, vi: usize, loc: &str) -> Result<(&[u8], Option<usize>), MeshErrorKind> {
+        let v = self
+            .root
+            .buffer_views
+            .get(vi)
+            .ok_or_else(|| parse_err(loc, format!("bufferView {vi} does not exist")))?;
+        let vloc = format!("{loc} bufferView {vi}");
+        let too_far = || {
+            MeshErrorKind::Truncated(format!(
+                "{vloc}: reaches past the end of its buffer or decoded data"
+            ))
+        };
+        let stride = v.byte_stride.map(|s| s.0);
+        let length = usize::try_from(v.byte_length.0).map_err(|_| too_far())?;
+        let compressed = match &v.extensions {
+            Some(e) => gltf_meshopt::compressed_view(&e.others, &vloc)?,
+            None => None,
+        };
+        if let Some(c) = compressed {
+            let cell = &self.decoded[vi];
+            let words = match cell.get() {
+                Some(w) => w,
+                None => {
+                    self.spend(c.decoded_len(&vloc)?, &vloc)?;
+                    let stream =
+                        self.buffer_range(c.buffer, c.byte_offset, c.byte_length, &vloc)?;
+                    let w = c.decode(stream, &vloc)?;
+                    cell.get_or_init(|| w)
+                }
+            };
+            let decoded =
+                &bytemuck::cast_slice::<u32, u8>(words)[..(c.count * c.byte_stride) as usize];
+            return Ok((decoded.get(..length).ok_or_else(too_far)?, stride));
+        }
+        let bi = v.buffer.value();
+        if self.fallback.get(bi) == Some(&true) {
+            return Err(parse_err(
+                &vloc,
+                format!(
+                    "lies in buffer {bi}, a meshopt fallback that holds no data, and is not compressed itself"
+                ),
+            ));
+        }
+        let off = v.byte_offset.map(|o| o.0).unwrap_or(0);
+        Ok((self.buffer_range(bi, off, v.byte_length.0, &vloc)?, stride))
+    }
+
+    /// Bytes `offset..offset + length` of buffer `bi`, range-checked.
+    fn buffer_range(
+        &self,
+        bi: usize,
+        offset: u64,
+        length: u64,
+        loc: &str,
+    ) -> Result<&[u8], MeshErrorKind> {
+        let buffer = self
+            .buffers
+            .get(bi)
+            .ok_or_else(|| parse_err(loc, format!("buffer {bi} does not exist")))?;
+        offset
+            .checked_add(length)
+            .and_then(|end| Some(usize::try_from(offset).ok()?..usize::try_from(end).ok()?))
+            .and_then(|r| buffer.get(r))
+            .ok_or_else(|| {
+                MeshErrorKind::Truncated(format!("{loc}: reaches past the end of buffer {bi}"))
+            })
+    }
+
+    /// Accessor `i`, with its bytes range-checked against its view and buffer; a sparse accessor,
+    /// or one without a bufferView, comes back as a dense copy with the substitutions applied.
     fn accessor(&self, i: usize, loc: &str) -> Result<Accessor<'_>, MeshErrorKind> {
         let loc = format!("{loc} accessor {i}");
         let a = self
@@ -389,66 +573,63 @@ impl Document {
             .accessors
             .get(i)
             .ok_or_else(|| parse_err(&loc, "does not exist"))?;
-        if a.sparse.is_some() {
-            return Err(MeshErrorKind::Unsupported(format!(
-                "{loc}: sparse accessor"
-            )));
-        }
         let (Checked::Valid(component), Checked::Valid(ty)) = (&a.component_type, &a.type_) else {
             return Err(parse_err(&loc, "invalid componentType or type"));
         };
         let (component, ty) = (component.0, *ty);
         let elem = component_size(component) * type_len(ty);
         let count = usize::try_from(a.count.0).map_err(|_| parse_err(&loc, "count too large"))?;
-        let Some(view) = &a.buffer_view else {
-            return Err(MeshErrorKind::Unsupported(format!(
-                "{loc}: accessor without a bufferView (implicit zeros)"
-            )));
-        };
-        let vi = view.value();
-        let v = self
-            .root
-            .buffer_views
-            .get(vi)
-            .ok_or_else(|| parse_err(&loc, format!("bufferView {vi} does not exist")))?;
-        let bi = v.buffer.value();
-        let buffer = self
-            .buffers
-            .get(bi)
-            .ok_or_else(|| parse_err(&loc, format!("buffer {bi} does not exist")))?;
-        let stride = v.byte_stride.map(|s| s.0).unwrap_or(elem);
-        if stride < elem {
-            return Err(parse_err(
-                &loc,
-                format!("byteStride {stride} < element size {elem}"),
-            ));
-        }
-        // view range inside the buffer, accessor range inside the view; all checked.
         let too_far = || {
             MeshErrorKind::Truncated(format!(
                 "{loc}: reaches past the end of its buffer view or buffer"
             ))
         };
-        let v_off = v.byte_offset.map(|o| o.0).unwrap_or(0);
-        let v_end = v_off.checked_add(v.byte_length.0).ok_or_else(too_far)?;
-        let view_bytes = usize::try_from(v_off)
-            .ok()
-            .zip(usize::try_from(v_end).ok())
-            .and_then(|(s, e)| buffer.get(s..e))
-            .ok_or_else(too_far)?;
-        let a_off =
-            usize::try_from(a.byte_offset.map(|o| o.0).unwrap_or(0)).map_err(|_| too_far())?;
-        let span = match count {
-            0 => 0,
-            c => (c - 1)
-                .checked_mul(stride)
-                .and_then(|x| x.checked_add(elem))
-                .ok_or_else(too_far)?,
+        let dense_len = count.checked_mul(elem).ok_or_else(too_far)?;
+        // The base values: a range of the view, element `k` at `k * stride`.
+        let base = match &a.buffer_view {
+            None => None,
+            Some(view) => {
+                let (view_bytes, stride) = self.view(view.value(), &loc)?;
+                let stride = stride.unwrap_or(elem);
+                if stride < elem {
+                    return Err(parse_err(
+                        &loc,
+                        format!("byteStride {stride} < element size {elem}"),
+                    ));
+                }
+                let a_off = usize::try_from(a.byte_offset.map(|o| o.0).unwrap_or(0))
+                    .map_err(|_| too_far())?;
+                let span = match count {
+                    0 => 0,
+                    c => (c - 1)
+                        .checked_mul(stride)
+                        .and_then(|x| x.checked_add(elem))
+                        .ok_or_else(too_far)?,
+                };
+                let data = a_off
+                    .checked_add(span)
+                    .and_then(|end| view_bytes.get(a_off..end))
+                    .ok_or_else(too_far)?;
+                Some((data, stride))
+            }
         };
-        let data = a_off
-            .checked_add(span)
-            .and_then(|end| view_bytes.get(a_off..end))
-            .ok_or_else(too_far)?;
+        let (data, stride) = match (base, &a.sparse) {
+            (Some((data, stride)), None) => (Cow::Borrowed(data), stride),
+            (base, sparse) => {
+                // Zeros (no bufferView) or the base values, packed; then the substitutions.
+                self.spend(dense_len as u64, &loc)?;
+                let mut dense = vec![0u8; dense_len];
+                if let Some((data, stride)) = base {
+                    for (k, e) in dense.chunks_exact_mut(elem).enumerate() {
+                        e.copy_from_slice(&data[k * stride..k * stride + elem]);
+                    }
+                }
+                if let Some(sp) = sparse {
+                    self.substitute(sp, &mut dense, elem, &loc)?;
+                }
+                (Cow::Owned(dense), elem)
+            }
+        };
         Ok(Accessor {
             data,
             count,
@@ -458,6 +639,83 @@ impl Document {
             normalized: a.normalized,
             loc,
         })
+    }
+
+    /// Writes a sparse accessor's values over `dense` (elements of `elem` bytes). The spec's rules
+    /// are checked: indices strictly increasing and below the accessor's count.
+    fn substitute(
+        &self,
+        sp: &json::accessor::sparse::Sparse,
+        dense: &mut [u8],
+        elem: usize,
+        loc: &str,
+    ) -> Result<(), MeshErrorKind> {
+        let loc = format!("{loc} sparse");
+        let count = dense.len() / elem;
+        let n = usize::try_from(sp.count.0)
+            .ok()
+            .filter(|&n| n <= count)
+            .ok_or_else(|| {
+                parse_err(
+                    &loc,
+                    format!("count {} exceeds the accessor's {count}", sp.count.0),
+                )
+            })?;
+        let isize_ = match &sp.indices.component_type {
+            Checked::Valid(c) => match c.0 {
+                ComponentType::U8 => 1,
+                ComponentType::U16 => 2,
+                ComponentType::U32 => 4,
+                c => return Err(parse_err(&loc, format!("indices of component type {c:?}"))),
+            },
+            Checked::Invalid => return Err(parse_err(&loc, "invalid indices componentType")),
+        };
+        let range =
+            |view: usize, off: u64, width: usize, what: &str| -> Result<&[u8], MeshErrorKind> {
+                let (bytes, _) = self.view(view, &loc)?;
+                usize::try_from(off)
+                    .ok()
+                    .and_then(|o| Some(o..o.checked_add(n.checked_mul(width)?)?))
+                    .and_then(|r| bytes.get(r))
+                    .ok_or_else(|| {
+                        MeshErrorKind::Truncated(format!(
+                            "{loc}: {what} reach past the end of their view"
+                        ))
+                    })
+            };
+        let indices = range(
+            sp.indices.buffer_view.value(),
+            sp.indices.byte_offset.0,
+            isize_,
+            "indices",
+        )?;
+        let values = range(
+            sp.values.buffer_view.value(),
+            sp.values.byte_offset.0,
+            elem,
+            "values",
+        )?;
+        let mut last: Option<usize> = None;
+        for (k, (ib, v)) in indices
+            .chunks_exact(isize_)
+            .zip(values.chunks_exact(elem))
+            .enumerate()
+        {
+            let mut word = [0u8; 4];
+            word[..isize_].copy_from_slice(ib);
+            let t = u32::from_le_bytes(word) as usize;
+            if t >= count || last.is_some_and(|l| t <= l) {
+                return Err(parse_err(
+                    &loc,
+                    format!(
+                        "index {k} is {t}: indices must increase strictly and stay below {count}"
+                    ),
+                ));
+            }
+            last = Some(t);
+            dense[t * elem..(t + 1) * elem].copy_from_slice(v);
+        }
+        Ok(())
     }
 
     /// (vertices, indices after unrolling) of a triangle primitive, `None` for points and lines.
@@ -517,10 +775,36 @@ impl Document {
                 .attributes
                 .get(&Checked::Valid(json::mesh::Semantic::Positions))
                 .expect("checked by primitive_size");
+            let draco = prim
+                .extensions
+                .as_ref()
+                .is_some_and(|e| e.others.contains_key(DRACO));
+            if draco
+                && self
+                    .root
+                    .accessors
+                    .get(pa.value())
+                    .is_some_and(|a| a.buffer_view.is_none())
+            {
+                // Its accessors would read as zeros: only the Draco stream holds the geometry.
+                return Err(MeshErrorKind::UnsupportedExtension {
+                    name: DRACO.into(),
+                    hint: format!("{DRACO_HINT} ({loc} has no uncompressed fallback)"),
+                });
+            }
             let acc = self.accessor(pa.value(), &loc)?;
-            if acc.ty != Type::Vec3 || acc.component != ComponentType::F32 {
+            // Float, or the integer types KHR_mesh_quantization allows (normalised or not).
+            let position_type = matches!(
+                acc.component,
+                ComponentType::F32
+                    | ComponentType::I8
+                    | ComponentType::U8
+                    | ComponentType::I16
+                    | ComponentType::U16
+            );
+            if acc.ty != Type::Vec3 || !position_type {
                 return Err(MeshErrorKind::Unsupported(format!(
-                    "{loc}: POSITION must be VEC3 of float (found {:?} of {:?}; quantised positions are not supported)",
+                    "{loc}: POSITION must be VEC3 of float, or of byte or short (KHR_mesh_quantization); found {:?} of {:?}",
                     acc.ty, acc.component
                 )));
             }

@@ -8,6 +8,7 @@
 mod error;
 pub mod generate;
 pub mod gltf_io;
+mod gltf_meshopt;
 mod load;
 mod obj;
 pub mod ply;
