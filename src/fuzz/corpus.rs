@@ -137,6 +137,8 @@ impl Corpus {
         seeds.push(obj(&pos, &quads, true));
         for glb in [false, true] {
             seeds.push(gltf(&pos, &quads, glb));
+            seeds.push(gltf_quantised(&pos, &quads, glb));
+            seeds.push(gltf_meshopt(&pos, &quads, glb));
         }
         let meshlet_source = Mesh {
             positions: pos.clone(),
@@ -536,15 +538,11 @@ fn gltf(pos: &[[f32; 3]], quads: &[[u32; 4]], glb: bool) -> Seed {
         bin.extend_from_slice(&t.to_le_bytes());
     }
     let tri_len = bin.len() - pos_len;
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
+    align4(&mut bin);
     let strip_at = bin.len();
     let strip: [u8; 6] = [0, 5, 1, 6, 2, 7];
     bin.extend_from_slice(&strip);
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
+    align4(&mut bin);
     let (lo, hi) = pos
         .iter()
         .fold(([f32::MAX; 3], [f32::MIN; 3]), |(mut lo, mut hi), p| {
@@ -579,6 +577,180 @@ fn gltf(pos: &[[f32; 3]], quads: &[[u32; 4]], glb: bool) -> Seed {
         ],
         "buffers": [{"byteLength": bin.len()}]
     });
+    gltf_seed("scene", doc, bin, floats, glb)
+}
+
+/// Pads `bin` with zeros to a multiple of 4 bytes (glTF aligns every view's start).
+fn align4(bin: &mut Vec<u8>) {
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+}
+
+/// The scene of [`gltf`] (same nodes, so the node-graph mutations apply) with quantised positions
+/// (KHR_mesh_quantization): mesh 0 reads normalised i16 positions (stride 8) with two vertices
+/// moved by a sparse substitution, mesh 1's strip reads an accessor without a bufferView whose
+/// strip vertices come from sparse values alone. The node scale dequantises.
+fn gltf_quantised(pos: &[[f32; 3]], quads: &[[u32; 4]], glb: bool) -> Seed {
+    const SCALE: f32 = 4.0;
+    let q = |p: &[f32; 3]| p.map(|c| (c / SCALE * 32767.0).round() as i16);
+    let mut bin = Vec::new();
+    for p in pos {
+        for c in q(p) {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+        bin.extend_from_slice(&[0u8; 2]);
+    }
+    let pos_len = bin.len();
+    for t in quads.iter().flat_map(|q| [q[0], q[1], q[2], q[0], q[2], q[3]]) {
+        bin.extend_from_slice(&(t as u16).to_le_bytes());
+    }
+    let tri_len = bin.len() - pos_len;
+    align4(&mut bin);
+    // Mesh 0's substitution: vertices 1 and 6 lifted by 0.5 (strictly increasing u8 indices).
+    let moved_at = bin.len();
+    bin.extend_from_slice(&[1u8, 6]);
+    align4(&mut bin);
+    let moved_values_at = bin.len();
+    for v in [1usize, 6] {
+        let mut p = pos[v];
+        p[2] += 0.5;
+        bin.extend(q(&p).iter().flat_map(|c| c.to_le_bytes()));
+    }
+    align4(&mut bin);
+    // Mesh 1's strip vertices, with u16 indices.
+    let strip: [u16; 6] = [0, 1, 2, 5, 6, 7];
+    let strip_at = bin.len();
+    bin.extend(strip.iter().flat_map(|i| i.to_le_bytes()));
+    align4(&mut bin);
+    let strip_values_at = bin.len();
+    for &v in &strip {
+        bin.extend(q(&pos[v as usize]).iter().flat_map(|c| c.to_le_bytes()));
+    }
+    align4(&mut bin);
+    let strip_order_at = bin.len();
+    let order: [u8; 6] = [0, 5, 1, 6, 2, 7];
+    bin.extend_from_slice(&order);
+    align4(&mut bin);
+    let doc = json!({
+        "asset": {"version": "2.0", "generator": "meshletlab fuzz seed"},
+        "extensionsUsed": ["KHR_mesh_quantization"],
+        "extensionsRequired": ["KHR_mesh_quantization"],
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [
+            {"children": [1, 2], "rotation": [0.0, 0.38268343, 0.0, 0.9238795]},
+            {"mesh": 0, "translation": [1.0, 2.0, 3.0], "scale": [SCALE, SCALE, SCALE]},
+            {"mesh": 1, "scale": [-SCALE, SCALE, SCALE]}
+        ],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "mode": 4}]},
+            {"primitives": [{"attributes": {"POSITION": 2}, "indices": 3, "mode": 5}]}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5122, "normalized": true, "count": pos.len(), "type": "VEC3",
+             "sparse": {"count": 2, "indices": {"bufferView": 2, "componentType": 5121},
+                        "values": {"bufferView": 3}}},
+            {"bufferView": 1, "componentType": 5123, "count": tri_len / 2, "type": "SCALAR"},
+            {"componentType": 5122, "normalized": true, "count": 8, "type": "VEC3",
+             "sparse": {"count": strip.len(), "indices": {"bufferView": 4, "componentType": 5123},
+                        "values": {"bufferView": 5}}},
+            {"bufferView": 6, "componentType": 5121, "count": order.len(), "type": "SCALAR"}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": pos_len, "byteStride": 8},
+            {"buffer": 0, "byteOffset": pos_len, "byteLength": tri_len},
+            {"buffer": 0, "byteOffset": moved_at, "byteLength": 2},
+            {"buffer": 0, "byteOffset": moved_values_at, "byteLength": 12},
+            {"buffer": 0, "byteOffset": strip_at, "byteLength": 12},
+            {"buffer": 0, "byteOffset": strip_values_at, "byteLength": 36},
+            {"buffer": 0, "byteOffset": strip_order_at, "byteLength": order.len()}
+        ],
+        "buffers": [{"byteLength": bin.len()}]
+    });
+    gltf_seed("quantised", doc, bin, Vec::new(), glb)
+}
+
+/// The scene of [`gltf`] with every view meshopt-compressed (EXT_meshopt_compression, by
+/// meshoptimizer's encoders): mesh 0 reads u16 positions (ATTRIBUTES, stride 8) and triangles
+/// (TRIANGLES); mesh 1's strip reads float positions through the EXPONENTIAL filter and an index
+/// sequence (INDICES). The uncompressed views lie in buffer 1, a fallback without data.
+fn gltf_meshopt(pos: &[[f32; 3]], quads: &[[u32; 4]], glb: bool) -> Seed {
+    const SCALE: f32 = 1e-3;
+    let quantised: Vec<[u16; 4]> = pos
+        .iter()
+        .map(|p| {
+            let [x, y, z] = p.map(|c| (c / SCALE).round() as u16);
+            [x, y, z, 0]
+        })
+        .collect();
+    let tris: Vec<u32> = quads
+        .iter()
+        .flat_map(|q| [q[0], q[1], q[2], q[0], q[2], q[3]])
+        .collect();
+    let strip: [u32; 6] = [0, 5, 1, 6, 2, 7];
+    let exp = meshopt::encode_filter_exp(pos, 15, meshopt::EncodeExpMode::SharedVector);
+    let streams = [
+        meshopt::encode_vertex_buffer(&quantised).expect("encodes"),
+        meshopt::encode_index_buffer(&tris, pos.len()).expect("encodes"),
+        meshopt::encode_vertex_buffer(&exp).expect("encodes"),
+        meshopt::encode_index_sequence(&strip, pos.len()).expect("encodes"),
+    ];
+    // (mode, filter, stride, count) of each stream, in the order above.
+    let shapes = [
+        ("ATTRIBUTES", "NONE", 8, pos.len()),
+        ("TRIANGLES", "NONE", 2, tris.len()),
+        ("ATTRIBUTES", "EXPONENTIAL", 12, pos.len()),
+        ("INDICES", "NONE", 2, strip.len()),
+    ];
+    let mut bin = Vec::new();
+    let mut fallback_len = 0;
+    let mut views = Vec::new();
+    for (stream, (mode, filter, stride, count)) in streams.iter().zip(shapes) {
+        let ext = json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": stream.len(),
+                         "byteStride": stride, "count": count, "mode": mode, "filter": filter});
+        let mut view = json!({"buffer": 1, "byteOffset": fallback_len, "byteLength": stride * count,
+                              "extensions": {"EXT_meshopt_compression": ext}});
+        if mode == "ATTRIBUTES" {
+            view["byteStride"] = stride.into();
+        }
+        views.push(view);
+        bin.extend_from_slice(stream);
+        align4(&mut bin);
+        fallback_len += (stride * count).div_ceil(4) * 4;
+    }
+    let doc = json!({
+        "asset": {"version": "2.0", "generator": "meshletlab fuzz seed"},
+        "extensionsUsed": ["EXT_meshopt_compression", "KHR_mesh_quantization"],
+        "extensionsRequired": ["EXT_meshopt_compression", "KHR_mesh_quantization"],
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [
+            {"children": [1, 2], "rotation": [0.0, 0.38268343, 0.0, 0.9238795]},
+            {"mesh": 0, "translation": [1.0, 2.0, 3.0], "scale": [SCALE, SCALE, SCALE]},
+            {"mesh": 1, "scale": [-1.0, 1.0, 1.0]}
+        ],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "mode": 4}]},
+            {"primitives": [{"attributes": {"POSITION": 2}, "indices": 3, "mode": 5}]}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5123, "count": pos.len(), "type": "VEC3"},
+            {"bufferView": 1, "componentType": 5123, "count": tris.len(), "type": "SCALAR"},
+            {"bufferView": 2, "componentType": 5126, "count": pos.len(), "type": "VEC3"},
+            {"bufferView": 3, "componentType": 5123, "count": strip.len(), "type": "SCALAR"}
+        ],
+        "bufferViews": views,
+        "buffers": [
+            {"byteLength": bin.len()},
+            {"byteLength": fallback_len, "extensions": {"EXT_meshopt_compression": {"fallback": true}}}
+        ]
+    });
+    gltf_seed("meshopt", doc, bin, Vec::new(), glb)
+}
+
+/// A glTF or GLB seed from its document and buffer 0, with the offsets of its structure.
+fn gltf_seed(name: &str, doc: Value, bin: Vec<u8>, floats: Vec<usize>, glb: bool) -> Seed {
     let parts = GltfParts {
         json: doc,
         bin,
@@ -618,7 +790,7 @@ fn gltf(pos: &[[f32; 3]], quads: &[[u32; 4]], glb: bool) -> Seed {
         }
     }
     Seed {
-        name: format!("{}/scene", if glb { "glb" } else { "gltf" }),
+        name: format!("{}/{name}", if glb { "glb" } else { "gltf" }),
         target: if glb { Target::Glb } else { Target::Gltf },
         text_end: if glb { 0 } else { bytes.len() },
         bytes,

@@ -380,6 +380,48 @@ mod tests {
     }
 
     #[test]
+    fn quantised_and_meshopt_seeds_decode_to_the_plain_scene() {
+        let c = Corpus::new();
+        let load = |name: &str| {
+            let s = c.seeds.iter().find(|s| s.name == name).expect(name);
+            crate::mesh::load_bytes(&s.bytes, Path::new(&format!("seed.{}", s.target.extension())))
+                .unwrap()
+        };
+        for glb in ["gltf", "glb"] {
+            let plain = load(&format!("{glb}/scene"));
+            for (variant, tolerance) in [("quantised", 4.0 / 32767.0), ("meshopt", 1e-3)] {
+                let m = load(&format!("{glb}/{variant}"));
+                assert_eq!(m.triangle_count(), plain.triangle_count(), "{variant}");
+                let mut moved = 0;
+                for t in 0..m.triangle_count() {
+                    // meshoptimizer's index codec may rotate a triangle's corners (winding kept).
+                    let mut tri = m.triangle(t);
+                    let p = plain.triangle(t);
+                    for _ in 0..2 {
+                        if (m.position(tri[0]) - plain.position(p[0])).length() <= 0.6 {
+                            break;
+                        }
+                        tri.rotate_left(1);
+                    }
+                    for (a, b) in tri.into_iter().zip(p) {
+                        let d = (m.position(a) - plain.position(b)).length();
+                        // The sparse substitution lifts two vertices by 0.5 (before rotation).
+                        if variant == "quantised" && (d - 0.5).abs() < tolerance * 2.0 {
+                            moved += 1;
+                        } else {
+                            assert!(d <= tolerance * 2.0, "{glb}/{variant} triangle {t}: {d}");
+                        }
+                    }
+                }
+                if variant == "quantised" {
+                    // Vertices 1 and 6 are corners of 3 and 6 grid triangles.
+                    assert_eq!(moved, 9, "{glb}: corners moved by the sparse accessor");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn mutations_change_the_file() {
         let c = Corpus::new();
         let mut changed = 0;

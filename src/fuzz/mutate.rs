@@ -171,7 +171,8 @@ pub fn zero_range(mut b: Vec<u8>, rng: &mut Rng) -> Vec<u8> {
 
 /// Writes NaN, an infinity, a denormal or an out-of-range value into 1 to 3 float fields.
 fn float_special(seed: &Seed, rng: &mut Rng) -> Vec<u8> {
-    if let Some(g) = &seed.gltf {
+    // Seeds whose buffer holds no plain floats (quantised, compressed) fall through to bit flips.
+    if let Some(g) = seed.gltf.as_ref().filter(|g| !g.floats.is_empty()) {
         let mut bin = g.bin.clone();
         for _ in 0..1 + rng.below(3) {
             let at = *rng.pick(&g.floats);
