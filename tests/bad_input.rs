@@ -62,6 +62,19 @@ fn cases() -> Vec<Case> {
         ("accessor_range.gltf", br#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":7}}]}]}"#.to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),
         ("node_cycle.gltf", br#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"children":[1]},{"children":[0]}]}"#.to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),
         ("empty.gltf", br#"{"asset":{"version":"2.0"}}"#.to_vec(), |k| matches!(k, MeshErrorKind::Empty(_))),
+        // Four bytes of meshopt stream announcing 4 G vertices: refused before decoding or allocating.
+        ("meshopt_bomb.gltf", br#"{"asset":{"version":"2.0"},"extensionsRequired":["EXT_meshopt_compression"],
+            "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+            "buffers":[{"byteLength":4,"uri":"data:application/octet-stream;base64,oAAAAA=="},
+                       {"byteLength":48,"extensions":{"EXT_meshopt_compression":{"fallback":true}}}],
+            "bufferViews":[{"buffer":1,"byteLength":48,"byteStride":12,"extensions":{"EXT_meshopt_compression":
+                {"buffer":0,"byteLength":4,"byteStride":12,"count":4000000000,"mode":"ATTRIBUTES"}}}],
+            "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"}]}"#.to_vec(), |k| matches!(k, MeshErrorKind::TooLarge(_))),
+        // An accessor of zeros needs no bytes in the file, but its size is budgeted all the same.
+        ("zeros_bomb.gltf", br#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+            "accessors":[{"componentType":5126,"count":4000000000,"type":"VEC3"}]}"#.to_vec(), |k| matches!(k, MeshErrorKind::TooLarge(_))),
+        ("draco.gltf", br#"{"asset":{"version":"2.0"},"extensionsRequired":["KHR_draco_mesh_compression"]}"#.to_vec(),
+            |k| matches!(k, MeshErrorKind::UnsupportedExtension { name, .. } if name == "KHR_draco_mesh_compression")),
     ]
 }
 
