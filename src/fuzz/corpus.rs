@@ -602,7 +602,10 @@ fn gltf_quantised(pos: &[[f32; 3]], quads: &[[u32; 4]], glb: bool) -> Seed {
         bin.extend_from_slice(&[0u8; 2]);
     }
     let pos_len = bin.len();
-    for t in quads.iter().flat_map(|q| [q[0], q[1], q[2], q[0], q[2], q[3]]) {
+    for t in quads
+        .iter()
+        .flat_map(|q| [q[0], q[1], q[2], q[0], q[2], q[3]])
+    {
         bin.extend_from_slice(&(t as u16).to_le_bytes());
     }
     let tri_len = bin.len() - pos_len;

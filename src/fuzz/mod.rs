@@ -384,8 +384,11 @@ mod tests {
         let c = Corpus::new();
         let load = |name: &str| {
             let s = c.seeds.iter().find(|s| s.name == name).expect(name);
-            crate::mesh::load_bytes(&s.bytes, Path::new(&format!("seed.{}", s.target.extension())))
-                .unwrap()
+            crate::mesh::load_bytes(
+                &s.bytes,
+                Path::new(&format!("seed.{}", s.target.extension())),
+            )
+            .unwrap()
         };
         for glb in ["gltf", "glb"] {
             let plain = load(&format!("{glb}/scene"));
