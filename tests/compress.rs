@@ -92,8 +92,12 @@ fn meshopt_codec_round_trips_every_shared_mesh() {
             compress::paper_tolerance(&m),
         );
         // Positions at 14 bits and meshoptimizer's 11-12 bits of topology per triangle: a few
-        // bytes per triangle, far below the 12 + 6 of an indexed f32 mesh.
-        assert!(bpt > 1.0 && bpt < 8.0, "{name}: {bpt} bytes per triangle");
+        // bytes per triangle, far below the 12 + 6 of an indexed f32 mesh. Measured 3.64
+        // (motorbike) to 4.44 (aneurysm) on the ten meshes; the bounds sit 10 % outside that.
+        assert!(
+            (3.25..4.9).contains(&bpt),
+            "{name}: {bpt} bytes per triangle"
+        );
     }
 }
 
@@ -262,21 +266,48 @@ fn corruption_is_an_error_never_a_panic_in_every_format() {
             (0..ml.len()).any(|i| f.decode(&cut, i).is_err()),
             "{f:?}: half the buffer decodes"
         );
-        // Single-byte changes all over the buffer (at most ~3000 places): each decodes (to
-        // something) or errs.
+        // Single-byte changes all over the buffer (at most ~3000 places): each gives a typed
+        // error or a well-formed meshlet (source vertices in range, triangles over its own
+        // vertices, finite positions, within 256/256), never a panic or an out-of-range index.
         let stride = (enc.data.len() / 3000).max(1);
+        let (mut errors, mut decoded) = (0, 0);
         for k in (0..enc.data.len()).step_by(stride) {
             for x in [0u8, 0xff, enc.data[k] ^ 0x41] {
                 let mut c = enc.clone();
                 c.data[k] = x;
                 for i in [0, ml.len() / 2, ml.len() - 1] {
-                    let _ = f.decode(&c, i);
+                    match f.decode(&c, i) {
+                        Err(_) => errors += 1,
+                        Ok(d) => {
+                            decoded += 1;
+                            let n = d.vertices.len();
+                            assert!(n <= 256 && d.triangles.len() <= 256, "{f:?} byte {k}");
+                            assert_eq!(d.positions.len(), n, "{f:?} byte {k}");
+                            assert!(
+                                d.vertices.iter().all(|&v| v < m.vertex_count() as u32),
+                                "{f:?} byte {k}: a source vertex out of range"
+                            );
+                            assert!(
+                                d.triangles.iter().flatten().all(|&l| (l as usize) < n),
+                                "{f:?} byte {k}: a triangle outside the meshlet's vertices"
+                            );
+                            assert!(
+                                d.positions.iter().flatten().all(|x| x.is_finite()),
+                                "{f:?} byte {k}: a non-finite position"
+                            );
+                        }
+                    }
                     if f == Format::LacedWires {
                         let _ = compress::laced::culling(&c, i);
                     }
                 }
             }
         }
+        // Both outcomes occur: the flips reach checked fields and plain payload alike.
+        assert!(
+            errors > 0 && decoded > 0,
+            "{f:?}: {errors} errors, {decoded} decodes"
+        );
     }
 }
 

@@ -8,7 +8,7 @@ use meshletlab::lod::flat::{self, Flat, Query};
 use meshletlab::lod::{self, io::LodFile, select, Lod};
 use meshletlab::mesh::{generate, Mesh};
 use meshletlab::meshlet::Limits;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 
 fn build(m: &Mesh) -> Lod {
     let s = meshletlab::strategy::by_name("meshopt", &Default::default()).unwrap();
@@ -19,14 +19,25 @@ fn build(m: &Mesh) -> Lod {
 struct Shape {
     /// Vertices on the boundary (edges used once).
     boundary: HashSet<u32>,
+    /// The boundary edges as the source's triangles direct them: `a -> [b, ...]` (two or more
+    /// only at a vertex where boundary loops touch).
+    boundary_next: HashMap<u32, Vec<u32>>,
+    /// Each boundary vertex's loop (loops that touch at a vertex count as one) and each loop's
+    /// number of edges.
+    loop_of: HashMap<u32, usize>,
+    loop_edges: Vec<usize>,
     /// Every edge used twice, in opposite directions.
     closed: bool,
     /// Some edge used more than twice.
     non_manifold: bool,
+    /// Endpoints of the edges used more than twice.
+    non_manifold_vertices: HashSet<u32>,
+    /// Edges used more than twice.
+    over_used: usize,
 }
 
 fn source_shape(m: &Mesh, remap: &[u32]) -> Shape {
-    let mut edges = std::collections::HashMap::<(u32, u32), (u32, u32)>::new();
+    let mut edges = HashMap::<(u32, u32), (u32, u32)>::new();
     for t in 0..m.triangle_count() {
         let t = m.triangle(t).map(|v| remap[v as usize]);
         if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
@@ -39,14 +50,62 @@ fn source_shape(m: &Mesh, remap: &[u32]) -> Shape {
             e.1 += (a < b) as u32;
         }
     }
+    let mut boundary_next = HashMap::<u32, Vec<u32>>::new();
+    for (&(a, b), &(u, forward)) in &edges {
+        if u == 1 {
+            let (from, to) = if forward == 1 { (a, b) } else { (b, a) };
+            boundary_next.entry(from).or_default().push(to);
+        }
+    }
+    // Loops: connected components of the boundary edges (union-find over their vertices).
+    let mut parent: HashMap<u32, u32> = boundary_next
+        .iter()
+        .flat_map(|(&a, bs)| std::iter::once(a).chain(bs.iter().copied()))
+        .map(|v| (v, v))
+        .collect();
+    fn find(p: &mut HashMap<u32, u32>, v: u32) -> u32 {
+        let mut r = v;
+        while p[&r] != r {
+            r = p[&r];
+        }
+        p.insert(v, r);
+        r
+    }
+    for (&a, bs) in &boundary_next {
+        for &b in bs {
+            let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+            parent.insert(ra.max(rb), ra.min(rb));
+        }
+    }
+    let vertices: Vec<u32> = parent.keys().copied().collect();
+    let mut roots: Vec<u32> = vertices.iter().map(|&v| find(&mut parent, v)).collect();
+    roots.sort_unstable();
+    roots.dedup();
+    let loop_of: HashMap<u32, usize> = vertices
+        .into_iter()
+        .map(|v| (v, roots.binary_search(&find(&mut parent, v)).unwrap()))
+        .collect();
+    let mut loop_edges = vec![0; roots.len()];
+    for (a, bs) in &boundary_next {
+        loop_edges[loop_of[a]] += bs.len();
+    }
     Shape {
+        loop_of,
+        loop_edges,
         closed: edges.values().all(|&(u, d)| u == 2 && d == 1),
         non_manifold: edges.values().any(|&(u, _)| u > 2),
+        over_used: edges.values().filter(|&&(u, _)| u > 2).count(),
+        non_manifold_vertices: edges
+            .iter()
+            .filter(|(_, &(u, _))| u > 2)
+            .flat_map(|(&(a, b), _)| [a, b])
+            .collect(),
         boundary: edges
             .iter()
             .filter(|(_, &(u, _))| u == 1)
             .flat_map(|(&(a, b), _)| [a, b])
             .collect(),
+        boundary_next,
     }
 }
 
@@ -70,20 +129,156 @@ fn views(m: &Mesh, n: usize, seed: u64) -> Vec<select::View> {
         .collect()
 }
 
-/// Counts over the cuts of one mesh.
+/// What one cut's edges showed.
 #[derive(Default)]
 struct Tally {
-    /// Edges used more than twice: on a closed source only where two neighbouring groups
-    /// simplified to the same triangle from both sides (a zero-area fin between them, watertight
-    /// but not manifold).
+    /// Edges used more than twice off the source's non-manifold edges (fins, see
+    /// [`fin_allowance`]).
     over: usize,
-    /// Open edges off the source's boundary (allowed, and counted, on non-manifold sources only).
+    /// Open edges off the source's boundary: only on non-manifold sources, and only between
+    /// vertices of the source's non-manifold edges (checked).
     open: usize,
+    /// Cuts that drew meshlets of two or more levels.
+    mixed: usize,
+    /// Boundary loops that a cut closed (simplified away), summed over cuts.
+    closed_loops: usize,
+    /// Most over-used edges in one cut.
+    max_over: usize,
 }
 
-/// One cut: exactly one meshlet per DAG path, and no crack: on a closed source every edge is used
-/// as often in one direction as in the other (watertight); on an open manifold source every
-/// once-used edge joins two source boundary vertices. Non-manifold sources are counted.
+/// Edges used more than twice that a cut may add to the source's own ("fins"), per mesh. A fin
+/// appears where two neighbouring groups simplified to the same triangle from both sides: a
+/// zero-area pair that is watertight (the edges' uses balance, which `check_edges` checks) but
+/// not manifold. Measured over 1000 views and the streaming prefixes: 0 on fandisk, igea, the
+/// bunny, gaspra and the faceted sphere; 1 on the noisy sphere, terrain and knot; 2 on the
+/// aneurysm; 6 on pycortex; 36 on the dragon (871 k triangles); the non-manifold neurons and
+/// motorbike never exceed the source's own count. The bound is twice the measured maximum.
+fn fin_allowance(name: &str) -> usize {
+    match name.split('.').next().unwrap_or(name) {
+        "noisy-sphere" | "terrain" | "knot" => 2,
+        "gmsh_aneurysm" => 4,
+        "pycortex_S1_pia_lh" => 12,
+        "stanford_dragon_vrip" => 72,
+        _ => 0,
+    }
+}
+
+/// The crack test of one cut's edges (from [`select::cut_edges`]): every edge's uses balance
+/// (as many one way as the other) wherever the source is manifold; on a closed source no open
+/// edge; on an open manifold source every open edge, walked along the source's directed
+/// boundary, spans an arc no other open edge spans (so a chord between two boundary vertices
+/// fails), and each boundary loop is covered whole or, where simplification closed a small hole,
+/// not at all; on a non-manifold source an open edge off the boundary must touch one of the
+/// source's non-manifold edges; edges used more than twice no more than the source's own plus
+/// `fins` ([`fin_allowance`]).
+fn check_edges(
+    edges: &HashMap<(u32, u32), (u32, u32)>,
+    shape: &Shape,
+    fins: usize,
+    t: &mut Tally,
+) -> Result<(), String> {
+    let mut covered = HashSet::<(u32, u32)>::new();
+    let mut over = 0;
+    for (&(a, b), &(uses, forward)) in edges {
+        if uses > 2 {
+            over += 1;
+            if !(shape.non_manifold_vertices.contains(&a)
+                && shape.non_manifold_vertices.contains(&b))
+            {
+                t.over += 1;
+            }
+        }
+        if uses >= 2 && 2 * forward != uses && !shape.non_manifold {
+            return Err(format!(
+                "edge {a}-{b}: {forward} of its {uses} uses run one way (flipped winding)"
+            ));
+        }
+        if uses != 1 {
+            continue;
+        }
+        if shape.closed {
+            return Err(format!("crack: edge {a}-{b} is open on a closed source"));
+        }
+        let on_boundary = shape.boundary.contains(&a) && shape.boundary.contains(&b);
+        if shape.non_manifold {
+            if !on_boundary {
+                let nm = &shape.non_manifold_vertices;
+                if !(nm.contains(&a) || nm.contains(&b)) {
+                    return Err(format!(
+                        "crack: edge {a}-{b} is open, off the boundary and away from every non-manifold edge"
+                    ));
+                }
+                t.open += 1;
+            }
+            continue;
+        }
+        // Open manifold source: the edge must span an arc of the boundary, walked in the
+        // boundary's own direction, that no other open edge of the cut spans.
+        let (from, to) = if forward == 1 { (a, b) } else { (b, a) };
+        let arc = boundary_arc(shape, from, to).ok_or_else(|| {
+            format!("crack: open edge {from}->{to} does not follow the source's boundary (a chord)")
+        })?;
+        for e in arc {
+            if !covered.insert(e) {
+                return Err(format!(
+                    "open edge {from}->{to} overlaps another on the boundary"
+                ));
+            }
+        }
+    }
+    if !shape.closed && !shape.non_manifold {
+        // Each boundary loop is covered whole, or not at all where simplification closed a
+        // small hole (its border collapsed onto itself: edges used twice, no open edge); a loop
+        // covered in part has a crack beside it.
+        let mut per_loop = vec![0; shape.loop_edges.len()];
+        for (a, _) in &covered {
+            per_loop[shape.loop_of[a]] += 1;
+        }
+        for (l, (&c, &n)) in per_loop.iter().zip(&shape.loop_edges).enumerate() {
+            if c != 0 && c != n {
+                return Err(format!(
+                    "crack: the cut's open edges cover {c} of boundary loop {l}'s {n} edges"
+                ));
+            }
+        }
+        t.closed_loops += per_loop.iter().filter(|&&c| c == 0).count();
+    }
+    t.max_over = t.max_over.max(over);
+    if over > shape.over_used + fins {
+        return Err(format!(
+            "{over} edges used more than twice (the source has {}, fins allowed {fins})",
+            shape.over_used
+        ));
+    }
+    Ok(())
+}
+
+/// The boundary edges from `from` to `to` along the source's directed boundary (breadth first,
+/// so where loops touch the shortest way is taken); `None` if `to` is not ahead on the boundary.
+fn boundary_arc(shape: &Shape, from: u32, to: u32) -> Option<Vec<(u32, u32)>> {
+    let mut prev = HashMap::<u32, u32>::from([(from, from)]);
+    let mut queue = std::collections::VecDeque::from([from]);
+    while let Some(v) = queue.pop_front() {
+        for &w in shape.boundary_next.get(&v).into_iter().flatten() {
+            if prev.contains_key(&w) {
+                continue;
+            }
+            prev.insert(w, v);
+            if w == to {
+                let mut arc = vec![];
+                let mut x = to;
+                while x != from {
+                    arc.push((prev[&x], x));
+                    x = prev[&x];
+                }
+                return Some(arc);
+            }
+            queue.push_back(w);
+        }
+    }
+    None
+}
+
 /// One mesh's DAG and what the crack test compares it with.
 struct Subject<'a> {
     lod: &'a Lod,
@@ -92,6 +287,8 @@ struct Subject<'a> {
     shape: &'a Shape,
 }
 
+/// One cut: exactly one meshlet per DAG path, the flattened selection equal to it, and the crack
+/// test of its edges.
 fn check_view(s: &Subject, v: &select::View, finest: usize, name: &str, t: &mut Tally) {
     let Subject {
         lod,
@@ -121,23 +318,14 @@ fn check_view(s: &Subject, v: &select::View, finest: usize, name: &str, t: &mut 
         })
         .collect();
     assert_eq!(flat_sel, per_level, "{name}: flat selection differs");
-    for (&(a, b), &(uses, forward)) in &select::cut_edges(lod, &sel, remap) {
-        if uses == 1 && !(shape.boundary.contains(&a) && shape.boundary.contains(&b)) {
-            assert!(
-                shape.non_manifold,
-                "{name}: crack: edge {a}-{b} is open but not on the source's boundary"
-            );
-            t.open += 1;
-        }
-        if shape.closed {
-            assert_eq!(
-                2 * forward,
-                uses,
-                "{name}: edge {a}-{b}: {forward} of {uses} uses one way"
-            );
-        }
-        t.over += (uses > 2) as usize;
-    }
+    t.mixed += (sel.iter().filter(|l| l.iter().any(|&b| b)).count() > 1) as usize;
+    check_edges(
+        &select::cut_edges(lod, &sel, remap),
+        shape,
+        fin_allowance(name),
+        t,
+    )
+    .unwrap_or_else(|e| panic!("{name}: {e}"));
 }
 
 fn dag_checks(name: &str, m: &Mesh, views_per_mesh: usize) {
@@ -186,14 +374,22 @@ fn dag_checks(name: &str, m: &Mesh, views_per_mesh: usize) {
         }
     }
     println!(
-        "{name}: {} levels, {} roots, {:.3}x triangles; {} views: cuts exact; over all cuts: {} edges used > 2 times, {} open edges off the boundary{}",
+        "{name}: {} levels, {} roots, {:.3}x triangles; {} views: cuts exact; over all cuts: {} mixed levels, {} edges used > 2 times off the source's non-manifold edges (at most {} in a cut; the source has {}), {} open edges off the boundary, {} boundary loops closed{}",
         lod.levels.len(),
         lod.roots(),
         lod.triangle_count() as f64 / m.triangle_count() as f64,
         vs.len(),
+        t.mixed,
         t.over,
+        t.max_over,
+        shape.over_used,
         t.open,
+        t.closed_loops,
         if shape.non_manifold { " (non-manifold source)" } else { "" }
+    );
+    assert!(
+        t.mixed > 0,
+        "{name}: no cut mixed levels: the crack test saw no level border"
     );
 }
 
@@ -233,17 +429,9 @@ fn generated_closed_open_and_unwelded_meshes() {
 #[test]
 fn output_is_identical_for_any_thread_count() {
     let m = common::load("stanford_bunny");
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap()
-        .install(|| build(&m));
-    let two = rayon::ThreadPoolBuilder::new()
-        .num_threads(2)
-        .build()
-        .unwrap()
-        .install(|| build(&m));
-    assert!(one == two, "different DAGs for 1 and 2 threads");
+    let one = common::pool(1).install(|| build(&m));
+    let many = common::pool(common::MANY_THREADS).install(|| build(&m));
+    assert!(one == many, "different DAGs for 1 and many threads");
 }
 
 #[test]
@@ -301,15 +489,44 @@ fn the_checks_catch_a_broken_cut() {
         .enumerate()
         .find_map(|(l, s)| s.iter().position(|&b| b).map(|k| (l, k)))
         .unwrap();
+    let shape = source_shape(&m, &remap);
+    assert!(
+        shape.closed,
+        "fandisk is closed: the negative cases below rely on it"
+    );
+    let edges = |lod: &Lod, sel: &[Vec<bool>]| {
+        check_edges(
+            &select::cut_edges(lod, sel, &remap),
+            &shape,
+            0,
+            &mut Tally::default(),
+        )
+    };
+    edges(&lod, &sel).unwrap();
     // One meshlet dropped: a hole (paths selecting nothing) and open edges on a closed source.
     let mut hole = sel.clone();
     hole[l][k] = false;
     assert!(select::check_cut(&lod, &hole, 0).is_err());
-    let open = select::cut_edges(&lod, &hole, &remap)
-        .values()
-        .filter(|&&(u, _)| u == 1)
-        .count();
-    assert!(open > 0, "dropping a meshlet must open edges");
+    assert!(edges(&lod, &hole).unwrap_err().contains("crack"));
+    // Cuts whose structure is right but whose triangles are not: check_cut passes, the edge
+    // test must fail. One corner of a drawn triangle moved to another of the meshlet's vertices:
+    let mut moved = lod.clone();
+    let ml = &mut moved.levels[l].meshlets;
+    let (off, n) = (
+        ml.meshlets[k].triangle_offset as usize,
+        ml.meshlets[k].vertex_count as u8,
+    );
+    let corner = &mut ml.triangles[off];
+    *corner = (*corner + 1) % n;
+    select::check_cut(&moved, &sel, 0).unwrap();
+    let e = edges(&moved, &sel).unwrap_err();
+    assert!(e.contains("crack") || e.contains("flipped"), "{e}");
+    // One drawn triangle's winding flipped:
+    let mut flipped = lod.clone();
+    let ml = &mut flipped.levels[l].meshlets;
+    ml.triangles.swap(off + 1, off + 2);
+    select::check_cut(&flipped, &sel, 0).unwrap();
+    assert!(edges(&flipped, &sel).unwrap_err().contains("flipped"));
     // A meshlet drawn with one of its parents: some path selects two.
     let mut twice = sel.clone();
     twice[0][0] = true;

@@ -129,19 +129,22 @@ fn paper_code_growers_reproduce_the_papers_bunny_counts() {
 #[test]
 fn results_do_not_depend_on_thread_count() {
     let m = common::load("gmsh_aneurysm");
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
+    let (one, many) = (common::pool(1), common::pool(common::MANY_THREADS));
     let opts = Options::default();
     for s in strategy::all(&opts) {
         let a = one.install(|| (s.build(&m, Limits::DEFAULT), MeshStats::of(&m)));
-        let ml = s.build(&m, Limits::DEFAULT);
-        assert_eq!(a.0, ml, "{}", s.name());
-        assert_eq!(a.0, s.build(&m, Limits::DEFAULT), "{} run to run", s.name());
-        assert_eq!(a.1, MeshStats::of(&m));
-        let b1 = one.install(|| bounds::compute_bounds(&m, &ml));
-        assert_eq!(b1, bounds::compute_bounds(&m, &ml));
+        let b = many.install(|| (s.build(&m, Limits::DEFAULT), MeshStats::of(&m)));
+        let ml = &b.0;
+        assert_eq!(&a.0, ml, "{}", s.name());
+        assert_eq!(
+            ml,
+            &many.install(|| s.build(&m, Limits::DEFAULT)),
+            "{} run to run",
+            s.name()
+        );
+        assert_eq!(a.1, b.1);
+        let b1 = one.install(|| bounds::compute_bounds(&m, ml));
+        assert_eq!(b1, many.install(|| bounds::compute_bounds(&m, ml)));
     }
 }
 

@@ -63,10 +63,7 @@ fn full_effort(name: &str, triangles: usize) -> bool {
 fn refine_every_output(small: bool) {
     let mut opts = Options::default();
     opts.kmedoids.paper_budget = std::time::Duration::from_millis(500);
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
+    let (one, many) = (common::pool(1), common::pool(common::MANY_THREADS));
     let mut checked = 0;
     for f in common::mesh_files() {
         let m = mesh::load(&f).unwrap();
@@ -87,11 +84,11 @@ fn refine_every_output(small: bool) {
                     refine::Effort::Fast
                 };
                 let config = refine::Config::new(effort);
-                let out = refine::refine(&m, &input, limits, config);
+                let out = many.install(|| refine::refine(&m, &input, limits, config));
                 let what = format!("{} {name}+refine {effort:?} {limits}", f.display());
                 check_refined(&m, &input, &out, limits, &what);
                 if full {
-                    // Determinism: the same on one thread (the input too) and run to run.
+                    // Determinism: the same on one thread as on many (the input too).
                     let again = one.install(|| {
                         let input = strategy::by_name(name, &opts).unwrap().build(&m, limits);
                         refine::refine(&m, &input, limits, config)

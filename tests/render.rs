@@ -47,6 +47,12 @@ const MESH_NO_CULL: Pipeline = Pipeline::Mesh {
     colour_ids: false,
 };
 
+fn sorted(ids: &[u32]) -> Vec<u32> {
+    let mut v = ids.to_vec();
+    v.sort_unstable();
+    v
+}
+
 fn meshlets(mesh: &meshletlab::mesh::Mesh, name: &str, limits: Limits) -> Meshlets {
     strategy::by_name(name, &Options::default())
         .unwrap()
@@ -217,7 +223,7 @@ fn random_views_are_seeded_and_look_at_the_mesh() {
 }
 
 /// Cluster LOD in the task shader: at a sub-pixel threshold the cut looks like full detail; the
-/// task shader's drawn meshlets are exactly the CPU reference's (LOD rule, frustum, cone), for
+/// task shader's drawn meshlets (recorded by the shader, id by id) are exactly the CPU reference's (LOD rule, frustum, cone), for
 /// every view and streaming prefix; far views draw far fewer triangles.
 #[test]
 fn lod_task_shader_matches_the_cpu_cut_and_full_detail_at_sub_pixel_threshold() {
@@ -236,9 +242,11 @@ fn lod_task_shader_matches_the_cpu_cut_and_full_detail_at_sub_pixel_threshold() 
         let mut coarse = 0;
         for (i, cam) in views.iter().enumerate() {
             let q = cam.lod_query(0.5, 0, true);
-            let a = pass.render_lod(cam, &q, false, Shading::Unlit).unwrap();
+            let (a, ids) = pass.render_lod_ids(cam, &q, Shading::Unlit).unwrap();
             let b = full.render(cam, MESH_CULL, Shading::Unlit).unwrap();
             let cpu = flat::select(&fl, &q);
+            // The very meshlets the task shader launched, not only as many.
+            assert_eq!(ids, sorted(&cpu), "{name} view {i}: drawn set");
             assert_eq!(a.drawn as usize, cpu.len(), "{name} view {i}");
             coarse += cpu
                 .iter()
@@ -269,8 +277,10 @@ fn lod_task_shader_matches_the_cpu_cut_and_full_detail_at_sub_pixel_threshold() 
         for cam in &far {
             for finest in 0..fl.levels() {
                 let q = cam.lod_query(2.0, finest, true);
-                let a = pass.render_lod(cam, &q, false, Shading::Lit).unwrap();
-                assert_eq!(a.drawn as usize, flat::select(&fl, &q).len());
+                let (a, ids) = pass.render_lod_ids(cam, &q, Shading::Lit).unwrap();
+                let cpu = flat::select(&fl, &q);
+                assert_eq!(ids, sorted(&cpu), "{name}: drawn set, levels from {finest}");
+                assert_eq!(a.drawn as usize, cpu.len());
                 assert_eq!(
                     a.not_selected + a.culled_frustum + a.culled_cone + a.drawn,
                     fl.loaded(finest) as u32
@@ -287,4 +297,37 @@ fn lod_task_shader_matches_the_cpu_cut_and_full_detail_at_sub_pixel_threshold() 
     }
     let (errors, first) = ctx.validation.as_ref().unwrap().errors();
     assert_eq!(errors, 0, "validation layer errors: {first:#?}");
+}
+
+/// The validation layer's counter fires: a deliberate misuse (a buffer of size 0, which
+/// VUID-VkBufferCreateInfo-size-00912 forbids) is counted, so "0 errors" elsewhere means something.
+#[test]
+fn the_validation_layer_counts_a_deliberate_misuse() {
+    use ash::vk;
+    let ctx = Context::new(true).expect("lavapipe with VK_EXT_mesh_shader (make setup)");
+    let v = ctx
+        .validation
+        .as_ref()
+        .expect("the Khronos validation layer (make setup installs it)");
+    assert_eq!(
+        v.errors().0,
+        0,
+        "errors before the misuse: {:#?}",
+        v.errors().1
+    );
+    let info = vk::BufferCreateInfo::default()
+        .size(0)
+        .usage(vk::BufferUsageFlags::STORAGE_BUFFER);
+    // SAFETY: `ctx.device` is a live device; the invalid size is the point of the test (the layer
+    // reports it, lavapipe creates a buffer regardless), and the buffer is destroyed at once.
+    if let Ok(b) = unsafe { ctx.device.create_buffer(&info, None) } {
+        // SAFETY: `b` was just created on this device and is not in use.
+        unsafe { ctx.device.destroy_buffer(b, None) };
+    }
+    let (errors, first) = v.errors();
+    assert!(errors >= 1, "the misuse was not counted");
+    assert!(
+        first.iter().any(|m| m.contains("00912")),
+        "not the expected message: {first:#?}"
+    );
 }

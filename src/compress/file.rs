@@ -139,13 +139,26 @@ impl Format {
         })
     }
 
-    /// Decodes meshlet `i` of an encoding in this format.
+    /// Decodes meshlet `i` of an encoding in this format. A position that decodes to NaN or an
+    /// infinity (a damaged raw float in the basic formats, say) is an error, as in the mesh
+    /// loaders: no valid file holds one.
     pub fn decode(self, enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
-        match self {
+        let d = match self {
             Format::Meshopt => meshopt_codec::decode(enc, i),
             Format::LacedWires => laced::decode(enc, i),
             _ => baseline::decode(enc, i),
+        }?;
+        if let Some(k) = d
+            .positions
+            .iter()
+            .position(|p| !p.iter().all(|x| x.is_finite()))
+        {
+            return Err(DecodeError::Invalid {
+                meshlet: i,
+                what: format!("vertex {k} decodes to a non-finite position"),
+            });
         }
+        Ok(d)
     }
 }
 

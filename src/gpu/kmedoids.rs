@@ -50,6 +50,9 @@ pub struct GpuClustering {
     pub large_updates: u32,
     /// BFS levels run in total (dispatches of `push` that had a frontier).
     pub bfs_rounds: u32,
+    /// Extra submissions for assignments deeper than the levels recorded up front (each one a
+    /// host round trip beyond the one per iteration).
+    pub deep_submissions: u32,
     /// Cluster updates over all iterations (clusters times iterations), the skipped ones
     /// (`clustering.skipped_updates`) included.
     pub updates: u64,
@@ -92,6 +95,8 @@ struct Run<'a> {
     mem_scan: Option<(usize, ScanJob)>,
     large: u32,
     rounds: std::cell::Cell<u32>,
+    /// See [`GpuClustering::deep_submissions`].
+    deep: std::cell::Cell<u32>,
     updates: u64,
     skipped: u64,
     /// BFS levels to record up front: the last assignment's depth plus two.
@@ -250,6 +255,7 @@ pub fn cluster(
         adjacency_kernel: adj_timing.kernel,
         large_updates: run.large,
         bfs_rounds: run.rounds.get(),
+        deep_submissions: run.deep.get(),
         updates: run.updates,
         seconds: start.elapsed().as_secs_f64(),
     })
@@ -360,6 +366,7 @@ impl<'a> Run<'a> {
             mem_scan: None,
             large: 0,
             rounds: std::cell::Cell::new(0),
+            deep: std::cell::Cell::new(0),
             updates: 0,
             skipped: 0,
             levels: std::cell::Cell::new(16),
@@ -448,6 +455,7 @@ impl<'a> Run<'a> {
                 self.record_levels(&mut b, k, recorded, more);
                 sizes = self.run(b, &[(&self.counters, 0, COUNTERS)])?.remove(0);
                 recorded += more;
+                self.deep.set(self.deep.get() + 1);
             }
             let n = sizes[SIZES + d % RING] as usize;
             reached += n;

@@ -109,6 +109,11 @@ struct Push {
     flags: u32,
 }
 
+/// Bytes of the task shader's counters (`glsl/common.glsl`); a LOD pass's drawn-id bitmap follows.
+const COUNTER_BYTES: u64 = 32;
+/// Push-constant flag: the LOD task shader records each drawn meshlet's bit after the counters.
+const FLAG_RECORD_IDS: u32 = 1 << 3;
+
 /// Where each level starts in a flattened DAG (see [`Flat`]).
 struct LodLayout {
     starts: Vec<u32>,
@@ -452,7 +457,10 @@ impl<'a> Pass<'a> {
                 return Err(RenderError::TooLarge { what, bytes, limit });
             }
         }
-        let counters = ctx.buffer(32, storage)?;
+        // Eight counters; a LOD pass adds one bit per meshlet for the drawn-id record
+        // (`render_lod_ids`).
+        let id_words = lod_layout.as_ref().map_or(0, |l| l.total.div_ceil(32));
+        let counters = ctx.buffer(COUNTER_BYTES + 4 * id_words as u64, storage)?;
         let readback = ctx.buffer(
             WIDTH as u64 * HEIGHT as u64 * 4,
             vk::BufferUsageFlags::TRANSFER_DST,
@@ -746,11 +754,46 @@ impl<'a> Pass<'a> {
         colour_ids: bool,
         shading: Shading,
     ) -> Result<Frame, RenderError> {
+        self.lod_frame(camera, q, colour_ids, shading, 0)
+    }
+
+    /// [`Pass::render_lod`], with the task shader also recording which meshlets it launched: the
+    /// frame and the drawn meshlets' flat indices, ascending (for comparing the GPU's cut with
+    /// [`crate::lod::flat::select`] meshlet by meshlet; the benchmarks draw without it).
+    pub fn render_lod_ids(
+        &self,
+        camera: &Camera,
+        q: &Query,
+        shading: Shading,
+    ) -> Result<(Frame, Vec<u32>), RenderError> {
+        let frame = self.lod_frame(camera, q, false, shading, FLAG_RECORD_IDS)?;
+        let bits = self.counters.read(self.counters.size as usize);
+        let words: &[u32] = bytemuck::cast_slice(&bits[COUNTER_BYTES as usize..]);
+        let ids = words
+            .iter()
+            .enumerate()
+            .flat_map(|(w, &b)| {
+                (0..32)
+                    .filter(move |k| b >> k & 1 == 1)
+                    .map(move |k| 32 * w as u32 + k)
+            })
+            .collect();
+        Ok((frame, ids))
+    }
+
+    fn lod_frame(
+        &self,
+        camera: &Camera,
+        q: &Query,
+        colour_ids: bool,
+        shading: Shading,
+        flags: u32,
+    ) -> Result<Frame, RenderError> {
         let (layout, (shade, ids)) = self.lod.as_ref().ok_or(RenderError::NotLod)?;
         let view = ViewData::new(q, layout.loaded(q.finest));
         self.buffers[7].write(bytemuck::bytes_of(&view));
         let pipeline = if colour_ids { *ids } else { *shade };
-        self.frame(camera, pipeline, 0, shading, view.loaded, true)
+        self.frame(camera, pipeline, flags, shading, view.loaded, true)
     }
 
     fn frame(
@@ -764,7 +807,7 @@ impl<'a> Pass<'a> {
     ) -> Result<Frame, RenderError> {
         let ctx = self.ctx;
         let d = &ctx.device;
-        self.counters.write(&[0u8; 32]);
+        self.counters.write(&vec![0u8; self.counters.size as usize]);
         let push = Push {
             view_proj: camera
                 .view_proj(WIDTH as f32 / HEIGHT as f32)

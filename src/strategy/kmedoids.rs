@@ -633,12 +633,15 @@ mod tests {
     fn serial_and_parallel_agree_and_output_is_valid() {
         let m = generate::knot_tube(120, 12, 3);
         let limits = Limits::new(32, 40).unwrap();
-        let par = cluster(&m, limits, &Config::default());
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let ser = one.install(|| cluster(&m, limits, &Config::default()));
+        // Explicit pools: on a one-core host the global pool is one thread too.
+        let pool = |n| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap()
+        };
+        let par = pool(4).install(|| cluster(&m, limits, &Config::default()));
+        let ser = pool(1).install(|| cluster(&m, limits, &Config::default()));
         // Everything but the wall-clock time.
         let key = |c: &Clustering| {
             (

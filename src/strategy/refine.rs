@@ -1478,10 +1478,12 @@ mod tests {
 
     #[test]
     fn refined_names_select_the_effort_and_keep_their_name() {
-        for (suffix, _) in crate::strategy::REFINE_SUFFIXES {
+        for (suffix, effort) in crate::strategy::REFINE_SUFFIXES {
             for base in crate::strategy::NAMES {
                 let name = format!("{base}{suffix}");
                 assert_eq!(by_name(&name, &Options::default()).unwrap().name(), name);
+                let (b, e, full) = crate::strategy::refined(&name).unwrap();
+                assert_eq!((b, e, full), (*base, effort, name.as_str()), "{name}");
             }
         }
         assert!(by_name("meshopt+refined", &Options::default()).is_err());

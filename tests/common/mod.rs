@@ -29,6 +29,19 @@ pub fn load(stem: &str) -> Mesh {
     mesh::load(&meshes_dir().join(format!("{stem}.ply.zst"))).expect("shared mesh loads")
 }
 
+/// A rayon pool of exactly `n` threads. Thread-count tests compare explicit pools of 1 and
+/// [`MANY_THREADS`], never a pool with the global one (on a one-core host both are one thread,
+/// and such a test would pass without comparing anything).
+pub fn pool(n: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .unwrap()
+}
+
+/// More threads than CI's two cores: work is split differently from the one-thread run.
+pub const MANY_THREADS: usize = 4;
+
 /// A unique scratch folder for one test.
 pub fn scratch(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("meshletlab-test-{}-{name}", std::process::id()));
