@@ -35,6 +35,9 @@ pub struct Config {
     pub one_thread_max: usize,
     /// Skip the subdivided dragons (a quick run).
     pub quick: bool,
+    /// Every mesh in `meshes` instead of the bunny, igea and the dragon, the first one profiled
+    /// (`bench gpu --smoke` over [`crate::bench::smoke`]'s meshes).
+    pub smoke: bool,
     /// No progress output.
     pub quiet: bool,
 }
@@ -150,22 +153,24 @@ pub fn run(cfg: &Config) -> Result<()> {
         let p = cfg.meshes.join(format!("{stem}.ply.zst"));
         mesh::load(&p).with_context(|| format!("bench gpu needs {}", p.display()))
     };
-    let dragon = load("stanford_dragon_vrip")?;
-    let mut inputs: Vec<(String, Mesh)> = vec![
-        ("stanford_bunny".into(), load("stanford_bunny")?),
-        ("igea".into(), load("igea")?),
-    ];
-    if !cfg.quick {
-        inputs.push((
-            "dragon x4 (subdivided)".into(),
-            subdivide(&dragon, 1).map_err(anyhow::Error::msg)?,
-        ));
-        inputs.push((
-            "dragon x16 (subdivided)".into(),
-            subdivide(&dragon, 2).map_err(anyhow::Error::msg)?,
-        ));
+    let mut inputs: Vec<(String, Mesh)> = Vec::new();
+    if cfg.smoke {
+        for p in super::build::mesh_files(&cfg.meshes)? {
+            inputs.push((super::build::mesh_name(&p), mesh::load(&p)?));
+        }
+    } else {
+        let dragon = load("stanford_dragon_vrip")?;
+        inputs.push(("stanford_bunny".into(), load("stanford_bunny")?));
+        inputs.push(("igea".into(), load("igea")?));
+        inputs.push(("stanford_dragon_vrip".into(), dragon));
     }
-    inputs.insert(2, ("stanford_dragon_vrip".into(), dragon));
+    if !cfg.quick {
+        let dragon = &inputs[2].1;
+        let x4 = subdivide(dragon, 1).map_err(anyhow::Error::msg)?;
+        let x16 = subdivide(dragon, 2).map_err(anyhow::Error::msg)?;
+        inputs.push(("dragon x4 (subdivided)".into(), x4));
+        inputs.push(("dragon x16 (subdivided)".into(), x16));
+    }
     let one = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
     let kc = KConfig::default();
     let mut rows = Vec::new();
@@ -221,7 +226,8 @@ pub fn run(cfg: &Config) -> Result<()> {
         };
         // The profile: the same run again with every dispatch timed on its own (its pass
         // boundaries cost a little, so its times are not the table's).
-        let profile = if km_gpu.is_some() && PROFILED.contains(&name.as_str()) {
+        let profiled = PROFILED.contains(&name.as_str()) || (cfg.smoke && rows.is_empty());
+        let profile = if km_gpu.is_some() && profiled {
             pb.set_message(format!("{name} ({t} triangles): k-medoids, GPU profile"));
             g.time_each_kernel(true);
             let before = g.profile();

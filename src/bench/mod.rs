@@ -12,6 +12,7 @@ pub mod paper;
 pub mod plot;
 pub mod render;
 pub mod robustness;
+pub mod smoke;
 pub mod stability;
 
 use crate::mesh::Mesh;

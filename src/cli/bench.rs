@@ -8,6 +8,10 @@ use clap::Subcommand;
 use std::path::PathBuf;
 use std::time::Duration;
 
+/// Help of every bench's `--smoke`.
+const SMOKE: &str = "Smoke run: tiny generated meshes, one run, tables into --out (not results/) \
+    - checks that the bench runs and writes its files; no number in them is a measurement";
+
 /// Benchmarks.
 #[derive(Subcommand, Debug)]
 pub enum BenchCommand {
@@ -22,6 +26,8 @@ pub enum BenchCommand {
         /// Output folder.
         #[arg(long, default_value = "results")]
         out: PathBuf,
+        #[arg(long, help = SMOKE)]
+        smoke: bool,
         /// Only these strategies (repeatable; default all but the slow kmedoids-paper, plus the
         /// `+refine` rows and the per-preset count comparison).
         #[arg(short, long)]
@@ -43,6 +49,8 @@ pub enum BenchCommand {
         /// Output folder.
         #[arg(long, default_value = "results")]
         out: PathBuf,
+        #[arg(long, help = SMOKE)]
+        smoke: bool,
         /// Meshlet limits.
         #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
         limits: Limits,
@@ -65,6 +73,8 @@ pub enum BenchCommand {
         /// Output folder.
         #[arg(long, default_value = "results")]
         out: PathBuf,
+        #[arg(long, help = SMOKE)]
+        smoke: bool,
         /// Meshlet limits.
         #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
         limits: Limits,
@@ -101,6 +111,8 @@ pub enum BenchCommand {
         /// Output folder.
         #[arg(long, default_value = "results")]
         out: PathBuf,
+        #[arg(long, help = SMOKE)]
+        smoke: bool,
         /// Meshlet limits.
         #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
         limits: Limits,
@@ -121,6 +133,8 @@ pub enum BenchCommand {
         /// Output folder.
         #[arg(long, default_value = "results")]
         out: PathBuf,
+        #[arg(long, help = SMOKE)]
+        smoke: bool,
     },
     /// k-medoids at scale (fast and paper modes, every mesh) and a run-time-vs-error sweep -> kmedoids.md.
     Kmedoids {
@@ -130,6 +144,8 @@ pub enum BenchCommand {
         /// Output folder.
         #[arg(long, default_value = "results")]
         out: PathBuf,
+        #[arg(long, help = SMOKE)]
+        smoke: bool,
         /// Meshlet limits.
         #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
         limits: Limits,
@@ -155,6 +171,8 @@ pub enum BenchCommand {
         /// Output folder.
         #[arg(long, default_value = "results")]
         out: PathBuf,
+        #[arg(long, help = SMOKE)]
+        smoke: bool,
         /// Interleaved build runs per configuration (median reported).
         #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
         runs: u32,
@@ -195,6 +213,8 @@ pub enum BenchCommand {
         /// Output folder.
         #[arg(long, default_value = "results")]
         out: PathBuf,
+        #[arg(long, help = SMOKE)]
+        smoke: bool,
         /// Interleaved timing runs (median reported).
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
         runs: u32,
@@ -210,6 +230,8 @@ pub enum BenchCommand {
         /// Output folder.
         #[arg(long, default_value = "results")]
         out: PathBuf,
+        #[arg(long, help = SMOKE)]
+        smoke: bool,
         /// Views per mesh (framed random directions).
         #[arg(long, default_value_t = 7, value_parser = clap::value_parser!(u64).range(1..))]
         views: u64,
@@ -228,6 +250,8 @@ pub enum BenchCommand {
         /// Output folder.
         #[arg(long, default_value = "results")]
         out: PathBuf,
+        #[arg(long, help = SMOKE)]
+        smoke: bool,
         /// Number of cases.
         #[arg(long, default_value_t = 1_000_000)]
         cases: u64,
@@ -246,17 +270,33 @@ pub enum BenchCommand {
     },
 }
 
+/// The mesh folder of a bench: the smoke meshes (written into `out`) for `--smoke`, else `meshes`
+/// or the default shared folder.
+fn meshes_for(smoke: bool, meshes: Option<PathBuf>, out: &std::path::Path) -> Result<PathBuf> {
+    match smoke {
+        true => bench::smoke::prepare(out),
+        false => Ok(meshes.unwrap_or_else(default_meshes_dir)),
+    }
+}
+
 pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
     match cmd {
         BenchCommand::Stability {
             meshes,
             mesh,
             out,
+            smoke,
             limits,
         } => {
-            let path = meshes
-                .unwrap_or_else(default_meshes_dir)
-                .join(format!("{mesh}.ply.zst"));
+            let (mesh, path) = match smoke {
+                true => bench::smoke::first(&bench::smoke::prepare(&out)?),
+                false => {
+                    let p = meshes
+                        .unwrap_or_else(default_meshes_dir)
+                        .join(format!("{mesh}.ply.zst"));
+                    (mesh, p)
+                }
+            };
             let m = load(&path, q)?;
             let pb = spinner(q, format!("stress variants of {mesh}"));
             let reports = bench::stability::run(&mesh, &m, limits, &out)?;
@@ -271,18 +311,20 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::Gpu {
             meshes,
             out,
+            smoke,
             limits,
             kmedoids_gpu_max,
             one_thread_max,
             quick,
         } => {
             let cfg = bench::gpu::Config {
-                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                meshes: meshes_for(smoke, meshes, &out)?,
                 out,
                 limits,
                 kmedoids_gpu_max,
                 one_thread_max,
-                quick,
+                quick: quick || smoke,
+                smoke,
                 quiet: q,
             };
             bench::gpu::run(&cfg)?;
@@ -292,6 +334,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::Render {
             meshes,
             out,
+            smoke,
             limits,
             strategy,
             experiment_strategy,
@@ -301,7 +344,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             near_distance,
         } => {
             let cfg = bench::render::Config {
-                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                meshes: meshes_for(smoke, meshes, &out)?,
                 out,
                 limits,
                 strategies: strategy,
@@ -309,7 +352,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
                     .into_iter()
                     .filter(|s| !s.is_empty())
                     .collect(),
-                views,
+                views: if smoke { 1 } else { views },
                 seed,
                 distance,
                 near_distance,
@@ -324,14 +367,18 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             mesh,
             runs,
             out,
+            smoke,
         } => {
-            let cfg = bench::fidelity::Config {
-                mesh: meshes
-                    .unwrap_or_else(default_meshes_dir)
-                    .join(format!("{mesh}.ply.zst")),
-                runs: runs.max(1),
-                out,
+            let (mesh, runs) = match smoke {
+                true => (bench::smoke::first(&bench::smoke::prepare(&out)?).1, 1),
+                false => (
+                    meshes
+                        .unwrap_or_else(default_meshes_dir)
+                        .join(format!("{mesh}.ply.zst")),
+                    runs.max(1),
+                ),
             };
+            let cfg = bench::fidelity::Config { mesh, runs, out };
             bench::fidelity::run(&cfg)?;
             println!("wrote {}", cfg.out.join("fidelity.md").display());
             Ok(())
@@ -339,13 +386,19 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::Kmedoids {
             meshes,
             out,
+            smoke,
             limits,
             paper_budget,
             skip_paper,
             sweep_mesh,
         } => {
+            let meshes = meshes_for(smoke, meshes, &out)?;
+            let (sweep_mesh, paper_budget) = match smoke {
+                true => (bench::smoke::first(&meshes).0, 0.5),
+                false => (sweep_mesh, paper_budget),
+            };
             let cfg = bench::kmedoids::Config {
-                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                meshes,
                 out,
                 limits,
                 paper_budget: Duration::from_secs_f64(paper_budget.max(0.0)),
@@ -361,21 +414,22 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             meshes,
             runs,
             out,
+            smoke,
             strategy,
             no_refined,
             no_refine_max,
             args,
         } => {
             let cfg = bench::build::Config {
-                meshes: meshes.unwrap_or_else(default_meshes_dir),
-                runs: runs as usize,
+                meshes: meshes_for(smoke, meshes, &out)?,
+                runs: if smoke { 1 } else { runs as usize },
                 out,
                 limits: args.limits,
                 strategies: strategy,
                 options: args.options(),
                 quiet: q,
                 refined: !no_refined,
-                refine_max: !no_refine_max,
+                refine_max: !no_refine_max && !smoke,
             };
             let rows = bench::build::run(&cfg)?;
             println!(
@@ -389,6 +443,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::Lod {
             meshes,
             out,
+            smoke,
             runs,
             select_views,
             render_views,
@@ -403,16 +458,20 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
                 bail!("--threshold must be a positive number of pixels");
             }
             let cfg = bench::lod::Config {
-                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                meshes: meshes_for(smoke, meshes, &out)?,
                 out,
-                runs: runs as usize,
+                runs: if smoke { 1 } else { runs as usize },
                 distances: bench::lod::DISTANCES.to_vec(),
-                select_views: select_views.max(1),
-                render_views,
+                select_views: if smoke { 2 } else { select_views.max(1) },
+                render_views: if smoke {
+                    render_views.min(1)
+                } else {
+                    render_views
+                },
                 threshold,
                 strategies: strategy,
                 strategy_max_triangles,
-                quick,
+                quick: quick || smoke,
                 lod: crate::lod::Config {
                     group_size: group_size as usize,
                     permissive,
@@ -424,11 +483,16 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             println!("wrote {}", cfg.out.join("lod.md").display());
             Ok(())
         }
-        BenchCommand::Compress { meshes, out, runs } => {
+        BenchCommand::Compress {
+            meshes,
+            out,
+            smoke,
+            runs,
+        } => {
             let cfg = bench::compress::Config {
-                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                meshes: meshes_for(smoke, meshes, &out)?,
                 out,
-                runs: runs as usize,
+                runs: if smoke { 1 } else { runs as usize },
                 quiet: q,
             };
             let rows = bench::compress::run(&cfg)?;
@@ -442,16 +506,17 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::CompressRender {
             meshes,
             out,
+            smoke,
             views,
             seed,
             scene_copies,
         } => {
             let cfg = bench::compress_render::Config {
-                meshes: meshes.unwrap_or_else(default_meshes_dir),
+                meshes: meshes_for(smoke, meshes, &out)?,
                 out,
-                views: views as usize,
+                views: if smoke { 1 } else { views as usize },
                 seed,
-                scene_copies: scene_copies as usize,
+                scene_copies: if smoke { 1 } else { scene_copies as usize },
                 quiet: q,
             };
             let rows = bench::compress_render::run(&cfg)?;
@@ -464,6 +529,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         }
         BenchCommand::Robustness {
             out,
+            smoke,
             cases,
             seed,
             workers,
@@ -475,9 +541,12 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
                 println!("case {k} of seed {seed} -> {}", p.display());
                 return Ok(());
             }
+            if smoke {
+                bench::smoke::prepare(&out)?;
+            }
             let cfg = bench::robustness::Config {
                 out,
-                cases,
+                cases: if smoke { 2000 } else { cases },
                 seed,
                 workers: workers.unwrap_or_else(rayon::current_num_threads),
                 quiet: q,

@@ -1,0 +1,41 @@
+//! Smoke runs of the benchmarks (`meshletlab bench ... --smoke`): tiny generated meshes and one
+//! run, so every table and plot writer runs in seconds (`make test` runs each bench this way and
+//! checks its results file). Nothing a smoke run writes is a measurement; it goes to a folder
+//! other than results/.
+
+use crate::mesh::{generate, save_ply, Mesh};
+use anyhow::{bail, Context, Result};
+use std::path::{Path, PathBuf};
+
+/// The smoke meshes, by file stem: a closed noisy sphere, a torus-knot tube and an open terrain,
+/// each under 1,300 triangles. The first is the one a bench that takes a single mesh uses.
+pub fn meshes() -> Vec<(&'static str, Mesh)> {
+    vec![
+        ("sphere", generate::noisy_sphere(3, 0.2, 1)),
+        ("knot", generate::knot_tube(48, 10, 2)),
+        ("terrain", generate::terrain(20, 3)),
+    ]
+}
+
+/// The folder the smoke meshes are written to inside `out`, written: `out/smoke-meshes`. Refuses
+/// `results` itself, so a smoke run never overwrites reported tables.
+pub fn prepare(out: &Path) -> Result<PathBuf> {
+    if out.file_name().is_some_and(|n| n == "results") {
+        bail!(
+            "--smoke writes throwaway tables: give --out a folder other than {}",
+            out.display()
+        );
+    }
+    let dir = out.join("smoke-meshes");
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    for (name, m) in meshes() {
+        save_ply(&m, &dir.join(format!("{name}.ply")))?;
+    }
+    Ok(dir)
+}
+
+/// The single mesh of a smoke run (the first of [`meshes`]) in a folder made by [`prepare`].
+pub fn first(dir: &Path) -> (String, PathBuf) {
+    let name = meshes()[0].0;
+    (name.to_string(), dir.join(format!("{name}.ply")))
+}

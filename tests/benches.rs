@@ -1,0 +1,126 @@
+//! Every `meshletlab bench` subcommand in its smoke mode (tiny generated meshes, one run): it
+//! exits 0 and writes its results files, each markdown file with its title and its tables. A bench
+//! whose writer breaks is found here, not at the next full bench run. The numbers are not checked:
+//! a smoke run measures nothing.
+
+mod common;
+
+use std::process::Command;
+
+/// (subcommand, title of its markdown, the files it must write).
+const BENCHES: [(&str, &str, &[&str]); 10] = [
+    (
+        "build",
+        "# Meshlet build benchmark",
+        &["build.md", "build.csv", "strategies.md"],
+    ),
+    (
+        "fidelity",
+        "# Paper fidelity",
+        &["fidelity.md", "fidelity.csv"],
+    ),
+    (
+        "kmedoids",
+        "# k-medoids at scale",
+        &["kmedoids.md", "kmedoids.csv", "kmedoids_sweep.csv"],
+    ),
+    (
+        "gpu",
+        "# GPU kernels against their CPU references",
+        &["gpu.md", "gpu.csv"],
+    ),
+    (
+        "render",
+        "# Mesh-shader rendering",
+        &["render.md", "render.csv", "render_experiments.csv"],
+    ),
+    (
+        "stability",
+        "# Numerical stability under stress",
+        &["stability.md"],
+    ),
+    (
+        "lod",
+        "# Cluster LOD",
+        &["lod.md", "lod.csv", "lod_levels.csv", "lod_curve.csv"],
+    ),
+    (
+        "compress",
+        "# Compressed meshlets",
+        &["compress.md", "compress.csv", "compress_fig8.csv"],
+    ),
+    (
+        "compress-render",
+        "# Compressed meshlets rendered",
+        &["compress-render.md", "compress-render.csv"],
+    ),
+    (
+        "robustness",
+        "# Robustness",
+        &["robustness.md", "robustness.csv"],
+    ),
+];
+
+fn meshletlab(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_meshletlab"))
+        .args(args)
+        .output()
+        .expect("meshletlab runs")
+}
+
+#[test]
+fn every_bench_writes_its_tables_in_smoke_mode() {
+    let root = common::scratch("bench-smoke");
+    for (bench, title, files) in BENCHES {
+        let out = root.join(bench);
+        let o = meshletlab(&[
+            "-q",
+            "bench",
+            bench,
+            "--smoke",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            o.status.success(),
+            "bench {bench} --smoke: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        for f in files {
+            let text = std::fs::read_to_string(out.join(f))
+                .unwrap_or_else(|e| panic!("bench {bench}: {f}: {e}"));
+            if f.ends_with(".md") {
+                let md = f == &files[0];
+                assert!(
+                    !md || text.starts_with(title),
+                    "bench {bench}: {f} starts {:?}",
+                    text.lines().next()
+                );
+                // A table: a header row followed by its separator row.
+                let lines: Vec<&str> = text.lines().collect();
+                assert!(
+                    lines.windows(2).any(|w| w[0].starts_with('|')
+                        && ["|-", "| -", "|:"].iter().any(|s| w[1].starts_with(s))),
+                    "bench {bench}: {f} has no table"
+                );
+            } else {
+                // CSV: a header line of several fields and at least one row.
+                let mut lines = text.lines();
+                let fields = lines.next().map_or(0, |h| h.split(',').count());
+                let rows: Vec<&str> = lines.collect();
+                assert!(
+                    fields > 1 && !rows.is_empty(),
+                    "bench {bench}: {f} is empty"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn smoke_runs_never_write_into_results() {
+    let o = meshletlab(&["-q", "bench", "build", "--smoke"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--smoke") && err.contains("results"), "{err}");
+}
