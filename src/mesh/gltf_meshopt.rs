@@ -179,23 +179,11 @@ impl CompressedView {
             Mode::Triangles | Mode::Indices => {
                 let bytes: &mut [u8] = &mut bytemuck::cast_slice_mut(&mut words)[..len];
                 let triangles = self.mode == Mode::Triangles;
-                if stride == 2 {
-                    let v: Vec<u16> = if triangles {
-                        meshopt::decode_index_buffer(stream, count)
-                    } else {
-                        meshopt::decode_index_sequence(stream, count)
-                    }
-                    .map_err(|e| corrupt(e.to_string()))?;
-                    bytes.copy_from_slice(bytemuck::cast_slice(&v));
-                } else {
-                    let v: Vec<u32> = if triangles {
-                        meshopt::decode_index_buffer(stream, count)
-                    } else {
-                        meshopt::decode_index_sequence(stream, count)
-                    }
-                    .map_err(|e| corrupt(e.to_string()))?;
-                    bytes.copy_from_slice(bytemuck::cast_slice(&v));
+                match stride {
+                    2 => decode_indices::<u16>(stream, count, triangles, bytes),
+                    _ => decode_indices::<u32>(stream, count, triangles, bytes),
                 }
+                .map_err(|e| corrupt(e.to_string()))?;
             }
         }
         Ok(words)
@@ -215,4 +203,20 @@ impl CompressedView {
         // checked the stride each filter accepts (what the C code asserts).
         unsafe { f(words.as_mut_ptr().cast(), count, stride) };
     }
+}
+
+/// Decodes `count` indices of type `T` (TRIANGLES: the index-buffer codec; else the
+/// index-sequence codec) into `out`.
+fn decode_indices<T: meshopt::encoding::IndexType + bytemuck::Pod>(
+    stream: &[u8],
+    count: usize,
+    triangles: bool,
+    out: &mut [u8],
+) -> meshopt::Result<()> {
+    let v: Vec<T> = match triangles {
+        true => meshopt::decode_index_buffer(stream, count)?,
+        false => meshopt::decode_index_sequence(stream, count)?,
+    };
+    out.copy_from_slice(bytemuck::cast_slice(&v));
+    Ok(())
 }
