@@ -7,6 +7,7 @@
 //! [`fuzz`] feeds mutated files to every reader.
 
 pub mod adjacency;
+pub mod atomic;
 pub mod bench;
 pub mod cli;
 pub mod compress;

@@ -230,10 +230,10 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
     std::fs::create_dir_all(&cfg.out)
         .with_context(|| format!("{}: cannot create", cfg.out.display()))?;
     let csv = cfg.out.join("build.csv");
-    std::fs::write(&csv, to_csv(rows.iter().chain(&preset_rows)))
+    crate::atomic::write(&csv, to_csv(rows.iter().chain(&preset_rows)))
         .with_context(|| format!("{}: cannot write", csv.display()))?;
     let md = cfg.out.join("build.md");
-    std::fs::write(&md, to_markdown(&rows, &loads, cfg))
+    crate::atomic::write(&md, to_markdown(&rows, &loads, cfg))
         .with_context(|| format!("{}: cannot write", md.display()))?;
     write_strategies(&rows, &preset_rows, cfg)?;
     if let Some(bad) = rows
@@ -522,7 +522,7 @@ fn write_strategies(rows: &[Row], preset_rows: &[Row], cfg: &Config) -> Result<(
         )?;
     }
     let path = cfg.out.join("strategies.md");
-    std::fs::write(&path, s).with_context(|| format!("{}: cannot write", path.display()))
+    crate::atomic::write(&path, s).with_context(|| format!("{}: cannot write", path.display()))
 }
 
 /// The count comparison: at every preset and on every mesh, the refined meshoptimizer output

@@ -368,14 +368,14 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
             r.decode_mtps[1]
         )?;
     }
-    std::fs::write(cfg.out.join("compress.csv"), csv)?;
+    crate::atomic::write(cfg.out.join("compress.csv"), csv)?;
     let mut f8 = String::from(
         "mesh,bits_per_axis,series,max_error_rel,geometry_bits_per_vertex,encode_seconds\n",
     );
     for (m, b, s, e, bits, secs) in fig8 {
         writeln!(f8, "{m},{b},{s},{e:.4e},{bits:.3},{secs:.4}")?;
     }
-    std::fs::write(cfg.out.join("compress_fig8.csv"), f8)?;
+    crate::atomic::write(cfg.out.join("compress_fig8.csv"), f8)?;
 
     // Figure 8 per mesh.
     let mut names: Vec<&String> = fig8.iter().map(|f| &f.0).collect();
@@ -555,7 +555,7 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
     for p in &plots {
         writeln!(md, "![{p}]({p})")?;
     }
-    std::fs::write(cfg.out.join("compress.md"), md)?;
+    crate::atomic::write(cfg.out.join("compress.md"), md)?;
     Ok(())
 }
 

@@ -458,7 +458,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
         Axes::default(),
     )?;
     writeln!(md, "\n![size against speed](compress_render_tradeoff.svg)")?;
-    std::fs::write(cfg.out.join("compress-render.md"), md)?;
+    crate::atomic::write(cfg.out.join("compress-render.md"), md)?;
     let mut csv = String::from(
         "mesh,triangles,meshlets,variant,bytes,ms_median,ms_p95,meshlets_culled_per_frame\n",
     );
@@ -474,6 +474,6 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
             r.mesh, r.triangles, r.meshlets, r.variant, r.bytes, r.culled
         )?;
     }
-    std::fs::write(cfg.out.join("compress-render.csv"), csv)?;
+    crate::atomic::write(cfg.out.join("compress-render.csv"), csv)?;
     Ok(())
 }

@@ -92,10 +92,11 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
     }
     std::fs::create_dir_all(&cfg.out).with_context(|| format!("creating {}", cfg.out.display()))?;
     let md = cfg.out.join("fidelity.md");
-    std::fs::write(&md, markdown(cfg, &mesh_name(&cfg.mesh), &m, &rows))
+    crate::atomic::write(&md, markdown(cfg, &mesh_name(&cfg.mesh), &m, &rows))
         .with_context(|| format!("writing {}", md.display()))?;
     let csv = cfg.out.join("fidelity.csv");
-    std::fs::write(&csv, csv_text(&rows)).with_context(|| format!("writing {}", csv.display()))?;
+    crate::atomic::write(&csv, csv_text(&rows))
+        .with_context(|| format!("writing {}", csv.display()))?;
     Ok(rows)
 }
 

@@ -599,8 +599,8 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
         md,
         "\n![scaling](gpu_scaling.svg)\n\n![time vs error](gpu_time_vs_error.svg)\n\n![grower](gpu_grower_sweep.svg)"
     )?;
-    std::fs::write(cfg.out.join("gpu.md"), md)?;
-    std::fs::write(cfg.out.join("gpu.csv"), csv)?;
+    crate::atomic::write(cfg.out.join("gpu.md"), md)?;
+    crate::atomic::write(cfg.out.join("gpu.csv"), csv)?;
     let pts = |f: &dyn Fn(&Row) -> Option<f64>| {
         rows.iter()
             .filter_map(|r| f(r).map(|y| (r.triangles as f64, y)))

@@ -160,7 +160,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             r.metrics.vertex_fill
         );
     }
-    std::fs::write(cfg.out.join("kmedoids.csv"), csv)?;
+    crate::atomic::write(cfg.out.join("kmedoids.csv"), csv)?;
     let mut scsv = String::from(
         "mesh,threshold,max_iterations,clustering_seconds,clustering_iterations,clustering_mean_hops,\
          seconds,iterations_run,mean_hops,meshlets,primitive_fill,vertex_fill\n",
@@ -180,7 +180,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             met.vertex_fill
         );
     }
-    std::fs::write(cfg.out.join("kmedoids_sweep.csv"), scsv)?;
+    crate::atomic::write(cfg.out.join("kmedoids_sweep.csv"), scsv)?;
     let series = |x: &dyn Fn(&SweepRow) -> f64, y: &dyn Fn(&Clustering) -> f64| {
         thresholds
             .iter()
@@ -350,6 +350,6 @@ pub fn run(cfg: &Config) -> Result<()> {
     }
     right_align_numbers(&mut t, 0..10);
     let _ = writeln!(s, "{t}");
-    std::fs::write(cfg.out.join("kmedoids.md"), s)?;
+    crate::atomic::write(cfg.out.join("kmedoids.md"), s)?;
     Ok(())
 }

@@ -838,9 +838,9 @@ fn write_results(
                 .join(", ")
         )?;
     }
-    std::fs::write(cfg.out.join("lod.md"), md)?;
-    std::fs::write(cfg.out.join("lod.csv"), csv)?;
-    std::fs::write(cfg.out.join("lod_levels.csv"), level_csv)?;
-    std::fs::write(cfg.out.join("lod_curve.csv"), curve_csv)?;
+    crate::atomic::write(cfg.out.join("lod.md"), md)?;
+    crate::atomic::write(cfg.out.join("lod.csv"), csv)?;
+    crate::atomic::write(cfg.out.join("lod_levels.csv"), level_csv)?;
+    crate::atomic::write(cfg.out.join("lod_curve.csv"), curve_csv)?;
     Ok(())
 }

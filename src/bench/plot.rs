@@ -31,7 +31,8 @@ pub fn line_chart(
     axes: Axes,
 ) -> Result<()> {
     let log_x = axes.log_x;
-    let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (900, 560)).into_drawing_area();
     root.fill(&WHITE)?;
     let pts = series.iter().flat_map(|s| s.points.iter());
     let (mut x0, mut x1, mut y0, mut y1) = (
@@ -95,8 +96,11 @@ pub fn line_chart(
         .border_style(BLACK)
         .draw()?;
     root.present()
-        .with_context(|| format!("{}: cannot write plot", path.display()))?;
-    Ok(())
+        .with_context(|| format!("{}: cannot draw plot", path.display()))?;
+    drop(chart);
+    drop(root);
+    crate::atomic::write(path, svg)
+        .with_context(|| format!("{}: cannot write plot", path.display()))
 }
 
 /// One bar series: a value per category; series with the same `stack` are stacked on each other,
@@ -118,7 +122,8 @@ pub fn bar_chart(
     categories: &[String],
     bars: &[Bars],
 ) -> Result<()> {
-    let root = SVGBackend::new(path, (1000, 560)).into_drawing_area();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (1000, 560)).into_drawing_area();
     root.fill(&WHITE)?;
     let stacks = bars.iter().map(|b| b.stack + 1).max().unwrap_or(1);
     let mut top: f64 = 0.0;
@@ -190,6 +195,9 @@ pub fn bar_chart(
         .border_style(BLACK)
         .draw()?;
     root.present()
-        .with_context(|| format!("{}: cannot write plot", path.display()))?;
-    Ok(())
+        .with_context(|| format!("{}: cannot draw plot", path.display()))?;
+    drop(chart);
+    drop(root);
+    crate::atomic::write(path, svg)
+        .with_context(|| format!("{}: cannot write plot", path.display()))
 }

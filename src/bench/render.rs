@@ -495,8 +495,8 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
         )?;
     }
     write_experiments(cfg, &mut md, variants)?;
-    std::fs::write(cfg.out.join("render.md"), md)?;
-    std::fs::write(cfg.out.join("render.csv"), csv)?;
+    crate::atomic::write(cfg.out.join("render.md"), md)?;
+    crate::atomic::write(cfg.out.join("render.csv"), csv)?;
     line_chart(
         &cfg.out.join("render_per_triangle.svg"),
         "median ms per frame against triangles (no culling)",
@@ -600,7 +600,7 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
             p95(&v.no_cull)
         )?;
     }
-    std::fs::write(cfg.out.join("render_experiments.csv"), csv)?;
+    crate::atomic::write(cfg.out.join("render_experiments.csv"), csv)?;
     writeln!(md, "\n## Experiments\n")?;
     writeln!(md, "Each experiment renders its variants of the same meshlets over the same far views in interleaved order (view 0 for every variant, then view 1, ...), so machine noise hits them alike; ratios are of medians against the first variant (< 1: faster). Strategies: {}.\n", cfg.experiment_strategies.join(", "))?;
 

@@ -60,8 +60,8 @@ pub fn run(cfg: &Config) -> Result<Report> {
     pb.finish_and_clear();
     let _ = std::fs::remove_dir_all(&scratch);
     std::fs::create_dir_all(&cfg.out)?;
-    std::fs::write(cfg.out.join("robustness.md"), markdown(cfg, &report)?)?;
-    std::fs::write(cfg.out.join("robustness.csv"), csv(&report))?;
+    crate::atomic::write(cfg.out.join("robustness.md"), markdown(cfg, &report)?)?;
+    crate::atomic::write(cfg.out.join("robustness.csv"), csv(&report))?;
     Ok(report)
 }
 

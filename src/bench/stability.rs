@@ -257,6 +257,6 @@ pub fn run(
     writeln!(md, "- Cones (CPU, `src/meshlet/bounds.rs`) are computed in f64 and widened by a safety margin so that they stay conservative after rounding to f32; a cutoff of 1 means the meshlet is never culled.")?;
     writeln!(md, "- The integer kernels (adjacency, k-medoids) never read coordinates except k-medoids' seeding, which quantises centroids relative to the bounding box, so they give the same result under translation and scale.")?;
     std::fs::create_dir_all(out)?;
-    std::fs::write(out.join("stability.md"), md)?;
+    crate::atomic::write(out.join("stability.md"), md)?;
     Ok(reports)
 }

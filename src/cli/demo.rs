@@ -163,7 +163,7 @@ fn render(name: &str, m: &Mesh, a: &DemoArgs, quiet: bool) -> Result<()> {
     let png = a.out.join(format!("{name}_{STRATEGY}.png"));
     crate::render::write_meshlet_png(&pass, &cam, true, &png)?;
     let glb = a.out.join(format!("{name}_{STRATEGY}.glb"));
-    std::fs::write(&glb, crate::meshlet::export::glb(m, &ml))
+    crate::atomic::write(&glb, crate::meshlet::export::glb(m, &ml))
         .with_context(|| format!("cannot write {}", glb.display()))?;
     println!(
         "Wrote {} (meshlet-coloured, culled meshlets absent) and {} (open it in any glTF viewer).",

@@ -25,7 +25,7 @@ pub(super) fn run(a: ExportArgs, quiet: bool) -> Result<()> {
     let m = load(&a.mesh, quiet)?;
     let ml = build_validated(&m, &a.mesh, &a.strategy, &a.args)?;
     let glb = crate::meshlet::export::glb(&m, &ml);
-    std::fs::write(&a.output, &glb)
+    crate::atomic::write(&a.output, &glb)
         .with_context(|| format!("cannot write {}", a.output.display()))?;
     println!(
         "{}: {} meshlets ({}, {}) -> {} ({} triangles, {} vertices after splitting at meshlet borders, {:.1} KiB)",

@@ -1,8 +1,8 @@
 //! Compressed meshlets (Mlakar, Steinberger, Schmalstieg, "End-to-End Compressed Meshlet
-//! Rendering", CGF 43(1), 2024), one file per format family. First slice: the shared position
-//! grid, the size accounting every format reports, and the strongest public peer,
-//! meshoptimizer's meshlet codec with anchored positions ([`meshopt_codec`]). Laced wires and the
-//! paper's TS/IX/SC/GI formats come next.
+//! Rendering", CGF 43(1), 2024), one file per format family: the shared position
+//! grid, the size accounting every format reports, the strongest public peer, meshoptimizer's
+//! meshlet codec with anchored positions ([`meshopt_codec`]), laced wires ([`laced`]) and the
+//! paper's TS/IX/SC/GI comparison formats ([`baseline`]).
 //!
 //! **Positions.** Every format quantises on one global power-of-two grid anchored at the mesh's
 //! bounding-box minimum `o`: step `2^e`, the largest with `step / 2 <= tolerance`, so every decoded

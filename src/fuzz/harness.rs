@@ -462,6 +462,6 @@ pub fn dump(seed: u64, k: u64, dir: &Path) -> std::io::Result<PathBuf> {
         "case-{k}.{}",
         c.file_name.trim_start_matches("case.")
     ));
-    std::fs::write(&p, &c.bytes)?;
+    crate::atomic::write(&p, &c.bytes)?;
     Ok(p)
 }

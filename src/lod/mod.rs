@@ -1,6 +1,7 @@
-//! Cluster LOD: the Clustered Meshlet Optimizer's meshlet DAG (first slice: the build, the CMO data,
-//! the CPU selection rules and the checks; the GPU kernel, the task-shader LOD pass and `bench lod`
-//! come next).
+//! Cluster LOD: the Clustered Meshlet Optimizer's meshlet DAG: the build, the CMO data, the CPU
+//! selection rules and the checks here; the same selection runs in a wgpu kernel
+//! (`gpu::select`) and in the task shader (`render`, `glsl/lod.glsl`), and `bench lod` compares
+//! the DAG with meshoptimizer's clusterlod.
 //!
 //! Level 0 is the meshlets of any strategy. Each further level partitions the current meshlets into
 //! groups of about [`Config::group_size`] edge-adjacent meshlets (meshoptimizer's

@@ -95,20 +95,22 @@ pub fn decompress(bytes: &[u8]) -> Result<Vec<u8>, MeshErrorKind> {
     Ok(out)
 }
 
-/// Writes a mesh as binary PLY, zstd-compressed when the name ends in `.zst`.
+/// Writes a mesh as binary PLY, zstd-compressed when the name ends in `.zst` (atomically: an
+/// interrupted write leaves the previous file).
 pub fn save_ply(mesh: &Mesh, path: &Path) -> Result<(), MeshError> {
-    let err = |e| MeshError::new(path, MeshErrorKind::Io(e));
-    let file = std::io::BufWriter::new(std::fs::File::create(path).map_err(err)?);
     let zst = path
         .to_string_lossy()
         .to_ascii_lowercase()
         .ends_with(".zst");
-    if zst {
-        let mut enc = zstd::stream::Encoder::new(file, 3).map_err(err)?;
-        ply::write_binary(&mesh.positions, &mesh.indices, &mut enc).map_err(err)?;
-        enc.finish().map_err(err)?;
-    } else {
-        ply::write_binary(&mesh.positions, &mesh.indices, file).map_err(err)?;
-    }
-    Ok(())
+    crate::atomic::write_with(path, |file| {
+        if zst {
+            let mut enc = zstd::stream::Encoder::new(file, 3)?;
+            ply::write_binary(&mesh.positions, &mesh.indices, &mut enc)?;
+            enc.finish()?;
+            Ok(())
+        } else {
+            ply::write_binary(&mesh.positions, &mesh.indices, file)
+        }
+    })
+    .map_err(|e| MeshError::new(path, MeshErrorKind::Io(e)))
 }

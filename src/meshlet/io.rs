@@ -53,9 +53,9 @@ pub struct FileError {
 /// Errors reading a meshlet file.
 pub type MeshletFileError = FileError;
 
-/// Writes `bytes` to `path`.
+/// Writes `bytes` to `path` (atomically: an interrupted write leaves the previous file).
 pub(crate) fn write_file(path: &Path, bytes: &[u8]) -> Result<(), FileError> {
-    std::fs::write(path, bytes).map_err(|e| FileError {
+    crate::atomic::write(path, bytes).map_err(|e| FileError {
         path: path.to_path_buf(),
         message: format!("cannot write: {e}"),
     })

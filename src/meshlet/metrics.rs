@@ -148,14 +148,40 @@ fn plane_fit_rms(mesh: &Mesh, ml: &Meshlets, i: usize) -> f64 {
         z[4] += d.x * d.z;
         z[5] += d.y * d.z;
     }
-    crate::strategy::qem::smallest_eigenvalue(z.map(|x| x / n))
-        .max(0.0)
-        .sqrt()
+    smallest_eigenvalue(z.map(|x| x / n)).max(0.0).sqrt()
+}
+
+/// Smallest eigenvalue of the symmetric matrix (xx, yy, zz, xy, xz, yz) (the trigonometric closed
+/// form). Shared with the `qem` strategy, which scores its merges by it.
+pub(crate) fn smallest_eigenvalue(z: [f64; 6]) -> f64 {
+    let [a, b, c, d, e, f] = z;
+    let p1 = d * d + e * e + f * f;
+    if p1 <= 1e-300 {
+        return a.min(b).min(c);
+    }
+    let q = (a + b + c) / 3.0;
+    let p2 = (a - q).powi(2) + (b - q).powi(2) + (c - q).powi(2) + 2.0 * p1;
+    let p = (p2 / 6.0).sqrt();
+    let (ba, bb, bc, bd, be, bf) = ((a - q) / p, (b - q) / p, (c - q) / p, d / p, e / p, f / p);
+    let det = ba * (bb * bc - bf * bf) - bd * (bd * bc - bf * be) + be * (bd * bf - bb * be);
+    let phi = (det / 2.0).clamp(-1.0, 1.0).acos() / 3.0;
+    q + 2.0 * p * (phi + 2.0 * std::f64::consts::PI / 3.0).cos()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn eigenvalue_of_a_flat_and_a_round_covariance() {
+        // Points spread in x and y only: the smallest eigenvalue is 0 (a plane fits exactly).
+        assert!(smallest_eigenvalue([2.0, 1.0, 0.0, 0.5, 0.0, 0.0]).abs() < 1e-12);
+        // Diagonal: the smallest diagonal entry.
+        assert!((smallest_eigenvalue([3.0, 2.0, 5.0, 0.0, 0.0, 0.0]) - 2.0).abs() < 1e-12);
+        // A rotated diag(1, 2, 3): eigenvalue 1.
+        let z = [1.5, 1.5, 3.0, 0.5, 0.0, 0.0];
+        assert!((smallest_eigenvalue(z) - 1.0).abs() < 1e-9);
+    }
 
     #[test]
     fn connectivity() {

@@ -1,5 +1,5 @@
-//! The meshlet model, shared by every strategy, the validator, bounds, metrics, the file format and
-//! (later) rendering, compression and LOD.
+//! The meshlet model, shared by every strategy, the validator, bounds, metrics, the file format,
+//! rendering, compression and LOD.
 //!
 //! The layout is meshoptimizer's: one flat array of global vertex indices and one flat array of
 //! local (u8) triangle corners, with per-meshlet offsets into both. `triangle_offset` counts bytes of
