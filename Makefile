@@ -18,10 +18,13 @@ demo: setup
 lint:
 	$(CARGO) fmt --check
 	$(CARGO) clippy --all-targets --quiet -- -D warnings
+	$(CARGO) clippy --lib --no-default-features --quiet -- -D warnings
 
 # Unit, integration and property tests; the heavy ones run in the optimised test profile.
+# The core alone too: what an engine gets with `default-features = false` builds and passes.
 test: setup lint
 	$(CARGO) test --all-targets
+	$(CARGO) test --lib --no-default-features
 
 # Regenerates every table and plot in results/ from the shared real meshes.
 bench: setup

@@ -111,8 +111,12 @@ fn main() {
     // results/ headers name the build: custom profiles (fuzz) are told apart by their settings.
     let opt = std::env::var("OPT_LEVEL").unwrap_or_default();
     println!("cargo:rustc-env=MESHLETLAB_OPT_LEVEL={opt}");
-    let glsl = Path::new("glsl");
     println!("cargo:rerun-if-changed=glsl");
+    // Only the `render` feature includes the shaders.
+    if std::env::var_os("CARGO_FEATURE_RENDER").is_none() {
+        return;
+    }
+    let glsl = Path::new("glsl");
     let mut missing = false;
     let mut table = String::from("/// Every compiled shader as (name, SPIR-V bytes; empty when glslangValidator was missing).\npub const SHADERS: &[(&str, &[u8])] = &[\n");
     for (name, src, dst, defines) in shaders() {

@@ -119,7 +119,7 @@ fn views(m: &Mesh, n: usize, seed: u64) -> Vec<select::View> {
         s = generate::splitmix64(s);
         (s >> 11) as f32 / (1u64 << 53) as f32
     };
-    meshletlab::render::random_directions(n, seed ^ 0x5eed)
+    generate::random_directions(n, seed ^ 0x5eed)
         .into_iter()
         .map(|dir| {
             let dist = 0.5 * 128f32.powf(unit());

@@ -26,7 +26,7 @@ pub(super) fn run(a: LodCheckArgs, quiet: bool) -> Result<()> {
     let (lo, hi) = m.bounding_box();
     let (c, r) = ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-6));
     let mut cuts = 0;
-    for (i, dir) in crate::render::random_directions(a.views, 1)
+    for (i, dir) in crate::mesh::generate::random_directions(a.views, 1)
         .into_iter()
         .enumerate()
     {

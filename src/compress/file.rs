@@ -32,7 +32,8 @@ use std::path::Path;
 const MAGIC: &[u8; 8] = b"MLTCMP01";
 
 /// The formats a file can hold.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "tool", derive(clap::ValueEnum))]
 pub enum Format {
     /// meshoptimizer's meshlet codec with anchored per-axis positions (the peer).
     Meshopt,
@@ -95,12 +96,22 @@ impl Format {
         Self::ALL.into_iter().find(|f| f.id() == id)
     }
 
-    /// The name on the command line.
+    /// The name on the command line (`--format`; clap's kebab-case of the variant, which a test
+    /// checks).
     pub fn name(self) -> String {
-        use clap::ValueEnum;
-        self.to_possible_value()
-            .map(|v| v.get_name().to_string())
-            .unwrap_or_default()
+        match self {
+            Format::Meshopt => "meshopt",
+            Format::LacedWires => "laced-wires",
+            Format::Ts => "ts",
+            Format::TsCompact => "ts-compact",
+            Format::Ix => "ix",
+            Format::IxCompact => "ix-compact",
+            Format::Sc => "sc",
+            Format::ScCompact => "sc-compact",
+            Format::Gi => "gi",
+            Format::GiCompact => "gi-compact",
+        }
+        .to_string()
     }
 
     /// The compact variant of a basic comparison format.
@@ -372,5 +383,20 @@ impl CompressedFile {
     /// Writes the file.
     pub fn save(&self, path: &Path) -> Result<(), CompressedFileError> {
         crate::meshlet::io::write_file(path, &self.to_bytes())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `name()` is written out so the core needs no clap; it must stay clap's kebab-case.
+    #[cfg(feature = "tool")]
+    #[test]
+    fn names_are_the_command_lines() {
+        use clap::ValueEnum;
+        for f in Format::ALL {
+            assert_eq!(f.name(), f.to_possible_value().unwrap().get_name());
+        }
     }
 }

@@ -235,13 +235,13 @@ pub fn lod_queries(mesh: &Mesh, flat: &Flat, n: usize, seed: u64) -> Vec<Query> 
         state = crate::mesh::generate::splitmix64(state);
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
-    crate::render::random_directions(n, seed)
+    crate::mesh::generate::random_directions(n, seed)
         .into_iter()
         .map(|dir| {
             let dist = (1.5 * 32f64.powf(unit())) as f32;
             let pixels = (0.25 * 64f64.powf(unit())) as f32;
             let finest = ((unit() * flat.levels() as f64) as usize).min(flat.levels() - 1);
-            let cam = crate::render::Camera::looking_at(mesh, centre + dir * r * dist);
+            let cam = crate::lod::camera::Camera::looking_at(mesh, centre + dir * r * dist);
             let mut q = cam.lod_query(pixels, finest, unit() < 0.5);
             q.cone = unit() < 0.5;
             q

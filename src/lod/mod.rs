@@ -34,6 +34,7 @@
 //! partitioner, simplifier and strategies are deterministic, so the output is identical for any
 //! thread count.
 
+pub mod camera;
 pub mod flat;
 pub mod group;
 pub mod io;

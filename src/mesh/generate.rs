@@ -175,6 +175,23 @@ pub fn terrain(n: usize, seed: u64) -> Mesh {
     Mesh { positions, indices }
 }
 
+/// `n` seeded directions, uniform on the unit sphere (z uniform in [-1, 1], angle uniform).
+pub fn random_directions(n: usize, seed: u64) -> Vec<Vec3> {
+    let mut state = seed;
+    let mut unit = || {
+        state = splitmix64(state);
+        (state >> 11) as f32 / (1u64 << 53) as f32
+    };
+    (0..n)
+        .map(|_| {
+            let z = 2.0 * unit() - 1.0;
+            let a = std::f32::consts::TAU * unit();
+            let s = (1.0 - z * z).max(0.0).sqrt();
+            Vec3::new(s * a.cos(), z, s * a.sin())
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -779,10 +779,16 @@ mod tests {
         let (mesh, ml) = sample();
         let p = pack(&mesh, &ml, Format::NvidiaA).unwrap();
         let exact = compute_bounds(&mesh, &ml);
-        let views = crate::render::Camera::random_views(&mesh, 40, 5, 2.0);
+        // Eyes of the paper's random-view protocol (`lod::camera::Camera::random_views`) at 2 radii.
+        let (lo, hi) = mesh.bounding_box();
+        let (centre, r) = ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-6));
+        let eyes: Vec<glam::Vec3> = crate::mesh::generate::random_directions(40, 5)
+            .into_iter()
+            .map(|dir| centre + dir * r * 2.0)
+            .collect();
         let (mut culled, mut exact_culled) = (0, 0);
-        for v in &views {
-            let eye = v.eye.to_array();
+        for v in &eyes {
+            let eye = v.to_array();
             for i in 0..ml.len() {
                 let Cull::Quantised(q) = p.decode(i).cull else {
                     unreachable!()

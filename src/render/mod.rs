@@ -8,11 +8,11 @@ pub mod context;
 pub mod pass;
 pub mod validation;
 
+pub use crate::lod::camera::{Camera, FOV_Y, FRAME_FILL, HEIGHT, WIDTH};
+pub use crate::mesh::generate::random_directions;
 pub use context::Context;
-pub use pass::{Drawn, Frame, MeshQueries, Pass, Pipeline, Shading, HEIGHT, WIDTH};
+pub use pass::{Drawn, Frame, MeshQueries, Pass, Pipeline, Shading};
 
-use crate::mesh::Mesh;
-use glam::{Mat4, Vec3};
 use thiserror::Error;
 
 /// Why rendering is not possible or failed.
@@ -60,153 +60,6 @@ pub enum RenderError {
 /// Maps a failed Vulkan call to [`RenderError::Vulkan`] naming the call.
 pub(crate) fn vk_err(what: &'static str) -> impl Fn(ash::vk::Result) -> RenderError {
     move |e| RenderError::Vulkan(what, e)
-}
-
-/// How much of the image's half-height (or half-width) a framed mesh fills ([`Camera::framed`]).
-pub const FRAME_FILL: f32 = 0.92;
-
-/// Vertical field of view of every camera, degrees.
-pub const FOV_Y: f32 = 60.0;
-
-/// A perspective camera looking at a point (60 degree vertical field of view, depth 0..1).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Camera {
-    /// Position.
-    pub eye: Vec3,
-    /// The point looked at.
-    pub target: Vec3,
-    /// Near and far plane distances.
-    pub near: f32,
-    /// See `near`.
-    pub far: f32,
-}
-
-impl Camera {
-    /// View and projection for an image of `aspect` (width / height). The y axis is flipped for
-    /// Vulkan's downward framebuffer y, so the image is upright and counter-clockwise stays front.
-    pub fn view_proj(&self, aspect: f32) -> Mat4 {
-        let up = up_for((self.target - self.eye).normalize_or(Vec3::NEG_Z));
-        let view = Mat4::look_at_rh(self.eye, self.target, up);
-        let proj = Mat4::perspective_rh(FOV_Y.to_radians(), aspect, self.near, self.far);
-        Mat4::from_scale(Vec3::new(1.0, -1.0, 1.0)) * proj * view
-    }
-
-    /// The LOD selection query of this camera: its eye, the pass's image height and field of view,
-    /// a threshold of `pixels`, levels `finest..` loaded, and its frustum and normal-cone culling
-    /// when `cull`.
-    pub fn lod_query(&self, pixels: f32, finest: usize, cull: bool) -> crate::lod::flat::Query {
-        crate::lod::flat::Query {
-            view: crate::lod::select::View::new(
-                self.eye,
-                HEIGHT as f32,
-                FOV_Y.to_radians(),
-                pixels,
-            ),
-            finest,
-            frustum: cull.then(|| {
-                crate::lod::flat::frustum_planes(&self.view_proj(WIDTH as f32 / HEIGHT as f32))
-            }),
-            cone: cull,
-        }
-    }
-
-    /// A camera at `eye` looking at `mesh`'s bounding-sphere centre, with planes that enclose it.
-    pub fn looking_at(mesh: &Mesh, eye: Vec3) -> Self {
-        let (lo, hi) = mesh.bounding_box();
-        let centre = (lo + hi) * 0.5;
-        let r = ((hi - lo).length() * 0.5).max(1e-6);
-        let dist = (eye - centre).length();
-        Self {
-            eye,
-            target: centre,
-            near: (dist - 1.5 * r).max(r * 1e-3),
-            far: dist + 1.5 * r,
-        }
-    }
-
-    /// The paper's random-view protocol (§4): `n` cameras at seeded random directions around the
-    /// mesh, at `distance` bounding radii from its centre, looking at it; the same sequence for
-    /// every strategy.
-    pub fn random_views(mesh: &Mesh, n: usize, seed: u64, distance: f32) -> Vec<Self> {
-        let (lo, hi) = mesh.bounding_box();
-        let centre = (lo + hi) * 0.5;
-        let r = ((hi - lo).length() * 0.5).max(1e-6);
-        random_directions(n, seed)
-            .into_iter()
-            .map(|dir| Self::looking_at(mesh, centre + dir * r * distance))
-            .collect()
-    }
-
-    /// The same directions as [`Camera::random_views`], each camera as close as it can be with the
-    /// whole mesh inside `fill` of the image's half-width and half-height: framed, so the mesh
-    /// fills most of the picture whatever its shape.
-    pub fn framed_views(mesh: &Mesh, n: usize, seed: u64, aspect: f32, fill: f32) -> Vec<Self> {
-        random_directions(n, seed)
-            .into_iter()
-            .map(|dir| Self::framed(mesh, dir, aspect, fill))
-            .collect()
-    }
-
-    /// A camera on the ray from `mesh`'s box centre along `dir`, at the least distance for which
-    /// every vertex projects inside `fill` (0..1) of the image (vertical field of view 60 degrees,
-    /// `aspect` = width / height). A vertex at offset (x, y, z) in the camera frame (z towards the
-    /// camera) is inside when |y| <= tan(30 deg) * fill * (d - z), and likewise for x with the
-    /// horizontal half-angle, so d is the largest z + |y| / (tan * fill) over the vertices.
-    pub fn framed(mesh: &Mesh, dir: Vec3, aspect: f32, fill: f32) -> Self {
-        let (lo, hi) = mesh.bounding_box();
-        let centre = (lo + hi) * 0.5;
-        let r = ((hi - lo).length() * 0.5).max(1e-6);
-        let dir = dir.normalize_or(Vec3::Z);
-        // The same frame view_proj builds for a camera looking along -dir.
-        let up = up_for(-dir);
-        let right = (-dir).cross(up).normalize();
-        let cam_up = right.cross(-dir);
-        let tan_v = 30f32.to_radians().tan() * fill.clamp(0.05, 1.0);
-        let tan_h = tan_v * aspect;
-        let mut d = f32::MIN;
-        for p in &mesh.positions {
-            let q = Vec3::from_array(*p) - centre;
-            let z = q.dot(dir);
-            d = d
-                .max(z + q.dot(right).abs() / tan_h)
-                .max(z + q.dot(cam_up).abs() / tan_v);
-        }
-        // In front of every vertex (a thin mesh seen end-on needs only d > its nearest tip).
-        let z_max = mesh
-            .positions
-            .iter()
-            .map(|p| (Vec3::from_array(*p) - centre).dot(dir))
-            .fold(f32::MIN, f32::max);
-        let d = d.max(z_max + r * 0.05).max(r * 1e-2);
-        Self::looking_at(mesh, centre + dir * d)
-    }
-}
-
-/// The up vector for a camera looking along unit `forward`: +Y, or +Z when looking (almost)
-/// straight up or down.
-fn up_for(forward: Vec3) -> Vec3 {
-    if forward.cross(Vec3::Y).length_squared() > 1e-12 {
-        Vec3::Y
-    } else {
-        Vec3::Z
-    }
-}
-
-/// `n` seeded directions, uniform on the unit sphere (z uniform in [-1, 1], angle uniform).
-pub fn random_directions(n: usize, seed: u64) -> Vec<Vec3> {
-    let mut state = seed;
-    let mut unit = || {
-        state = crate::mesh::generate::splitmix64(state);
-        (state >> 11) as f32 / (1u64 << 53) as f32
-    };
-    (0..n)
-        .map(|_| {
-            let z = 2.0 * unit() - 1.0;
-            let a = std::f32::consts::TAU * unit();
-            let s = (1.0 - z * z).max(0.0).sqrt();
-            Vec3::new(s * a.cos(), z, s * a.sin())
-        })
-        .collect()
 }
 
 include!(concat!(env!("OUT_DIR"), "/shaders.rs"));

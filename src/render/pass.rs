@@ -4,17 +4,13 @@
 
 use super::compressed::{Decoder, Upload};
 use super::context::{Buffer, Context};
-use super::{vk_err, Camera, RenderError};
+use super::{vk_err, Camera, RenderError, HEIGHT, WIDTH};
 use crate::lod::flat::{loaded, Flat, Query, ViewData};
 use crate::mesh::Mesh;
 use crate::meshlet::descriptor::{self, Format};
 use crate::meshlet::{Limits, Meshlets};
 use ash::vk;
 
-/// Image width (the paper's).
-pub const WIDTH: u32 = 1280;
-/// Image height.
-pub const HEIGHT: u32 = 720;
 const SAMPLES: vk::SampleCountFlags = vk::SampleCountFlags::TYPE_4;
 const COLOR: vk::Format = vk::Format::R8G8B8A8_UNORM;
 const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
