@@ -184,16 +184,21 @@ fn draco_is_refused_with_its_name_and_the_way_out() {
 
 // ---- hand-made documents: the spec's accessor rules and the extension checks ----
 
+/// `bin` as a glTF buffer embedded in a data URI.
+fn embedded(bin: &[u8]) -> Value {
+    use base64::Engine as _;
+    json!({"byteLength": bin.len(), "uri": format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(bin)
+    )})
+}
+
 /// A .gltf with one triangle primitive over `bin` (embedded as a data URI), and `doc` merged in.
 fn gltf_file(dir: &Path, name: &str, bin: &[u8], doc: Value) -> PathBuf {
-    use base64::Engine as _;
     let mut j = json!({
         "asset": {"version": "2.0"},
         "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
-        "buffers": [{"byteLength": bin.len(), "uri": format!(
-            "data:application/octet-stream;base64,{}",
-            base64::engine::general_purpose::STANDARD.encode(bin)
-        )}],
+        "buffers": [embedded(bin)],
     });
     for (k, v) in doc.as_object().unwrap() {
         j[k] = v.clone();
@@ -357,10 +362,7 @@ fn meshopt_file(
             "extensionsUsed": ["EXT_meshopt_compression", "KHR_mesh_quantization"],
             "extensionsRequired": ["EXT_meshopt_compression", "KHR_mesh_quantization"],
             "buffers": [
-                {"byteLength": stream.len(), "uri": format!("data:application/octet-stream;base64,{}", {
-                    use base64::Engine as _;
-                    base64::engine::general_purpose::STANDARD.encode(stream)
-                })},
+                embedded(stream),
                 {"byteLength": count * stride, "extensions": {"EXT_meshopt_compression": {"fallback": true}}}
             ],
             "bufferViews": [{"buffer": 1, "byteLength": count * stride, "byteStride": stride,

@@ -803,7 +803,12 @@ impl<'a> Pass<'a> {
     ) -> Result<Frame, RenderError> {
         let ctx = self.ctx;
         let d = &ctx.device;
-        self.counters.write(&vec![0u8; self.counters.size as usize]);
+        // The drawn-id bitmap only when this frame records it (render_lod_ids reads it back).
+        let clear = match flags & FLAG_RECORD_IDS {
+            0 => COUNTER_BYTES,
+            _ => self.counters.size,
+        };
+        self.counters.write(&vec![0u8; clear as usize]);
         let push = Push {
             view_proj: camera
                 .view_proj(WIDTH as f32 / HEIGHT as f32)
