@@ -19,12 +19,18 @@ lint:
 	$(CARGO) fmt --check
 	$(CARGO) clippy --all-targets --quiet -- -D warnings
 	$(CARGO) clippy --lib --no-default-features --quiet -- -D warnings
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps --lib --quiet
 
-# Unit, integration and property tests; the heavy ones run in the optimised test profile.
-# The core alone too: what an engine gets with `default-features = false` builds and passes.
+# Unit, integration, property and doc tests; the heavy ones run in the optimised test profile.
+# The core alone too: what an engine gets with `default-features = false` builds and passes, and
+# the examples run (the core ones without default features, to show they need nothing else).
 test: setup lint
 	$(CARGO) test --all-targets
+	$(CARGO) test --doc
 	$(CARGO) test --lib --no-default-features
+	for e in build_meshlets lod_cut laced_wires; do \
+	  $(CARGO) run --profile test --quiet --no-default-features --example $$e || exit 1; done
+	$(CARGO) run --profile test --quiet --example gpu_kmedoids
 
 # Regenerates every table and plot in results/ from the shared real meshes.
 bench: setup

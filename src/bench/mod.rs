@@ -47,6 +47,7 @@ pub fn p95(xs: &[f64]) -> f64 {
     v[((v.len() as f64 * 0.95).ceil() as usize).clamp(1, v.len()) - 1]
 }
 
+/// The median (the mean of the two middle values for an even count; NaN for none).
 pub fn median(xs: &[f64]) -> f64 {
     let mut v = xs.to_vec();
     v.sort_by(f64::total_cmp);

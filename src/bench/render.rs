@@ -4,7 +4,7 @@
 //! task shader skipped (frustum and backface), the ns-per-triangle slope of frame time against
 //! triangle count across the shared meshes (paper Table 6), and a meshlet-coloured image of the
 //! bunny per strategy (paper Figure 1) -> results/render.md, render.csv, render_per_triangle.svg,
-//! render_bunny_<strategy>.png.
+//! `render_bunny_<strategy>.png`.
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{bar_chart, line_chart, Axes, Bars, Series};

@@ -43,6 +43,7 @@ pub struct Cli {
     /// Worker threads for parallel steps (default: all cores). Results do not depend on it.
     #[arg(long, global = true, value_name = "N")]
     pub threads: Option<usize>,
+    /// The subcommand to run.
     #[command(subcommand)]
     pub command: Command,
 }

@@ -114,7 +114,7 @@ pub fn truncate(b: &[u8], boundaries: &[usize], rng: &mut Rng) -> Vec<u8> {
     b[..at.min(b.len())].to_vec()
 }
 
-/// Replaces a header number or count with a value from [`NUMBERS`].
+/// Replaces a header number or count with a value from `NUMBERS`.
 pub fn header_number(b: &[u8], fields: &[Field], rng: &mut Rng) -> Vec<u8> {
     if fields.is_empty() {
         return flip(b.to_vec(), rng);

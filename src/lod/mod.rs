@@ -54,7 +54,7 @@ pub enum Grouping {
     /// meshoptimizer's `partition_clusters` over welded vertices and positions.
     #[default]
     Partition,
-    /// Our k-medoids on the meshlet graph ([`group::kmedoids`]).
+    /// Our k-medoids on the meshlet graph (`group::kmedoids`).
     KMedoids,
 }
 

@@ -162,24 +162,30 @@ pub(crate) fn mark_used(mesh: &Mesh, t: u32, used: &mut [bool], live: &mut [u32]
 #[error("unknown strategy '{0}' (known: {known}; any of them followed by +refine, +refine-fast or +refine-max)", known = NAMES.join(", "))]
 pub struct UnknownStrategy(pub String);
 
-/// Looks a strategy up by name; the ordering options wrap it in a post-pass.
+/// Looks a strategy up by name; the ordering options wrap it in a post-pass. The typed way to
+/// the same strategies is [`Kind::strategy`] (or [`Kind::refined`]) and [`with_order`].
 pub fn by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, UnknownStrategy> {
+    let unknown = || UnknownStrategy(name.to_string());
     let inner = match refined(name) {
-        Some((base, effort, full_name)) => Box::new(refine::Refined {
-            inner: base_by_name(base, opts).map_err(|_| UnknownStrategy(name.to_string()))?,
-            config: refine::Config::new(effort),
-            name: full_name,
-        }),
-        None => base_by_name(name, opts)?,
+        Some((base, effort, _)) => Kind::from_name(base)
+            .ok_or_else(unknown)?
+            .refined(effort, opts),
+        None => Kind::from_name(name).ok_or_else(unknown)?.strategy(opts),
     };
+    Ok(with_order(inner, opts))
+}
+
+/// Wraps `inner` in the ordering post-passes that `opts` asks for ([`Options::local_order`],
+/// [`Options::meshlet_order`]); returns it unchanged when they ask for none.
+pub fn with_order(inner: Box<dyn Strategy>, opts: &Options) -> Box<dyn Strategy> {
     if !opts.local_order && opts.meshlet_order == MeshletOrder::AsBuilt {
-        return Ok(inner);
+        return inner;
     }
-    Ok(Box::new(Ordered {
+    Box::new(Ordered {
         inner,
         local_order: opts.local_order,
         meshlet_order: opts.meshlet_order,
-    }))
+    })
 }
 
 /// A strategy followed by the ordering post-passes (which keep every meshlet's triangle set).
@@ -206,47 +212,133 @@ impl Strategy for Ordered {
     }
 }
 
-fn base_by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, UnknownStrategy> {
-    Ok(match name {
-        "nvidia" => Box::new(Nvidia {
-            tipsify_cache: None,
-        }),
-        "nvidia+tipsify" => Box::new(Nvidia {
-            tipsify_cache: Some(opts.cache_size),
-        }),
-        "greedy" => Box::new(Greedy),
-        "greedy-paper" => Box::new(GreedyPaper {
-            close_on_empty_queue: false,
-        }),
-        "bsphere-paper" => Box::new(BoundingSpherePaper),
-        "bsphere" => Box::new(BoundingSphere { coherent: false }),
-        "bsphere-coherent" => Box::new(BoundingSphere { coherent: true }),
-        "bsphere-parallel" => Box::new(ParallelGrower {
-            spacing: parallel::DEFAULT_SPACING,
-        }),
-        "compact" => Box::new(Compact),
-        "kmedoids" => Box::new(KMedoids {
+/// Every strategy, by type: what an engine names instead of a string. `Kind::ALL[i].name()` is
+/// `NAMES[i]`, and [`by_name`] goes through this enum.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Kind {
+    /// [`Nvidia`] without tipsify: `nvidia`.
+    Nvidia,
+    /// [`Nvidia`] over a tipsify-ordered index buffer: `nvidia+tipsify`.
+    NvidiaTipsify,
+    /// [`Greedy`]: `greedy`.
+    Greedy,
+    /// [`GreedyPaper`]: `greedy-paper`.
+    GreedyPaper,
+    /// [`BoundingSphere`]: `bsphere`.
+    Bsphere,
+    /// [`BoundingSpherePaper`]: `bsphere-paper`.
+    BspherePaper,
+    /// [`BoundingSphere`], connected growth only: `bsphere-coherent`.
+    BsphereCoherent,
+    /// [`ParallelGrower`]: `bsphere-parallel`.
+    BsphereParallel,
+    /// [`KMedoids`], fast mode: `kmedoids`.
+    Kmedoids,
+    /// [`KMedoids`] as the paper runs it (slow by design): `kmedoids-paper`.
+    KmedoidsPaper,
+    /// [`Compact`]: `compact`.
+    Compact,
+    /// [`Meshopt`] (meshoptimizer's `build_meshlets`): `meshopt`.
+    Meshopt,
+    /// [`MeshoptScan`]: `meshopt-scan`.
+    MeshoptScan,
+    /// [`MeshoptSpatial`]: `meshopt-spatial`.
+    MeshoptSpatial,
+    /// [`qem::Qem`]: `qem`.
+    Qem,
+}
+
+impl Kind {
+    /// Every kind, in [`NAMES`] (table) order.
+    pub const ALL: [Kind; 15] = [
+        Kind::Nvidia,
+        Kind::NvidiaTipsify,
+        Kind::Greedy,
+        Kind::GreedyPaper,
+        Kind::Bsphere,
+        Kind::BspherePaper,
+        Kind::BsphereCoherent,
+        Kind::BsphereParallel,
+        Kind::Kmedoids,
+        Kind::KmedoidsPaper,
+        Kind::Compact,
+        Kind::Meshopt,
+        Kind::MeshoptScan,
+        Kind::MeshoptSpatial,
+        Kind::Qem,
+    ];
+
+    /// The name the command line and the files use.
+    pub fn name(self) -> &'static str {
+        NAMES[self as usize]
+    }
+
+    /// The kind named `name` (without a refine suffix).
+    pub fn from_name(name: &str) -> Option<Kind> {
+        NAMES.iter().position(|&n| n == name).map(|i| Kind::ALL[i])
+    }
+
+    /// The strategy, with the tunables in `opts` it reads (the ordering options are applied by
+    /// [`with_order`], not here).
+    pub fn strategy(self, opts: &Options) -> Box<dyn Strategy> {
+        let kmedoids = |mode| KMedoids {
             config: kmedoids::Config {
-                mode: kmedoids::Mode::Fast,
+                mode,
                 ..opts.kmedoids
             },
-        }),
-        "kmedoids-paper" => Box::new(KMedoids {
-            config: kmedoids::Config {
-                mode: kmedoids::Mode::Paper,
-                ..opts.kmedoids
-            },
-        }),
-        "meshopt" => Box::new(Meshopt {
-            cone_weight: opts.cone_weight,
-        }),
-        "meshopt-scan" => Box::new(MeshoptScan),
-        "meshopt-spatial" => Box::new(MeshoptSpatial {
-            fill_weight: opts.fill_weight,
-        }),
-        "qem" => Box::new(qem::Qem),
-        _ => return Err(UnknownStrategy(name.to_string())),
-    })
+        };
+        match self {
+            Kind::Nvidia => Box::new(Nvidia {
+                tipsify_cache: None,
+            }),
+            Kind::NvidiaTipsify => Box::new(Nvidia {
+                tipsify_cache: Some(opts.cache_size),
+            }),
+            Kind::Greedy => Box::new(Greedy),
+            Kind::GreedyPaper => Box::new(GreedyPaper {
+                close_on_empty_queue: false,
+            }),
+            Kind::Bsphere => Box::new(BoundingSphere { coherent: false }),
+            Kind::BspherePaper => Box::new(BoundingSpherePaper),
+            Kind::BsphereCoherent => Box::new(BoundingSphere { coherent: true }),
+            Kind::BsphereParallel => Box::new(ParallelGrower {
+                spacing: parallel::DEFAULT_SPACING,
+            }),
+            Kind::Kmedoids => Box::new(kmedoids(kmedoids::Mode::Fast)),
+            Kind::KmedoidsPaper => Box::new(kmedoids(kmedoids::Mode::Paper)),
+            Kind::Compact => Box::new(Compact),
+            Kind::Meshopt => Box::new(Meshopt {
+                cone_weight: opts.cone_weight,
+            }),
+            Kind::MeshoptScan => Box::new(MeshoptScan),
+            Kind::MeshoptSpatial => Box::new(MeshoptSpatial {
+                fill_weight: opts.fill_weight,
+            }),
+            Kind::Qem => Box::new(qem::Qem),
+        }
+    }
+
+    /// The strategy followed by [`refine`] at `effort`, named e.g. `meshopt+refine`.
+    pub fn refined(self, effort: refine::Effort, opts: &Options) -> Box<dyn Strategy> {
+        let suffix = REFINE_SUFFIXES
+            .iter()
+            .find(|&&(_, e)| e == effort)
+            .map_or("", |&(s, _)| s);
+        let (_, _, name) =
+            refined(&format!("{}{suffix}", self.name())).expect("every kind has every suffix");
+        Box::new(refine::Refined {
+            inner: self.strategy(opts),
+            config: refine::Config::new(effort),
+            name,
+        })
+    }
+}
+
+impl std::str::FromStr for Kind {
+    type Err = UnknownStrategy;
+    fn from_str(s: &str) -> Result<Self, UnknownStrategy> {
+        Kind::from_name(s).ok_or_else(|| UnknownStrategy(s.to_string()))
+    }
 }
 
 /// Strategies that are slow by design and only run when named (or by `bench kmedoids`).
@@ -259,4 +351,45 @@ pub fn all(opts: &Options) -> Vec<Box<dyn Strategy>> {
         .filter(|n| !SLOW.contains(n))
         .map(|n| by_name(n, opts).expect("NAMES are known"))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn kinds_and_names_agree() {
+        assert_eq!(Kind::ALL.len(), NAMES.len());
+        let opts = Options::default();
+        for (i, k) in Kind::ALL.into_iter().enumerate() {
+            assert_eq!(k.name(), NAMES[i]);
+            assert_eq!(Kind::from_name(NAMES[i]), Some(k));
+            assert_eq!(k.strategy(&opts).name(), NAMES[i]);
+            for (suffix, effort) in REFINE_SUFFIXES {
+                let by_type = k.refined(effort, &opts);
+                let by_string = by_name(&format!("{}{suffix}", NAMES[i]), &opts).unwrap();
+                assert_eq!(by_type.name(), by_string.name());
+                assert_eq!(by_type.name(), format!("{}{suffix}", NAMES[i]));
+            }
+        }
+        assert!("meshopt2".parse::<Kind>().is_err());
+        assert!(by_name("meshopt+refine+refine", &opts).is_err());
+    }
+
+    #[test]
+    fn typed_and_named_strategies_build_the_same_meshlets() {
+        let mesh = crate::mesh::generate::terrain(14, 3);
+        let limits = Limits::new(64, 84).unwrap();
+        let opts = Options {
+            local_order: true,
+            meshlet_order: MeshletOrder::Triangles,
+            ..Options::default()
+        };
+        for k in [Kind::Greedy, Kind::Meshopt, Kind::Kmedoids] {
+            let typed = with_order(k.strategy(&opts), &opts).build(&mesh, limits);
+            let named = by_name(k.name(), &opts).unwrap().build(&mesh, limits);
+            assert_eq!(typed, named, "{}", k.name());
+            crate::meshlet::validate(&mesh, &typed, limits).unwrap();
+        }
+    }
 }

@@ -27,7 +27,7 @@
 //!    boundaries (a cold anneal then drives out any overflow the hot one left, or the input's
 //!    boundaries come back). Then meshlets are removed one at a time, emptiest first: the victim's
 //!    triangles are handed to their neighbours regardless of the limits, and an anneal confined to
-//!    the meshlets within [`ANNEAL_RINGS`] of it must drive the overflow (vertices and triangles over
+//!    the meshlets within `ANNEAL_RINGS` of it must drive the overflow (vertices and triangles over
 //!    the limits, weighted [`OVERFLOW_WEIGHT`]) back to zero within its budget, or the hand-over is
 //!    undone. Boundary moves alone cannot move vertex capacity far (a vertex freed on one side of a
 //!    meshlet does not help the other); annealing's uphill moves can, and a few meshlets around the
