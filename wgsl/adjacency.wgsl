@@ -5,11 +5,11 @@
 //                                               the rows dual_count gathered)
 // Large arrays are split in two bindings of at most 2^25 u32 (lavapipe's 128 MiB binding limit).
 
-struct Params { n: u32, t: u32, w2: u32, w3: u32, w4: u32, w5: u32, w6: u32, w7: u32 }
+struct Params { n: u32, t: u32 }
 
 @group(0) @binding(0) var<uniform> p: Params;
-@group(0) @binding(1) var<storage, read_write> idx_a: array<u32>;
-@group(0) @binding(2) var<storage, read_write> idx_b: array<u32>;
+@group(0) @binding(1) var<storage, read> idx_a: array<u32>;
+@group(0) @binding(2) var<storage, read> idx_b: array<u32>;
 @group(0) @binding(3) var<storage, read_write> vt_off: array<atomic<u32>>;
 @group(0) @binding(4) var<storage, read_write> vt_a: array<u32>;
 @group(0) @binding(5) var<storage, read_write> vt_b: array<u32>;
@@ -24,9 +24,6 @@ struct Params { n: u32, t: u32, w2: u32, w3: u32, w4: u32, w5: u32, w6: u32, w7:
 @group(0) @binding(12) var<storage, read_write> near_a: array<u32>;
 @group(0) @binding(13) var<storage, read_write> near_b: array<u32>;
 
-const PART: u32 = 33554432u; // 2^25
-const NONE: u32 = 0xffffffffu;
-
 fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART]; }
 fn vt(i: u32) -> u32 { if (i < PART) { return vt_a[i]; } return vt_b[i - PART]; }
 fn set_vt(i: u32, v: u32) { if (i < PART) { vt_a[i] = v; } else { vt_b[i - PART] = v; } }
@@ -34,8 +31,6 @@ fn set_dual(i: u32, v: u32) { if (i < PART) { dual_a[i] = v; } else { dual_b[i -
 fn near(i: u32) -> u32 { if (i < PART) { return near_a[i]; } return near_b[i - PART]; }
 fn set_near(i: u32, v: u32) { if (i < PART) { near_a[i] = v; } else { near_b[i - PART] = v; } }
 const COMPLEX: u32 = 0xfffffffeu;
-
-fn flat(gid: vec3<u32>) -> u32 { return gid.x + gid.y * 65535u * 64u; }
 
 fn tri(t: u32) -> vec3<u32> { return vec3<u32>(idx(3u * t), idx(3u * t + 1u), idx(3u * t + 2u)); }
 

@@ -15,29 +15,25 @@
 // reads them once: level d appends to slot (d + 1) % RING and clears slot (d + 2) % RING for the
 // level after next.
 
-struct Params { t: u32, k: u32, d: u32, w3: u32, w4: u32, w5: u32, w6: u32, w7: u32 }
+struct Params { t: u32, k: u32, d: u32, slot: u32, max_v: u32, max_t: u32 }
 
 @group(0) @binding(0) var<uniform> p: Params;
-@group(0) @binding(1) var<storage, read_write> dual_off: array<u32>;
-@group(0) @binding(2) var<storage, read_write> dual_a: array<u32>;
-@group(0) @binding(3) var<storage, read_write> dual_b: array<u32>;
+@group(0) @binding(1) var<storage, read> dual_off: array<u32>;
+@group(0) @binding(2) var<storage, read> dual_a: array<u32>;
+@group(0) @binding(3) var<storage, read> dual_b: array<u32>;
 @group(0) @binding(4) var<storage, read_write> labels: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read_write> dist: array<atomic<u32>>;
-@group(0) @binding(6) var<storage, read_write> medoids: array<u32>;
+@group(0) @binding(6) var<storage, read> medoids: array<u32>;
 // Shared with kmedoids.wgsl: [0, 8) its counters, [8, 8 + RING) frontier sizes by level.
 @group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>>;
 // Two frontier lists of T entries each: level d's at (d % 2) * T.
 @group(0) @binding(8) var<storage, read_write> frontier: array<u32>;
 
-const PART: u32 = 33554432u;
-const NONE: u32 = 0xffffffffu;
 const RING: u32 = 64u;
 const SIZES: u32 = 8u;
 
 fn nb(i: u32) -> u32 { if (i < PART) { return dual_a[i]; } return dual_b[i - PART]; }
 // Grid-stride loops: the host sizes dispatches to the device (few workgroups on a CPU adapter).
-fn flat(gid: vec3<u32>) -> u32 { return gid.x + gid.y * 65535u * 64u; }
-fn stride(nwg: vec3<u32>) -> u32 { return nwg.x * nwg.y * 64u; }
 
 @compute @workgroup_size(64)
 fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {

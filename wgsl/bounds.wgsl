@@ -7,20 +7,20 @@
 // padded by a relative 2^-16: WGSL lets sqrt be as loose as 1/inverseSqrt (lavapipe was seen ~18 ulps
 // from the CPU), and the padding must cover that so every vertex is inside.
 
-struct Params { n: u32, w1: u32, w2: u32, w3: u32, w4: u32, w5: u32, w6: u32, w7: u32 }
+struct Params { n: u32 }
 struct Meshlet { vertex_offset: u32, triangle_offset: u32, vertex_count: u32, triangle_count: u32 }
 
 @group(0) @binding(0) var<uniform> p: Params;
-@group(0) @binding(1) var<storage, read_write> positions: array<f32>;
-@group(0) @binding(2) var<storage, read_write> meshlets: array<Meshlet>;
-@group(0) @binding(3) var<storage, read_write> vertices: array<u32>;
+@group(0) @binding(1) var<storage, read> positions: array<f32>;
+@group(0) @binding(2) var<storage, read> meshlets: array<Meshlet>;
+@group(0) @binding(3) var<storage, read> vertices: array<u32>;
 @group(0) @binding(4) var<storage, read_write> spheres: array<vec4<f32>>;
 
 fn pos(v: u32) -> vec3<f32> { return vec3<f32>(positions[3u * v], positions[3u * v + 1u], positions[3u * v + 2u]); }
 
 @compute @workgroup_size(64)
 fn sphere(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x + gid.y * 65535u * 64u;
+    let i = flat(gid);
     if (i >= p.n) { return; }
     let m = meshlets[i];
     let p0 = pos(vertices[m.vertex_offset]);

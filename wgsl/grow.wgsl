@@ -14,13 +14,13 @@
 struct Params { t: u32, n: u32, base: u32, slot: u32, max_v: u32, max_t: u32, cell: u32, grid: u32 }
 
 @group(0) @binding(0) var<uniform> p: Params;
-@group(0) @binding(1) var<storage, read_write> dual_off: array<u32>;
-@group(0) @binding(2) var<storage, read_write> dual_a: array<u32>;
-@group(0) @binding(3) var<storage, read_write> dual_b: array<u32>;
-@group(0) @binding(4) var<storage, read_write> idx_a: array<u32>;
-@group(0) @binding(5) var<storage, read_write> idx_b: array<u32>;
+@group(0) @binding(1) var<storage, read> dual_off: array<u32>;
+@group(0) @binding(2) var<storage, read> dual_a: array<u32>;
+@group(0) @binding(3) var<storage, read> dual_b: array<u32>;
+@group(0) @binding(4) var<storage, read> idx_a: array<u32>;
+@group(0) @binding(5) var<storage, read> idx_b: array<u32>;
 // Quantised positions, three per vertex (15 bits each).
-@group(0) @binding(6) var<storage, read_write> q: array<u32>;
+@group(0) @binding(6) var<storage, read> q: array<u32>;
 // Owner (meshlet id) per triangle, NONE while unclaimed.
 @group(0) @binding(7) var<storage, read_write> claim: array<atomic<u32>>;
 // Position of each triangle in its meshlet.
@@ -37,15 +37,11 @@ struct Params { t: u32, n: u32, base: u32, slot: u32, max_v: u32, max_t: u32, ce
 // 0..8 proposals per growth round, 8..16 label changes per component round.
 @group(0) @binding(15) var<storage, read_write> counters: array<atomic<u32>>;
 
-const PART: u32 = 33554432u;
-const NONE: u32 = 0xffffffffu;
 // Marks a meshlet triangle (in mt) whose neighbours are all claimed. Triangle ids stay below 2^25.
 const INTERIOR: u32 = 0x80000000u;
 
 fn nb(i: u32) -> u32 { if (i < PART) { return dual_a[i]; } return dual_b[i - PART]; }
 fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART]; }
-fn flat(gid: vec3<u32>) -> u32 { return gid.x + gid.y * 65535u * 64u; }
-fn group(wid: vec3<u32>) -> u32 { return wid.x + wid.y * 65535u; }
 fn tri(t: u32) -> vec3<u32> { return vec3<u32>(idx(3u * t), idx(3u * t + 1u), idx(3u * t + 2u)); }
 fn unclaimed(t: u32) -> bool { return atomicLoad(&claim[t]) == NONE; }
 // Corner k of v repeats an earlier corner (a degenerate triangle): the CPU's `distinct` skips it.

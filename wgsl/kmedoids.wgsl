@@ -9,14 +9,14 @@
 //   (split statistics: wgsl/split.wgsl)
 //   dist_partial                             the objective (sum of hop distances), per workgroup
 
-struct Params { t: u32, k: u32, d: u32, slot: u32, max_v: u32, max_t: u32, w6: u32, w7: u32 }
+struct Params { t: u32, k: u32, d: u32, slot: u32, max_v: u32, max_t: u32 }
 
 @group(0) @binding(0) var<uniform> p: Params;
-@group(0) @binding(1) var<storage, read_write> dual_off: array<u32>;
-@group(0) @binding(2) var<storage, read_write> dual_a: array<u32>;
-@group(0) @binding(3) var<storage, read_write> dual_b: array<u32>;
-@group(0) @binding(4) var<storage, read_write> labels: array<u32>;
-@group(0) @binding(5) var<storage, read_write> dist: array<u32>;
+@group(0) @binding(1) var<storage, read> dual_off: array<u32>;
+@group(0) @binding(2) var<storage, read> dual_a: array<u32>;
+@group(0) @binding(3) var<storage, read> dual_b: array<u32>;
+@group(0) @binding(4) var<storage, read> labels: array<u32>;
+@group(0) @binding(5) var<storage, read> dist: array<u32>;
 @group(0) @binding(6) var<storage, read_write> medoids: array<u32>;
 @group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>>;
 @group(0) @binding(8) var<storage, read_write> mem_off: array<atomic<u32>>;
@@ -32,8 +32,6 @@ struct Params { t: u32, k: u32, d: u32, slot: u32, max_v: u32, max_t: u32, w6: u
 // [T, T + k): 1 where the cluster's members changed since then.
 @group(0) @binding(14) var<storage, read_write> prev: array<u32>;
 
-const PART: u32 = 33554432u;
-const NONE: u32 = 0xffffffffu;
 // counters: 0 shift sum, 1 medoids changed, 2 large clusters, 3 updates skipped as unchanged;
 // 8.. assign.wgsl's frontier sizes.
 const SHIFT: u32 = 0u;
@@ -42,8 +40,6 @@ const LARGE: u32 = 2u;
 const SKIPPED: u32 = 3u;
 
 fn nb(i: u32) -> u32 { if (i < PART) { return dual_a[i]; } return dual_b[i - PART]; }
-fn flat(gid: vec3<u32>) -> u32 { return gid.x + gid.y * 65535u * 64u; }
-fn group(wid: vec3<u32>) -> u32 { return wid.x + wid.y * 65535u; }
 
 @compute @workgroup_size(64)
 fn clear_counters(@builtin(global_invocation_id) gid: vec3<u32>) {

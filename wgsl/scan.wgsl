@@ -2,7 +2,7 @@
 // one workgroup, then each block scanned with its offset. A block is 64 threads x 16 items; the
 // one-workgroup middle pass handles any number of blocks (serial chunks per thread).
 
-struct Params { n: u32, w1: u32, w2: u32, w3: u32, w4: u32, w5: u32, w6: u32, w7: u32 }
+struct Params { n: u32 }
 
 @group(0) @binding(0) var<uniform> p: Params;
 @group(0) @binding(1) var<storage, read_write> data: array<u32>;
@@ -12,8 +12,6 @@ const ITEMS: u32 = 16u;
 const BLOCK: u32 = 1024u; // 64 * ITEMS
 
 var<workgroup> part: array<u32, 64>;
-
-fn group_id(wid: vec3<u32>) -> u32 { return wid.x + wid.y * 65535u; }
 
 // Exclusive scan of part[] by thread 0 (64 values: cheaper than a tree with barriers on lavapipe).
 fn scan_part(lid: u32) -> u32 {
@@ -41,7 +39,7 @@ fn thread_sum(base: u32) -> u32 {
 
 @compute @workgroup_size(64)
 fn block_sums(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let g = group_id(wid);
+    let g = group(wid);
     part[lid] = thread_sum(g * BLOCK + lid * ITEMS);
     workgroupBarrier();
     if (lid == 0u) {
@@ -70,7 +68,7 @@ fn scan_sums(@builtin(local_invocation_index) lid: u32) {
 
 @compute @workgroup_size(64)
 fn scan_blocks(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let g = group_id(wid);
+    let g = group(wid);
     let base = g * BLOCK + lid * ITEMS;
     part[lid] = thread_sum(base);
     var acc = scan_part(lid) + sums[g];

@@ -12,7 +12,7 @@
 // are exact and an FMA the compiler may form changes nothing; sums run x, y, z in the order the
 // CPU writes them; infinity is tested through its bits. See src/lod/select.rs.
 
-struct Params { n: u32, per_view: u32, w2: u32, w3: u32, w4: u32, w5: u32, w6: u32, w7: u32 }
+struct Params { n: u32, per_view: u32 }
 
 // Mirrors lod::flat::Record.
 struct Record {
@@ -40,8 +40,8 @@ struct View {
 }
 
 @group(0) @binding(0) var<uniform> p: Params;
-@group(0) @binding(1) var<storage, read_write> records: array<Record>;
-@group(0) @binding(2) var<storage, read_write> views: array<View>;
+@group(0) @binding(1) var<storage, read> records: array<Record>;
+@group(0) @binding(2) var<storage, read> views: array<View>;
 @group(0) @binding(3) var<storage, read_write> flags: array<u32>;
 @group(0) @binding(4) var<storage, read_write> offsets: array<u32>;
 @group(0) @binding(5) var<storage, read_write> ids: array<u32>;
@@ -90,11 +90,9 @@ fn backfacing(apex: vec3<f32>, axis: vec3<f32>, cutoff: f32, eye: vec3<f32>) -> 
     return a >= 0.0 || a * a <= rhs - margin;
 }
 
-fn flat_id(gid: vec3<u32>) -> u32 { return gid.x + gid.y * 65535u * 64u; }
-
 @compute @workgroup_size(64)
 fn decide(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = flat_id(gid);
+    let i = flat(gid);
     if (i >= p.n) { return; }
     let v = views[i / p.per_view];
     let m = i % p.per_view;
@@ -115,7 +113,7 @@ fn decide(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 @compute @workgroup_size(64)
 fn compact(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = flat_id(gid);
+    let i = flat(gid);
     if (i >= p.n) { return; }
     if (flags[i] != 0u) { ids[offsets[i]] = i; }
 }

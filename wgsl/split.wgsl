@@ -8,27 +8,23 @@
 // member triangle has the same vertex; the vertex -> triangle rows (ascending) answer the second
 // test in a few reads, where comparing all 3m corners pairwise cost O(m^2) per cluster.
 
-struct Params { t: u32, k: u32, w2: u32, w3: u32, max_v: u32, max_t: u32, w6: u32, w7: u32 }
+struct Params { t: u32, k: u32, d: u32, slot: u32, max_v: u32, max_t: u32 }
 
 @group(0) @binding(0) var<uniform> p: Params;
-@group(0) @binding(1) var<storage, read_write> mem_off: array<u32>;
-@group(0) @binding(2) var<storage, read_write> mem_items: array<u32>;
-@group(0) @binding(3) var<storage, read_write> labels: array<u32>;
-@group(0) @binding(4) var<storage, read_write> dist: array<u32>;
+@group(0) @binding(1) var<storage, read> mem_off: array<u32>;
+@group(0) @binding(2) var<storage, read> mem_items: array<u32>;
+@group(0) @binding(3) var<storage, read> labels: array<u32>;
+@group(0) @binding(4) var<storage, read> dist: array<u32>;
 // [2k, 3k) distinct vertices, [3k, 4k) farthest member (the layout of kmedoids.wgsl's result).
 @group(0) @binding(5) var<storage, read_write> result: array<u32>;
-@group(0) @binding(6) var<storage, read_write> idx_a: array<u32>;
-@group(0) @binding(7) var<storage, read_write> idx_b: array<u32>;
-@group(0) @binding(8) var<storage, read_write> vt_off: array<u32>;
-@group(0) @binding(9) var<storage, read_write> vt_a: array<u32>;
-@group(0) @binding(10) var<storage, read_write> vt_b: array<u32>;
-
-const PART: u32 = 33554432u;
-const NONE: u32 = 0xffffffffu;
+@group(0) @binding(6) var<storage, read> idx_a: array<u32>;
+@group(0) @binding(7) var<storage, read> idx_b: array<u32>;
+@group(0) @binding(8) var<storage, read> vt_off: array<u32>;
+@group(0) @binding(9) var<storage, read> vt_a: array<u32>;
+@group(0) @binding(10) var<storage, read> vt_b: array<u32>;
 
 fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART]; }
 fn vt(i: u32) -> u32 { if (i < PART) { return vt_a[i]; } return vt_b[i - PART]; }
-fn flat(gid: vec3<u32>) -> u32 { return gid.x + gid.y * 65535u * 64u; }
 
 // Whether a member of cluster c below triangle t uses vertex v.
 fn seen_before(v: u32, t: u32, c: u32) -> bool {

@@ -2,7 +2,7 @@
 //! graph, identical to [`crate::adjacency::vertex_triangles`] and [`crate::adjacency::dual_graph`],
 //! plus per-side edge flags equal to [`crate::adjacency::side_flags`].
 
-use super::{timed, Batch, Gpu, GpuError, Kernels, Params, Scan, Split};
+use super::{binding_set, param_block, timed, wgsl, Batch, Gpu, GpuError, Kernels, Scan, Split};
 use crate::adjacency::Csr;
 use crate::mesh::Mesh;
 
@@ -24,9 +24,51 @@ impl Timing {
     }
 }
 
+param_block! {
+    /// `struct Params` of `wgsl/adjacency.wgsl`.
+    pub struct Params {
+        /// Vertices.
+        n,
+        /// Triangles.
+        t,
+    }
+}
+
+binding_set! {
+    /// The storage buffers of `wgsl/adjacency.wgsl`, in binding order.
+    pub struct Buffers {
+        /// Index buffer, first part.
+        idx_a: Read,
+        /// Index buffer, second part.
+        idx_b: Read,
+        /// Vertex -> triangle offsets (counted, then scanned).
+        vt_off: ReadWrite,
+        /// Vertex -> triangle items, first part.
+        vt_a: ReadWrite,
+        /// Vertex -> triangle items, second part.
+        vt_b: ReadWrite,
+        /// Scatter cursor per vertex.
+        cursor: ReadWrite,
+        /// Dual-graph offsets.
+        dual_off: ReadWrite,
+        /// Dual-graph items, first part (a placeholder until the count is known).
+        dual_a: ReadWrite,
+        /// Dual-graph items, second part.
+        dual_b: ReadWrite,
+        /// Per-side edge flags.
+        side_flags: ReadWrite,
+        /// 1 for a degenerate triangle.
+        degenerate: ReadWrite,
+        /// Gathered neighbours, first part.
+        near_a: ReadWrite,
+        /// Gathered neighbours, second part.
+        near_b: ReadWrite,
+    }
+}
+
 /// The adjacency kernels.
 pub struct AdjacencyKernels {
-    kernels: Kernels,
+    kernels: Kernels<Params>,
     scan: Scan,
 }
 
@@ -66,11 +108,10 @@ impl AdjacencyKernels {
     /// Compiles the kernels.
     pub fn new(gpu: &Gpu) -> Self {
         Self {
-            kernels: Kernels::new(
+            kernels: Kernels::new::<Buffers>(
                 gpu,
                 "adjacency",
-                include_str!("../../wgsl/adjacency.wgsl"),
-                13,
+                wgsl!("adjacency.wgsl"),
                 &[
                     "vt_count",
                     "vt_scatter",
@@ -110,26 +151,27 @@ impl AdjacencyKernels {
         let bind = |da: &wgpu::Buffer, db: &wgpu::Buffer| {
             self.kernels.bind(
                 gpu,
-                &[
-                    &indices.a,
-                    &indices.b,
-                    &vt_offsets,
-                    &vt_items.a,
-                    &vt_items.b,
-                    &cursor,
-                    &dual_offsets,
-                    da,
-                    db,
-                    &side_flags,
-                    &degenerate,
-                    &near.a,
-                    &near.b,
-                ],
+                &Buffers {
+                    idx_a: &indices.a,
+                    idx_b: &indices.b,
+                    vt_off: &vt_offsets,
+                    vt_a: &vt_items.a,
+                    vt_b: &vt_items.b,
+                    cursor: &cursor,
+                    dual_off: &dual_offsets,
+                    dual_a: da,
+                    dual_b: db,
+                    side_flags: &side_flags,
+                    degenerate: &degenerate,
+                    near_a: &near.a,
+                    near_b: &near.b,
+                },
             )
         };
         let first = bind(&placeholder.0, &placeholder.1);
         let p = Params {
-            w: [n as u32, t as u32, 0, 0, 0, 0, 0, 0],
+            n: n as u32,
+            t: t as u32,
         };
         let scan_vt = self.scan.bind(gpu, &vt_offsets, n + 1);
         let scan_dual = self.scan.bind(gpu, &dual_offsets, t + 1);

@@ -6,10 +6,32 @@
 //! by about 18 ulps, 1.1e-6 relative): the check allows a relative 2^-16 (1.5e-5), which is also
 //! the padding that keeps the sphere conservative on both sides. For a 1 m meshlet that is 15 um.
 
-use super::{Batch, Gpu, GpuError, Kernels, Params};
+use super::{binding_set, param_block, wgsl, Batch, Gpu, GpuError, Kernels};
 use crate::mesh::Mesh;
 use crate::meshlet::Meshlets;
 use glam::Vec3;
+
+param_block! {
+    /// `struct Params` of `wgsl/bounds.wgsl`.
+    pub struct Params {
+        /// Meshlets.
+        n,
+    }
+}
+
+binding_set! {
+    /// The storage buffers of `wgsl/bounds.wgsl`, in binding order.
+    pub struct Buffers {
+        /// The mesh's positions, three f32 per vertex.
+        positions: Read,
+        /// The meshlets.
+        meshlets: Read,
+        /// The meshlets' global vertex indices.
+        vertices: Read,
+        /// Out: centre and radius per meshlet.
+        spheres: ReadWrite,
+    }
+}
 
 /// Relative radius tolerance between GPU and CPU (and the conservative padding).
 pub const RADIUS_TOLERANCE: f32 = 1.0 / 65_536.0;
@@ -49,29 +71,23 @@ pub fn sphere_f32(mesh: &Mesh, ml: &Meshlets, i: usize) -> ([f32; 3], f32) {
 
 /// Spheres of all meshlets on the GPU: (centre, radius) per meshlet, and the kernel time.
 pub fn spheres(gpu: &Gpu, mesh: &Mesh, ml: &Meshlets) -> Result<(Vec<SphereF32>, f64), GpuError> {
-    let k = Kernels::new(
-        gpu,
-        "bounds",
-        include_str!("../../wgsl/bounds.wgsl"),
-        4,
-        &["sphere"],
-    );
+    let k = Kernels::new::<Buffers>(gpu, "bounds", wgsl!("bounds.wgsl"), &["sphere"]);
     let positions = gpu.upload("positions", &mesh.positions);
     let meshlets = gpu.upload("meshlets", &ml.meshlets);
     let vertices = gpu.upload("meshlet vertices", &ml.vertices);
     let out = gpu.zeros("spheres", 4 * ml.len());
-    let bind = k.bind(gpu, &[&positions, &meshlets, &vertices, &out]);
+    let bind = k.bind(
+        gpu,
+        &Buffers {
+            positions: &positions,
+            meshlets: &meshlets,
+            vertices: &vertices,
+            spheres: &out,
+        },
+    );
     let mut b = Batch::new(gpu);
     let n = ml.len();
-    b.threads(
-        &k,
-        "sphere",
-        &bind,
-        Params {
-            w: [n as u32, 0, 0, 0, 0, 0, 0, 0],
-        },
-        n,
-    );
+    b.threads(&k, "sphere", &bind, Params { n: n as u32 }, n);
     let time = b.run()?;
     let raw = gpu.read(&out, 0, 4 * n)?;
     let s = raw

@@ -8,11 +8,69 @@
 
 use super::adjacency::{AdjacencyKernels, Timing};
 use super::scan::ScanJob;
-use super::{timed, Batch, Gpu, GpuError, Kernels, Params, Scan, PART};
+use super::{binding_set, param_block, timed, wgsl, Batch, Gpu, GpuError, Kernels, Scan, PART};
 use crate::mesh::Mesh;
 use crate::meshlet::{Limits, Meshlets};
 use crate::strategy::parallel::{assemble, Setup};
 use std::time::Instant;
+
+param_block! {
+    /// `struct Params` of `wgsl/grow.wgsl`.
+    pub struct Params {
+        /// Triangles.
+        t,
+        /// Meshlets in the wave (or seeds to place).
+        n,
+        /// First meshlet id of the wave.
+        base,
+        /// Counter slot this dispatch counts into.
+        slot,
+        /// Meshlet vertex limit.
+        max_v,
+        /// Meshlet triangle limit.
+        max_t,
+        /// Grid cell size in quantised units.
+        cell,
+        /// Grid cells per axis.
+        grid,
+    }
+}
+
+binding_set! {
+    /// The storage buffers of `wgsl/grow.wgsl`, in binding order.
+    pub struct Buffers {
+        /// Dual-graph offsets.
+        dual_off: Read,
+        /// Dual-graph items, first part.
+        dual_a: Read,
+        /// Dual-graph items, second part.
+        dual_b: Read,
+        /// Index buffer, first part.
+        idx_a: Read,
+        /// Index buffer, second part.
+        idx_b: Read,
+        /// Quantised positions.
+        q: Read,
+        /// Owner meshlet per triangle.
+        claim: ReadWrite,
+        /// Position of each triangle in its meshlet.
+        order: ReadWrite,
+        /// Component labels.
+        label: ReadWrite,
+        /// Grid cells: best distance and its triangle.
+        cells: ReadWrite,
+        /// Seed flags (scanned into seed slots).
+        flags: ReadWrite,
+        /// Per-meshlet growth state of the wave.
+        state: ReadWrite,
+        /// Meshlet triangles of the wave.
+        mt: ReadWrite,
+        /// Meshlet vertices of the wave.
+        mv: ReadWrite,
+        /// Proposal and label-change counters.
+        counters: ReadWrite,
+    }
+}
 
 /// Rounds recorded per submission (their counters come back together).
 const ROUNDS: u32 = 8;
@@ -77,11 +135,10 @@ pub fn grow(gpu: &Gpu, mesh: &Mesh, limits: Limits, spacing: f64) -> Result<GpuG
     let setup = Setup::new(mesh, limits, spacing);
     let ak = AdjacencyKernels::new(gpu);
     let (adj, adj_timing) = ak.build(gpu, mesh)?;
-    let kernels = Kernels::new(
+    let kernels = Kernels::new::<Buffers>(
         gpu,
         "grow",
-        include_str!("../../wgsl/grow.wgsl"),
-        15,
+        wgsl!("grow.wgsl"),
         &[
             "init",
             "clear_counters",
@@ -119,37 +176,35 @@ pub fn grow(gpu: &Gpu, mesh: &Mesh, limits: Limits, spacing: f64) -> Result<GpuG
     let bind_for = |w: &WaveBuffers| {
         kernels.bind(
             gpu,
-            &[
-                &adj.dual_offsets,
-                &adj.dual_items.a,
-                &adj.dual_items.b,
-                &adj.indices.a,
-                &adj.indices.b,
-                &q,
-                &claim,
-                &order,
-                &label,
-                &cell_buf,
-                &flags,
-                &w.state,
-                &w.mt,
-                &w.mv,
-                &counters,
-            ],
+            &Buffers {
+                dual_off: &adj.dual_offsets,
+                dual_a: &adj.dual_items.a,
+                dual_b: &adj.dual_items.b,
+                idx_a: &adj.indices.a,
+                idx_b: &adj.indices.b,
+                q: &q,
+                claim: &claim,
+                order: &order,
+                label: &label,
+                cells: &cell_buf,
+                flags: &flags,
+                state: &w.state,
+                mt: &w.mt,
+                mv: &w.mv,
+                counters: &counters,
+            },
         )
     };
     let mut bind = bind_for(&wave);
     let params = |n: usize, base: u32, slot: u32| Params {
-        w: [
-            t as u32,
-            n as u32,
-            base,
-            slot,
-            limits.max_vertices,
-            limits.max_triangles,
-            setup.cell,
-            setup.grid,
-        ],
+        t: t as u32,
+        n: n as u32,
+        base,
+        slot,
+        max_v: limits.max_vertices,
+        max_t: limits.max_triangles,
+        cell: setup.cell,
+        grid: setup.grid,
     };
     let mut read = |buf: &wgpu::Buffer, off: usize, len: usize| {
         let (r, s) = timed(|| gpu.read(buf, off, len));

@@ -14,7 +14,7 @@
 
 use super::adjacency::{AdjacencyKernels, DeviceAdjacency, Timing};
 use super::scan::ScanJob;
-use super::{timed, Batch, Gpu, GpuError, Kernels, Params, Scan, PART};
+use super::{binding_set, param_block, timed, wgsl, Batch, Gpu, GpuError, Kernels, Scan, PART};
 use crate::adjacency::Csr;
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
@@ -23,6 +23,107 @@ use crate::strategy::kmedoids::{
     split_choice, Clustering, Config, Mode,
 };
 use std::time::Instant;
+
+param_block! {
+    /// `struct Params` of the k-medoids family: `wgsl/kmedoids.wgsl`, `assign.wgsl` and
+    /// `split.wgsl` (one dispatch's parameters serve all three).
+    pub struct Params {
+        /// Triangles.
+        t,
+        /// Clusters.
+        k,
+        /// BFS level (assign's `push`).
+        d,
+        /// Counter slot this dispatch counts into.
+        slot,
+        /// Meshlet vertex limit.
+        max_v,
+        /// Meshlet triangle limit.
+        max_t,
+    }
+}
+
+binding_set! {
+    /// The storage buffers of `wgsl/kmedoids.wgsl` (the medoid update), in binding order.
+    pub struct UpdateBuffers {
+        /// Dual-graph offsets.
+        dual_off: Read,
+        /// Dual-graph items, first part.
+        dual_a: Read,
+        /// Dual-graph items, second part.
+        dual_b: Read,
+        /// Cluster per triangle.
+        labels: Read,
+        /// Hop distance to its medoid per triangle.
+        dist: Read,
+        /// Medoid per cluster (`place` writes the new ones).
+        medoids: ReadWrite,
+        /// Update counters (shared with assign's frontier ring).
+        counters: ReadWrite,
+        /// Member offsets per cluster.
+        mem_off: ReadWrite,
+        /// Members, cluster by cluster.
+        mem_items: ReadWrite,
+        /// Scatter cursor per cluster.
+        cursor: ReadWrite,
+        /// New medoid, shift and split statistics per cluster.
+        result: ReadWrite,
+        /// Changed-cluster and new-medoid flags (scanned).
+        flags: ReadWrite,
+        /// The large-cluster fallback's BFS distance and queue.
+        scratch: ReadWrite,
+        /// Each triangle's medoid at the last update, then the dirty flags.
+        prev: ReadWrite,
+    }
+}
+
+binding_set! {
+    /// The storage buffers of `wgsl/assign.wgsl` (the multi-source BFS), in binding order.
+    pub struct AssignBuffers {
+        /// Dual-graph offsets.
+        dual_off: Read,
+        /// Dual-graph items, first part.
+        dual_a: Read,
+        /// Dual-graph items, second part.
+        dual_b: Read,
+        /// Out: cluster per triangle.
+        labels: ReadWrite,
+        /// Out: hop distance per triangle.
+        dist: ReadWrite,
+        /// Medoid per cluster.
+        medoids: Read,
+        /// Update counters and the frontier-size ring.
+        counters: ReadWrite,
+        /// Two frontier lists.
+        frontier: ReadWrite,
+    }
+}
+
+binding_set! {
+    /// The storage buffers of `wgsl/split.wgsl` (split statistics), in binding order.
+    pub struct SplitBuffers {
+        /// Member offsets per cluster.
+        mem_off: Read,
+        /// Members, cluster by cluster.
+        mem_items: Read,
+        /// Cluster per triangle.
+        labels: Read,
+        /// Hop distance per triangle.
+        dist: Read,
+        /// Out: distinct vertices and farthest member per cluster.
+        result: ReadWrite,
+        /// Index buffer, first part.
+        idx_a: Read,
+        /// Index buffer, second part.
+        idx_b: Read,
+        /// Vertex -> triangle offsets.
+        vt_off: Read,
+        /// Vertex -> triangle items, first part.
+        vt_a: Read,
+        /// Vertex -> triangle items, second part.
+        vt_b: Read,
+    }
+}
 
 /// Frontier-size counters (a ring in `wgsl/assign.wgsl`, after 8 update counters).
 const RING: usize = 64;
@@ -65,9 +166,9 @@ type ClusterStats = (Vec<u32>, Vec<u32>, Vec<u32>);
 
 /// The three kernel modules of a run.
 struct Family<'a> {
-    update: &'a Kernels,
-    assign: &'a Kernels,
-    split: &'a Kernels,
+    update: &'a Kernels<Params>,
+    assign: &'a Kernels<Params>,
+    split: &'a Kernels<Params>,
 }
 
 struct Run<'a> {
@@ -147,28 +248,20 @@ pub fn cluster(
     let (adj, adj_timing) = ak.build(gpu, mesh)?;
     // One SIMD row per update workgroup on lavapipe (see `UW` in the WGSL).
     let uw = if gpu.is_cpu() { 8.0 } else { 64.0 };
-    let kernels = Kernels::with_constants(
+    let kernels = Kernels::with_constants::<UpdateBuffers>(
         gpu,
         "kmedoids",
-        include_str!("../../wgsl/kmedoids.wgsl"),
-        14,
+        wgsl!("kmedoids.wgsl"),
         UPDATE_ENTRIES,
         &[("UW", uw)],
     );
-    let assign_kernels = Kernels::new(
+    let assign_kernels = Kernels::new::<AssignBuffers>(
         gpu,
         "assign",
-        include_str!("../../wgsl/assign.wgsl"),
-        8,
+        wgsl!("assign.wgsl"),
         &["clear", "seed", "push"],
     );
-    let split_kernels = Kernels::new(
-        gpu,
-        "split",
-        include_str!("../../wgsl/split.wgsl"),
-        10,
-        &["stats"],
-    );
+    let split_kernels = Kernels::new::<SplitBuffers>(gpu, "split", wgsl!("split.wgsl"), &["stats"]);
     let scan = Scan::new(gpu);
     let family = Family {
         update: &kernels,
@@ -294,50 +387,50 @@ impl<'a> Run<'a> {
         let frontier = gpu.zeros("frontier", 2 * t);
         let bind = family.update.bind(
             gpu,
-            &[
-                &adj.dual_offsets,
-                &adj.dual_items.a,
-                &adj.dual_items.b,
-                &labels,
-                &dist,
-                &medoids,
-                &counters,
-                &mem_off,
-                &mem_items,
-                &cursor,
-                &result,
-                &flags,
-                &scratch,
-                &prev,
-            ],
+            &UpdateBuffers {
+                dual_off: &adj.dual_offsets,
+                dual_a: &adj.dual_items.a,
+                dual_b: &adj.dual_items.b,
+                labels: &labels,
+                dist: &dist,
+                medoids: &medoids,
+                counters: &counters,
+                mem_off: &mem_off,
+                mem_items: &mem_items,
+                cursor: &cursor,
+                result: &result,
+                flags: &flags,
+                scratch: &scratch,
+                prev: &prev,
+            },
         );
         let split_bind = family.split.bind(
             gpu,
-            &[
-                &mem_off,
-                &mem_items,
-                &labels,
-                &dist,
-                &result,
-                &adj.indices.a,
-                &adj.indices.b,
-                &adj.vt_offsets,
-                &adj.vt_items.a,
-                &adj.vt_items.b,
-            ],
+            &SplitBuffers {
+                mem_off: &mem_off,
+                mem_items: &mem_items,
+                labels: &labels,
+                dist: &dist,
+                result: &result,
+                idx_a: &adj.indices.a,
+                idx_b: &adj.indices.b,
+                vt_off: &adj.vt_offsets,
+                vt_a: &adj.vt_items.a,
+                vt_b: &adj.vt_items.b,
+            },
         );
         let assign_bind = family.assign.bind(
             gpu,
-            &[
-                &adj.dual_offsets,
-                &adj.dual_items.a,
-                &adj.dual_items.b,
-                &labels,
-                &dist,
-                &medoids,
-                &counters,
-                &frontier,
-            ],
+            &AssignBuffers {
+                dual_off: &adj.dual_offsets,
+                dual_a: &adj.dual_items.a,
+                dual_b: &adj.dual_items.b,
+                labels: &labels,
+                dist: &dist,
+                medoids: &medoids,
+                counters: &counters,
+                frontier: &frontier,
+            },
         );
         let flag_scan = scan.bind(gpu, &flags, t + 1);
         Ok(Self {
@@ -376,16 +469,12 @@ impl<'a> Run<'a> {
 
     fn params(&self, k: usize, d: u32, slot: u32) -> Params {
         Params {
-            w: [
-                self.t as u32,
-                k as u32,
-                d,
-                slot,
-                self.limits.max_vertices,
-                self.limits.max_triangles,
-                0,
-                0,
-            ],
+            t: self.t as u32,
+            k: k as u32,
+            d,
+            slot,
+            max_v: self.limits.max_vertices,
+            max_t: self.limits.max_triangles,
         }
     }
 

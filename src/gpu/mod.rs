@@ -76,7 +76,7 @@ pub struct Gpu {
     /// Whether kernel time comes from GPU timestamps (else from wall time around the dispatches).
     pub timestamps: bool,
     period_ns: f32,
-    /// Per-dispatch [`Params`] at a 256-byte stride, bound with dynamic offsets.
+    /// Per-dispatch [`ParamBlock`]s at a 256-byte stride, bound with dynamic offsets.
     params: wgpu::Buffer,
     /// Running host-side counts (see [`Gpu::profile`]).
     profile: Mutex<Profile>,
@@ -374,42 +374,107 @@ fn check_len(what: &'static str, len: usize) -> Result<(), GpuError> {
     Ok(())
 }
 
-/// Parameters of one dispatch, at a 256-byte stride in a uniform buffer (dynamic offsets).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Params {
-    /// Kernel-specific words (counts, the BFS level, limits, ...).
-    pub w: [u32; 8],
+/// A kernel family's uniform parameters: a Pod struct of named u32 fields in the order of the
+/// WGSL `struct Params` of its modules (`gpu::shaders_test` checks names, offsets and size
+/// against naga's reflection of every module). Declared with `param_block!`.
+pub trait ParamBlock: Pod {
+    /// Field names, in declaration (= WGSL member) order; field `i` sits at byte `4 i`.
+    const FIELDS: &'static [&'static str];
 }
 
+/// Declares a [`ParamBlock`]: `param_block! { /// doc\n pub struct X { /// doc\n a, /// doc\n b } }`
+/// makes a `#[repr(C)]` Pod struct of `u32` fields.
+macro_rules! param_block {
+    ($(#[$m:meta])* pub struct $name:ident { $($(#[$fm:meta])* $field:ident),* $(,)? }) => {
+        $(#[$m])*
+        #[repr(C)]
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+        pub struct $name { $($(#[$fm])* pub $field: u32,)* }
+        impl $crate::gpu::ParamBlock for $name {
+            const FIELDS: &'static [&'static str] = &[$(stringify!($field)),*];
+        }
+    };
+}
+pub(crate) use param_block;
+
+/// How a kernel family's modules use a storage binding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    /// Only read: declared `var<storage, read>` and bound read-only.
+    Read,
+    /// Written (or atomic) somewhere in the family: `var<storage, read_write>`.
+    ReadWrite,
+}
+
+/// The storage buffers of a kernel family, one named field per binding in binding order (1..):
+/// the field names are the WGSL variable names (checked by naga in `gpu::shaders_test`).
+/// Declared with `binding_set!`.
+pub trait BindingSet<'a> {
+    /// (WGSL name, access) of bindings 1, 2, ...
+    const LAYOUT: &'static [(&'static str, Access)];
+    /// The buffers in binding order.
+    fn buffers(&self) -> Vec<&'a wgpu::Buffer>;
+}
+
+/// Declares a [`BindingSet`]: `binding_set! { /// doc\n pub struct X { /// doc\n a: Read, b: ReadWrite } }`
+/// makes a struct of `&wgpu::Buffer` fields.
+macro_rules! binding_set {
+    ($(#[$m:meta])* pub struct $name:ident { $($(#[$fm:meta])* $field:ident: $access:ident),* $(,)? }) => {
+        $(#[$m])*
+        pub struct $name<'a> { $($(#[$fm])* pub $field: &'a wgpu::Buffer,)* }
+        impl<'a> $crate::gpu::BindingSet<'a> for $name<'a> {
+            const LAYOUT: &'static [(&'static str, $crate::gpu::Access)] =
+                &[$((stringify!($field), $crate::gpu::Access::$access)),*];
+            fn buffers(&self) -> Vec<&'a wgpu::Buffer> {
+                vec![$(self.$field),*]
+            }
+        }
+    };
+}
+pub(crate) use binding_set;
+
+/// The WGSL source of `wgsl/<file>` behind the shared prelude (`wgsl/prelude.wgsl`: the split
+/// part size, `NONE` and the flat-id helpers every module uses).
+macro_rules! wgsl {
+    ($file:literal) => {
+        concat!(
+            include_str!("../../wgsl/prelude.wgsl"),
+            include_str!(concat!("../../wgsl/", $file))
+        )
+    };
+}
+pub(crate) use wgsl;
+
+/// Bytes between the parameter blocks of consecutive dispatches in the uniform buffer (dynamic
+/// offsets must be multiples of 256).
 const PARAM_STRIDE: u64 = 256;
 
-/// One WGSL module, its pipelines and its fixed bind-group layout: binding 0 is the [`Params`]
-/// uniform (dynamic offset), bindings 1..=n read-write storage buffers. Every entry point sees
-/// the same layout, so one bind group serves the whole family.
-pub struct Kernels {
+/// One WGSL module, its pipelines and its fixed bind-group layout: binding 0 is the `P` uniform
+/// (dynamic offset), bindings 1..=n the storage buffers of one [`BindingSet`], read-only where it
+/// says so. Every entry point sees the same layout, so one bind group serves the whole module.
+pub struct Kernels<P: ParamBlock> {
     layout: wgpu::BindGroupLayout,
+    bindings: &'static [(&'static str, Access)],
     pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
+    _params: std::marker::PhantomData<P>,
 }
 
-impl Kernels {
-    /// Compiles `source` with `storage` storage bindings and builds a pipeline per entry point.
-    pub fn new(
+impl<P: ParamBlock> Kernels<P> {
+    /// Compiles `source` for the bindings of `B` and builds a pipeline per entry point.
+    pub fn new<'b, B: BindingSet<'b>>(
         gpu: &Gpu,
         label: &str,
         source: &str,
-        storage: u32,
         entries: &[&'static str],
     ) -> Self {
-        Self::with_constants(gpu, label, source, storage, entries, &[])
+        Self::with_constants::<B>(gpu, label, source, entries, &[])
     }
 
     /// [`Kernels::new`] with values for the module's `override` constants.
-    pub fn with_constants(
+    pub fn with_constants<'b, B: BindingSet<'b>>(
         gpu: &Gpu,
         label: &str,
         source: &str,
-        storage: u32,
         entries: &[&'static str],
         constants: &[(&str, f64)],
     ) -> Self {
@@ -424,19 +489,23 @@ impl Kernels {
             ty: wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Uniform,
                 has_dynamic_offset: true,
-                min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<Params>() as u64),
+                min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<P>() as u64),
             },
             count: None,
         }];
-        layout_entries.extend((1..=storage).map(|b| wgpu::BindGroupLayoutEntry {
-            binding: b,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
+        layout_entries.extend(B::LAYOUT.iter().zip(1..).map(|(&(_, access), b)| {
+            wgpu::BindGroupLayoutEntry {
+                binding: b,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage {
+                        read_only: access == Access::Read,
+                    },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }
         }));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some(label),
@@ -466,29 +535,37 @@ impl Kernels {
                 (e, p)
             })
             .collect();
-        Self { layout, pipelines }
+        Self {
+            layout,
+            bindings: B::LAYOUT,
+            pipelines,
+            _params: std::marker::PhantomData,
+        }
     }
 
-    /// The bind group for `buffers` (bindings 1..) with the params buffer at binding 0.
-    pub fn bind(&self, gpu: &Gpu, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+    /// The bind group for `set` (bindings 1..) with the params buffer at binding 0. `set` must be
+    /// of the binding set the kernels were built for.
+    pub fn bind<'b, B: BindingSet<'b>>(&self, gpu: &Gpu, set: &B) -> wgpu::BindGroup {
+        assert_eq!(
+            B::LAYOUT,
+            self.bindings,
+            "a bind group of another kernel family"
+        );
         let params = &gpu.params;
         let mut entries = vec![wgpu::BindGroupEntry {
             binding: 0,
             resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                 buffer: params,
                 offset: 0,
-                size: wgpu::BufferSize::new(std::mem::size_of::<Params>() as u64),
+                size: wgpu::BufferSize::new(std::mem::size_of::<P>() as u64),
             }),
         }];
-        entries.extend(
-            buffers
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32 + 1,
-                    resource: b.as_entire_binding(),
-                }),
-        );
+        entries.extend(set.buffers().into_iter().zip(1..).map(|(b, binding)| {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            }
+        }));
         gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
             layout: &self.layout,
@@ -517,10 +594,11 @@ pub struct Batch<'a> {
 }
 
 struct Step<'a> {
-    kernels: &'a Kernels,
+    pipeline: &'a wgpu::ComputePipeline,
     entry: &'static str,
     bind: &'a wgpu::BindGroup,
-    params: Params,
+    /// The dispatch's [`ParamBlock`] as bytes.
+    params: Vec<u8>,
     dims: [u32; 3],
 }
 
@@ -534,12 +612,12 @@ impl<'a> Batch<'a> {
     }
 
     /// Adds a dispatch of `threads` threads of a `@workgroup_size(64)` kernel.
-    pub fn threads(
+    pub fn threads<P: ParamBlock>(
         &mut self,
-        k: &'a Kernels,
+        k: &'a Kernels<P>,
         entry: &'static str,
         bind: &'a wgpu::BindGroup,
-        params: Params,
+        params: P,
         threads: usize,
     ) {
         self.groups(k, entry, bind, params, (threads as u32).div_ceil(WG));
@@ -547,12 +625,12 @@ impl<'a> Batch<'a> {
 
     /// Adds a dispatch of `groups` workgroups, split over y above 65535 (kernels rebuild the flat
     /// workgroup id as `x + y * 65535`).
-    pub fn groups(
+    pub fn groups<P: ParamBlock>(
         &mut self,
-        k: &'a Kernels,
+        k: &'a Kernels<P>,
         entry: &'static str,
         bind: &'a wgpu::BindGroup,
-        params: Params,
+        params: P,
         groups: u32,
     ) {
         if groups == 0 {
@@ -564,10 +642,10 @@ impl<'a> Batch<'a> {
             [MAX_X, groups.div_ceil(MAX_X), 1]
         };
         self.steps.push(Step {
-            kernels: k,
+            pipeline: k.pipeline(entry),
             entry,
             bind,
-            params,
+            params: bytemuck::bytes_of(&params).to_vec(),
             dims,
         });
     }
@@ -616,8 +694,7 @@ impl<'a> Batch<'a> {
         let mut bytes = vec![0u8; PARAM_STRIDE as usize * steps.len()];
         for (i, s) in steps.iter().enumerate() {
             let o = i * PARAM_STRIDE as usize;
-            bytes[o..o + std::mem::size_of::<Params>()]
-                .copy_from_slice(bytemuck::bytes_of(&s.params));
+            bytes[o..o + s.params.len()].copy_from_slice(&s.params);
         }
         if !bytes.is_empty() {
             gpu.queue.write_buffer(&gpu.params, 0, &bytes);
@@ -645,7 +722,7 @@ impl<'a> Batch<'a> {
                 })
         };
         let dispatch = |pass: &mut wgpu::ComputePass, i: usize, s: &Step| {
-            pass.set_pipeline(s.kernels.pipeline(s.entry));
+            pass.set_pipeline(s.pipeline);
             pass.set_bind_group(0, s.bind, &[(i as u64 * PARAM_STRIDE) as u32]);
             pass.dispatch_workgroups(s.dims[0], s.dims[1], s.dims[2]);
         };

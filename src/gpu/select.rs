@@ -4,7 +4,7 @@
 //! the arithmetic is made exact), so parity is checked by equality of the selected sets.
 
 use super::scan::Scan;
-use super::{Batch, Gpu, GpuError, Kernels, Params};
+use super::{binding_set, param_block, wgsl, Batch, Gpu, GpuError, Kernels};
 use crate::lod::flat::Flat;
 pub use crate::lod::flat::ViewData;
 
@@ -12,10 +12,36 @@ pub use crate::lod::flat::ViewData;
 /// 128 MiB binding limit, and the readback small.
 const PAIRS_PER_BATCH: usize = 1 << 22;
 
+param_block! {
+    /// `struct Params` of `wgsl/select.wgsl`.
+    pub struct Params {
+        /// (view, meshlet) pairs.
+        n,
+        /// Meshlets per view.
+        per_view,
+    }
+}
+
+binding_set! {
+    /// The storage buffers of `wgsl/select.wgsl`, in binding order.
+    pub struct Buffers {
+        /// The flattened DAG's records.
+        records: Read,
+        /// One view per camera.
+        views: Read,
+        /// 1 where a (view, meshlet) pair is drawn.
+        flags: ReadWrite,
+        /// The flags' exclusive scan.
+        offsets: ReadWrite,
+        /// Out: drawn pairs, compacted.
+        ids: ReadWrite,
+    }
+}
+
 /// A flattened DAG on the GPU with the selection kernels.
 pub struct Selector<'a> {
     gpu: &'a Gpu,
-    kernels: Kernels,
+    kernels: Kernels<Params>,
     scan: Scan,
     records: wgpu::Buffer,
     meshlets: usize,
@@ -26,11 +52,10 @@ impl<'a> Selector<'a> {
     pub fn new(gpu: &'a Gpu, flat: &Flat) -> Self {
         Self {
             gpu,
-            kernels: Kernels::new(
+            kernels: Kernels::new::<Buffers>(
                 gpu,
                 "select",
-                include_str!("../../wgsl/select.wgsl"),
-                5,
+                wgsl!("select.wgsl"),
                 &["decide", "compact"],
             ),
             scan: Scan::new(gpu),
@@ -61,12 +86,20 @@ impl<'a> Selector<'a> {
         let flags = gpu.zeros("flags", pairs);
         let offsets = gpu.zeros("offsets", pairs);
         let ids = gpu.zeros("ids", pairs);
-        let bind = self
-            .kernels
-            .bind(gpu, &[&self.records, &view_buf, &flags, &offsets, &ids]);
+        let bind = self.kernels.bind(
+            gpu,
+            &Buffers {
+                records: &self.records,
+                views: &view_buf,
+                flags: &flags,
+                offsets: &offsets,
+                ids: &ids,
+            },
+        );
         let scan = self.scan.bind(gpu, &offsets, pairs);
         let p = Params {
-            w: [pairs as u32, n as u32, 0, 0, 0, 0, 0, 0],
+            n: pairs as u32,
+            per_view: n as u32,
         };
         let mut b = Batch::new(gpu);
         b.threads(&self.kernels, "decide", &bind, p, pairs);

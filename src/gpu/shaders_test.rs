@@ -1,4 +1,109 @@
-//! Every WGSL file parses, validates with naga and emits SPIR-V.
+//! Every WGSL module (behind the prelude) parses, validates with naga and emits SPIR-V, and its
+//! interface is the one the Rust driver declares: the `Params` struct member by member against
+//! the family's [`ParamBlock`], every binding by name and access against its [`BindingSet`], and
+//! read-only wherever no kernel of the module writes.
+
+use super::{Access, BindingSet, ParamBlock};
+use naga::valid::GlobalUse;
+
+fn source(file: &str) -> String {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
+    let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap();
+    read("prelude.wgsl") + &read(file)
+}
+
+fn parse(file: &str) -> (naga::Module, naga::valid::ModuleInfo) {
+    let src = source(file);
+    let module = naga::front::wgsl::parse_str(&src)
+        .unwrap_or_else(|e| panic!("{file}: {}", e.emit_to_string(&src)));
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::empty(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{file}: {e:?}"));
+    (module, info)
+}
+
+/// Checks `file`'s `Params` against `P` and its bindings against `B`; returns the problems.
+fn interface<'b, P: ParamBlock, B: BindingSet<'b>>(file: &str) -> Vec<String> {
+    let (module, info) = parse(file);
+    let mut bad = Vec::new();
+    // Params: binding 0, a struct of u32 members named and placed as the Rust fields.
+    let params = module
+        .global_variables
+        .iter()
+        .find(|(_, g)| g.binding.as_ref().is_some_and(|b| b.binding == 0))
+        .map(|(_, g)| &module.types[g.ty]);
+    match params.map(|t| &t.inner) {
+        Some(naga::TypeInner::Struct { members, span }) => {
+            let names: Vec<_> = members
+                .iter()
+                .map(|m| m.name.as_deref().unwrap_or(""))
+                .collect();
+            if names != P::FIELDS {
+                bad.push(format!(
+                    "{file}: Params members {names:?}, Rust {:?}",
+                    P::FIELDS
+                ));
+            }
+            for (i, m) in members.iter().enumerate() {
+                let scalar = matches!(module.types[m.ty].inner, naga::TypeInner::Scalar(s) if s == naga::Scalar::U32);
+                if m.offset != 4 * i as u32 || !scalar {
+                    bad.push(format!(
+                        "{file}: Params member {i} is not a u32 at byte {}",
+                        4 * i
+                    ));
+                }
+            }
+            if *span as usize != std::mem::size_of::<P>() {
+                bad.push(format!(
+                    "{file}: Params is {span} bytes, Rust {}",
+                    std::mem::size_of::<P>()
+                ));
+            }
+        }
+        _ => bad.push(format!("{file}: no Params struct at binding 0")),
+    }
+    // Storage bindings 1..: names, declared access, and whether any kernel writes.
+    let mut storage: Vec<_> = module
+        .global_variables
+        .iter()
+        .filter_map(|(h, g)| {
+            let b = g.binding.as_ref()?;
+            let naga::AddressSpace::Storage { access } = g.space else {
+                return None;
+            };
+            let written = (0..module.entry_points.len())
+                .any(|e| info.get_entry_point(e)[h].contains(GlobalUse::WRITE));
+            let declared = if access.contains(naga::StorageAccess::STORE) {
+                Access::ReadWrite
+            } else {
+                Access::Read
+            };
+            Some((
+                b.binding,
+                g.name.clone().unwrap_or_default(),
+                declared,
+                written,
+            ))
+        })
+        .collect();
+    storage.sort_by_key(|s| s.0);
+    let wgsl: Vec<_> = storage.iter().map(|s| (s.0, s.1.as_str(), s.2)).collect();
+    let rust: Vec<_> = (1..).zip(B::LAYOUT).map(|(i, &(n, a))| (i, n, a)).collect();
+    if wgsl != rust {
+        bad.push(format!("{file}: bindings {wgsl:?}, Rust {rust:?}"));
+    }
+    for (b, name, declared, written) in &storage {
+        if *declared == Access::ReadWrite && !written {
+            bad.push(format!(
+                "{file}: binding {b} ({name}) is never written: declare it read"
+            ));
+        }
+    }
+    bad
+}
 
 #[test]
 fn every_wgsl_file_validates_and_emits_spirv() {
@@ -6,18 +111,11 @@ fn every_wgsl_file_validates_and_emits_spirv() {
     let mut n = 0;
     for e in std::fs::read_dir(&dir).unwrap() {
         let p = e.unwrap().path();
-        if p.extension().is_none_or(|x| x != "wgsl") {
+        let file = p.file_name().unwrap().to_str().unwrap().to_string();
+        if p.extension().is_none_or(|x| x != "wgsl") || file == "prelude.wgsl" {
             continue;
         }
-        let src = std::fs::read_to_string(&p).unwrap();
-        let module = naga::front::wgsl::parse_str(&src)
-            .unwrap_or_else(|e| panic!("{}: {}", p.display(), e.emit_to_string(&src)));
-        let info = naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::empty(),
-        )
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("{}: {e:?}", p.display()));
+        let (module, info) = parse(&file);
         // Override constants (workgroup sizes) at their defaults, as a pipeline without values.
         let (module, info) = naga::back::pipeline_constants::process_overrides(
             &module,
@@ -25,11 +123,51 @@ fn every_wgsl_file_validates_and_emits_spirv() {
             None,
             &Default::default(),
         )
-        .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        .unwrap_or_else(|e| panic!("{file}: {e}"));
         let spv = naga::back::spv::write_vec(&module, &info, &Default::default(), None)
-            .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-        assert_eq!(spv[0], 0x0723_0203, "{}: SPIR-V magic", p.display());
+            .unwrap_or_else(|e| panic!("{file}: {e}"));
+        assert_eq!(spv[0], 0x0723_0203, "{file}: SPIR-V magic");
         n += 1;
     }
-    assert!(n >= 4, "expected the kernel files in {}", dir.display());
+    assert_eq!(n, 8, "the kernel modules in {}", dir.display());
+}
+
+#[test]
+fn every_module_matches_its_rust_interface() {
+    use super::{adjacency, bounds, grow, kmedoids, scan, select};
+    let bad: Vec<String> = [
+        interface::<adjacency::Params, adjacency::Buffers>("adjacency.wgsl"),
+        interface::<bounds::Params, bounds::Buffers>("bounds.wgsl"),
+        interface::<grow::Params, grow::Buffers>("grow.wgsl"),
+        interface::<kmedoids::Params, kmedoids::UpdateBuffers>("kmedoids.wgsl"),
+        interface::<kmedoids::Params, kmedoids::AssignBuffers>("assign.wgsl"),
+        interface::<kmedoids::Params, kmedoids::SplitBuffers>("split.wgsl"),
+        interface::<scan::Params, scan::Buffers>("scan.wgsl"),
+        interface::<select::Params, select::Buffers>("select.wgsl"),
+    ]
+    .concat();
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+#[test]
+fn the_prelude_part_is_the_rust_part() {
+    let (module, _) = parse("bounds.wgsl");
+    let (_, part) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some("PART"))
+        .expect("PART in the prelude");
+    let value = match module.global_expressions[part.init] {
+        naga::Expression::Literal(naga::Literal::U32(v)) => v as usize,
+        ref e => panic!("PART is {e:?}"),
+    };
+    assert_eq!(value, super::PART);
+}
+
+#[test]
+fn the_interface_check_catches_a_mismatch() {
+    // A binding set with kmedoids' names against assign.wgsl must fail, as must a wrong Params.
+    use super::kmedoids;
+    assert!(!interface::<kmedoids::Params, kmedoids::UpdateBuffers>("assign.wgsl").is_empty());
+    assert!(!interface::<super::scan::Params, kmedoids::AssignBuffers>("assign.wgsl").is_empty());
 }

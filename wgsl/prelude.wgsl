@@ -1,0 +1,15 @@
+// The prelude of every kernel module: src/gpu/mod.rs (`wgsl!`) puts it in front of each file here.
+// One definition of what the modules share; gpu::shaders_test checks PART against the Rust side.
+
+// Elements per part of a split array (gpu::PART, 2^25 u32 = 128 MiB: lavapipe's binding limit).
+const PART: u32 = 33554432u;
+// "No index": an unassigned label, an unreached distance, a padded neighbour slot.
+const NONE: u32 = 0xffffffffu;
+
+// Flat thread id of a @workgroup_size(64) dispatch (Batch splits more than 65535 groups over y).
+fn flat(gid: vec3<u32>) -> u32 { return gid.x + gid.y * 65535u * 64u; }
+// Flat workgroup id of the same split.
+fn group(wid: vec3<u32>) -> u32 { return wid.x + wid.y * 65535u; }
+// Step of a grid-stride loop over a @workgroup_size(64) dispatch (few workgroups on a CPU adapter).
+fn stride(nwg: vec3<u32>) -> u32 { return nwg.x * nwg.y * 64u; }
+
