@@ -1,5 +1,8 @@
 // Shared by the mesh-shader pass and the vertex-pipeline baseline (src/render).
 
+// BINDING_*, FLAG_*, COUNTER_* and TASK_GROUP, written by build.rs from src/render/interface.rs.
+#include "interface.glsl"
+
 layout(push_constant) uniform Push {
     mat4 view_proj;
     // xyz: camera position (world).
@@ -8,17 +11,13 @@ layout(push_constant) uniform Push {
     vec4 box_min;
     vec4 box_step;
     uint meshlet_count;
-    // Bit 0: frustum culling, bit 1: normal-cone culling, bit 2: unlit (shade.frag), bit 3: the LOD
-    // task shader records drawn meshlets (meshlet.task).
+    // FLAG_FRUSTUM, FLAG_CONE, FLAG_UNLIT (shade.frag), FLAG_RECORD_IDS (the LOD task shader).
     uint flags;
 } pc;
 
-layout(std430, set = 0, binding = 0) readonly buffer Positions { float positions[]; };
-// 0: meshlets culled by the frustum, 1: by the normal cone, 2: meshlets drawn; 3, 4: triangles
-// culled by the frustum and by the cone; 5: LOD meshlets not on the cut; from 8: drawn-meshlet
-// bits when flag bit 3 is set.
-layout(std430, set = 0, binding = 5) buffer Counters { uint counters[]; };
+layout(std430, set = 0, binding = BINDING_POSITIONS) readonly buffer Positions { float positions[]; };
+// COUNTER_* slots; from COUNTER_WORDS, drawn-meshlet bits when FLAG_RECORD_IDS is set.
+layout(std430, set = 0, binding = BINDING_COUNTERS) buffer Counters { uint counters[]; };
 
 vec3 position(uint v) { return vec3(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]); }
 
-const uint TASK_GROUP = 32;

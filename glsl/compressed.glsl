@@ -5,9 +5,9 @@
 // the origin and 2^e), which is exactly the CPU's dequantise when q < 2^24 (q * 2^e is exact in
 // f32, so the sum is rounded once, as the CPU rounds its f64 sum once).
 
-layout(std430, set = 0, binding = 1) readonly buffer Offsets { uint offsets[]; };
-layout(std430, set = 0, binding = 2) readonly buffer Data { uint data[]; };
-layout(std430, set = 0, binding = 3) readonly buffer FirstTriangle { uint first_triangle[]; };
+layout(std430, set = 0, binding = BINDING_DESCRIPTORS) readonly buffer Offsets { uint offsets[]; };
+layout(std430, set = 0, binding = BINDING_DATA) readonly buffer Data { uint data[]; };
+layout(std430, set = 0, binding = BINDING_TRIANGLES) readonly buffer FirstTriangle { uint first_triangle[]; };
 
 // `n` (<= 32) bits at bit offset `at`, least significant bit first (src/compress read_bits).
 uint bits_at(uint at, uint n) {

@@ -10,20 +10,20 @@
 #if DESC == 3
 // Monolithic: one block offset per meshlet; the block holds 12 bound floats, the counts, copied
 // positions and the triangles.
-layout(std430, set = 0, binding = 1) readonly buffer Offsets { uint offsets[]; };
+layout(std430, set = 0, binding = BINDING_DESCRIPTORS) readonly buffer Offsets { uint offsets[]; };
 #else
 // Split: vertex offset, triangle byte offset, counts. NVIDIA A and B: see descriptor.rs.
-layout(std430, set = 0, binding = 1) readonly buffer Descriptors { uvec4 desc[]; };
+layout(std430, set = 0, binding = BINDING_DESCRIPTORS) readonly buffer Descriptors { uvec4 desc[]; };
 #endif
 // Split, A: global vertex indices. B: the pack buffer. Monolithic: the blocks.
-layout(std430, set = 0, binding = 2) readonly buffer Data { uint data[]; };
+layout(std430, set = 0, binding = BINDING_DATA) readonly buffer Data { uint data[]; };
 #if DESC <= 1
 // Local triangle corners, one byte each, four to a word.
-layout(std430, set = 0, binding = 3) readonly buffer Triangles { uint triangles[]; };
+layout(std430, set = 0, binding = BINDING_TRIANGLES) readonly buffer Triangles { uint triangles[]; };
 #endif
 #if DESC == 0
 // Split's task descriptor: (sphere centre, radius), (cone apex, cutoff), (axis, triangle count).
-layout(std430, set = 0, binding = 4) readonly buffer Task { vec4 task[]; };
+layout(std430, set = 0, binding = BINDING_TASK) readonly buffer Task { vec4 task[]; };
 #endif
 
 const uint BLOCK_HEADER = 13;

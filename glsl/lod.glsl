@@ -26,8 +26,8 @@ struct LodView {
     uint pad;
 };
 
-layout(std430, set = 0, binding = 6) readonly buffer Records { Record records[]; };
-layout(std430, set = 0, binding = 7) readonly buffer Views { LodView lod_view; };
+layout(std430, set = 0, binding = BINDING_LOD_RECORDS) readonly buffer Records { Record records[]; };
+layout(std430, set = 0, binding = BINDING_LOD_VIEW) readonly buffer Views { LodView lod_view; };
 
 float trunc12(float x) {
     uint b = floatBitsToUint(x);

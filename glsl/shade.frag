@@ -8,7 +8,7 @@ layout(location = 0) in vec3 world;
 layout(location = 0) out vec4 colour;
 
 void main() {
-    if ((pc.flags & 4u) != 0u) {
+    if ((pc.flags & FLAG_UNLIT) != 0u) {
         colour = vec4(1.0);
         return;
     }

@@ -15,7 +15,10 @@ use meshletlab::strategy::{self, Options};
 fn every_shader_is_valid_spirv() {
     let dir = std::env::temp_dir().join(format!("meshletlab-spv-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    for (name, spv) in SHADERS {
+    let shaders = meshletlab::render::interface::Shader::all();
+    assert_eq!(shaders.len(), SHADERS.len());
+    for (shader, spv) in shaders.iter().zip(SHADERS) {
+        let name = shader.label();
         assert!(
             !spv.is_empty(),
             "{name}: not compiled (glslangValidator missing at build time)"

@@ -53,6 +53,7 @@ impl Context {
             .application_name(c"meshletlab")
             .api_version(vk::API_VERSION_1_3);
         let layer = c"VK_LAYER_KHRONOS_validation";
+        // SAFETY: a query on the loaded entry, no handles involved.
         let have_layer = unsafe { entry.enumerate_instance_layer_properties() }
             .unwrap_or_default()
             .iter()
@@ -74,6 +75,8 @@ impl Context {
             .application_info(&app)
             .enabled_layer_names(&layers)
             .enabled_extension_names(&exts);
+        // SAFETY: a valid create info whose strings and layers outlive the call; destroyed in Drop
+        // (or below when no device qualifies).
         let instance = unsafe { entry.create_instance(&info, None) }
             .map_err(|e| RenderError::NoVulkan(format!("vkCreateInstance: {e}")))?;
         let validation = if validate {
@@ -81,16 +84,19 @@ impl Context {
         } else {
             None
         };
+        // SAFETY: `instance` is live.
         let devices = unsafe { instance.enumerate_physical_devices() }
             .map_err(vk_err("enumerate physical devices"))?;
         let mut seen = Vec::new();
         let mut chosen = None;
         for &pd in &devices {
+            // SAFETY: `pd` comes from this instance (so do the next three queries).
             let props = unsafe { instance.get_physical_device_properties(pd) };
             let name = props
                 .device_name_as_c_str()
                 .map(|c| c.to_string_lossy().into_owned())
                 .unwrap_or_default();
+            // SAFETY: as above.
             let has_ext = unsafe { instance.enumerate_device_extension_properties(pd) }
                 .unwrap_or_default()
                 .iter()
@@ -101,6 +107,7 @@ impl Context {
                 .push_next(&mut ms)
                 .push_next(&mut v13);
             if has_ext {
+                // SAFETY: as above; `f2` chains only structs that outlive the call.
                 unsafe { instance.get_physical_device_features2(pd, &mut f2) };
             }
             let ok = has_ext
@@ -109,6 +116,7 @@ impl Context {
                 && v13.dynamic_rendering == vk::TRUE
                 && v13.maintenance4 == vk::TRUE
                 && props.api_version >= vk::API_VERSION_1_3;
+            // SAFETY: as above.
             let family = unsafe { instance.get_physical_device_queue_family_properties(pd) }
                 .iter()
                 .position(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS));
@@ -131,6 +139,7 @@ impl Context {
             }
         }
         let Some((physical, family, name, mesh_queries, props)) = chosen else {
+            // SAFETY: nothing was made from the instance yet.
             unsafe { instance.destroy_instance(None) };
             return Err(RenderError::NoMeshShader(seen.join(", ")));
         };
@@ -138,6 +147,7 @@ impl Context {
         // scans pick a variant by this; lavapipe's subgroups are 8 wide).
         let mut sub = vk::PhysicalDeviceSubgroupProperties::default();
         let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut sub);
+        // SAFETY: `physical` comes from this instance; `p2` chains structs that outlive the call.
         unsafe { instance.get_physical_device_properties2(physical, &mut p2) };
         let subgroup_size = sub.subgroup_size;
         let mesh_subgroups = sub
@@ -167,9 +177,12 @@ impl Context {
             .enabled_features(&core)
             .push_next(&mut ms)
             .push_next(&mut v13);
+        // SAFETY: a valid create info for a device of this instance; destroyed in Drop.
         let device = unsafe { instance.create_device(physical, &info, None) }
             .map_err(vk_err("create device"))?;
+        // SAFETY: the family and queue index were requested in the create info.
         let queue = unsafe { device.get_device_queue(family, 0) };
+        // SAFETY: a pool for that family on the live device; destroyed in Drop.
         let pool = unsafe {
             device.create_command_pool(
                 &vk::CommandPoolCreateInfo::default()
@@ -179,6 +192,7 @@ impl Context {
             )
         }
         .map_err(vk_err("create command pool"))?;
+        // SAFETY: `physical` comes from this instance.
         let memory = unsafe { instance.get_physical_device_memory_properties(physical) };
         let mesh = ash::ext::mesh_shader::Device::new(&instance, &device);
         Ok(Self {
@@ -202,33 +216,38 @@ impl Context {
     }
 
     /// A buffer in host-visible, coherent memory (lavapipe has nothing else; on a discrete GPU a
-    /// device-local copy would be faster, which the render timings do not include anyway).
+    /// device-local copy would be faster, which the render timings do not include anyway). Freed
+    /// when dropped, also when a later step here fails.
     pub fn buffer(&self, size: u64, usage: vk::BufferUsageFlags) -> Result<Buffer, RenderError> {
         let size = size.max(16);
+        let d = &self.device;
+        // SAFETY: a valid create info on a live device; the handle is owned by `b` below.
         let buf = unsafe {
-            self.device.create_buffer(
+            d.create_buffer(
                 &vk::BufferCreateInfo::default().size(size).usage(usage),
                 None,
             )
         }
         .map_err(vk_err("create buffer"))?;
-        let req = unsafe { self.device.get_buffer_memory_requirements(buf) };
-        let mem = self.allocate(
+        let mut b = Buffer {
+            device: d.clone(),
+            buf,
+            mem: vk::DeviceMemory::null(),
+            ptr: std::ptr::null_mut(),
+            size,
+        };
+        // SAFETY: `buf` was created on this device above.
+        let req = unsafe { d.get_buffer_memory_requirements(buf) };
+        b.mem = self.allocate(
             req,
             vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT,
         )?;
-        unsafe { self.device.bind_buffer_memory(buf, mem, 0) }.map_err(vk_err("bind buffer"))?;
-        let ptr = unsafe {
-            self.device
-                .map_memory(mem, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty())
-        }
-        .map_err(vk_err("map memory"))? as *mut u8;
-        Ok(Buffer {
-            buf,
-            mem,
-            ptr,
-            size,
-        })
+        // SAFETY: fresh memory of a type the requirements allow, bound once at offset 0.
+        unsafe { d.bind_buffer_memory(buf, b.mem, 0) }.map_err(vk_err("bind buffer"))?;
+        // SAFETY: host-visible memory, mapped once for the buffer's life (freeing unmaps it).
+        b.ptr = unsafe { d.map_memory(b.mem, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty()) }
+            .map_err(vk_err("map memory"))? as *mut u8;
+        Ok(b)
     }
 
     /// A buffer holding `data`.
@@ -261,6 +280,7 @@ impl Context {
                 "no suitable memory type",
                 vk::Result::ERROR_OUT_OF_DEVICE_MEMORY,
             ))?;
+        // SAFETY: a valid allocate info with a memory type index of this device.
         unsafe {
             self.device.allocate_memory(
                 &vk::MemoryAllocateInfo::default()
@@ -275,6 +295,8 @@ impl Context {
     /// Records `f` into a fresh command buffer, submits it and waits.
     pub fn submit(&self, f: impl FnOnce(vk::CommandBuffer)) -> Result<(), RenderError> {
         let d = &self.device;
+        // SAFETY: the pool belongs to this device and is used from this thread only (`&self`
+        // methods of one context are not called concurrently: Context is not Sync).
         let cmd = unsafe {
             d.allocate_command_buffers(
                 &vk::CommandBufferAllocateInfo::default()
@@ -283,6 +305,7 @@ impl Context {
             )
         }
         .map_err(vk_err("allocate command buffer"))?[0];
+        // SAFETY: a freshly allocated primary command buffer in the initial state.
         unsafe {
             d.begin_command_buffer(
                 cmd,
@@ -292,6 +315,8 @@ impl Context {
         }
         .map_err(vk_err("begin command buffer"))?;
         f(cmd);
+        // SAFETY (the three calls): `cmd` is recording; it is submitted once to this device's
+        // queue, and the wait makes it idle before it is freed below.
         let result = (|| {
             unsafe { d.end_command_buffer(cmd) }.map_err(vk_err("end command buffer"))?;
             let cmds = [cmd];
@@ -300,21 +325,17 @@ impl Context {
                 .map_err(vk_err("queue submit"))?;
             unsafe { d.queue_wait_idle(self.queue) }.map_err(vk_err("queue wait idle"))
         })();
+        // SAFETY: the queue is idle (or the submission failed), so `cmd` is not pending.
         unsafe { d.free_command_buffers(self.pool, &[cmd]) };
         result
-    }
-
-    /// Frees a buffer.
-    pub fn destroy_buffer(&self, b: &Buffer) {
-        unsafe {
-            self.device.destroy_buffer(b.buf, None);
-            self.device.free_memory(b.mem, None);
-        }
     }
 }
 
 impl Drop for Context {
     fn drop(&mut self) {
+        // SAFETY: every object made from the device is gone (passes and buffers borrow or clone
+        // it and are dropped first: `Pass<'a>` borrows the context); wait idle, then destroy in
+        // reverse creation order.
         unsafe {
             let _ = self.device.device_wait_idle();
             self.device.destroy_command_pool(self.pool, None);
@@ -327,14 +348,107 @@ impl Drop for Context {
     }
 }
 
-/// A host-visible buffer, persistently mapped.
+/// A host-visible buffer, persistently mapped; destroyed with its memory when dropped (after the
+/// device is idle: its owner waits, as `Pass` does).
 pub struct Buffer {
+    device: ash::Device,
     /// The buffer.
     pub buf: vk::Buffer,
     mem: vk::DeviceMemory,
     ptr: *mut u8,
     /// Size in bytes.
     pub size: u64,
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        // SAFETY: the buffer and memory were made on `device` and are not in use (owners wait
+        // for the device first); null handles (a failed `Context::buffer`) are ignored by Vulkan.
+        unsafe {
+            self.device.destroy_buffer(self.buf, None);
+            self.device.free_memory(self.mem, None);
+        }
+    }
+}
+
+/// A Vulkan handle destroyed by `destroy` when dropped, so every path out of a function that
+/// made it, error paths included, frees it.
+pub struct Owned<T: Copy> {
+    device: ash::Device,
+    handle: T,
+    destroy: fn(&ash::Device, T),
+}
+
+impl<T: Copy> Owned<T> {
+    /// Takes ownership of `handle`, made on `device`.
+    pub fn new(device: &ash::Device, handle: T, destroy: fn(&ash::Device, T)) -> Self {
+        Self {
+            device: device.clone(),
+            handle,
+            destroy,
+        }
+    }
+
+    /// The raw handle (valid while `self` lives).
+    pub fn get(&self) -> T {
+        self.handle
+    }
+}
+
+impl<T: Copy> Drop for Owned<T> {
+    fn drop(&mut self) {
+        (self.destroy)(&self.device, self.handle)
+    }
+}
+
+// The destroyers `Owned` calls. SAFETY (all of them): the handle was made on `d` and is owned
+// by exactly one `Owned`, whose owner waits for the device to be idle before dropping it (or
+// drops it before ever submitting work that uses it).
+
+/// Destroys a pipeline.
+pub fn destroy_pipeline(d: &ash::Device, h: vk::Pipeline) {
+    // SAFETY: see the note above the destroyers.
+    unsafe { d.destroy_pipeline(h, None) }
+}
+/// Destroys a pipeline layout.
+pub fn destroy_pipeline_layout(d: &ash::Device, h: vk::PipelineLayout) {
+    // SAFETY: see the note above the destroyers.
+    unsafe { d.destroy_pipeline_layout(h, None) }
+}
+/// Destroys a descriptor pool (and frees its sets).
+pub fn destroy_descriptor_pool(d: &ash::Device, h: vk::DescriptorPool) {
+    // SAFETY: see the note above the destroyers.
+    unsafe { d.destroy_descriptor_pool(h, None) }
+}
+/// Destroys a descriptor-set layout.
+pub fn destroy_descriptor_set_layout(d: &ash::Device, h: vk::DescriptorSetLayout) {
+    // SAFETY: see the note above the destroyers.
+    unsafe { d.destroy_descriptor_set_layout(h, None) }
+}
+/// Destroys a shader module.
+pub fn destroy_shader_module(d: &ash::Device, h: vk::ShaderModule) {
+    // SAFETY: see the note above the destroyers.
+    unsafe { d.destroy_shader_module(h, None) }
+}
+/// Destroys a query pool.
+pub fn destroy_query_pool(d: &ash::Device, h: vk::QueryPool) {
+    // SAFETY: see the note above the destroyers.
+    unsafe { d.destroy_query_pool(h, None) }
+}
+/// Destroys an image.
+pub fn destroy_image(d: &ash::Device, h: vk::Image) {
+    // SAFETY: see the note above the destroyers.
+    unsafe { d.destroy_image(h, None) }
+}
+/// Destroys an image view.
+pub fn destroy_image_view(d: &ash::Device, h: vk::ImageView) {
+    // SAFETY: see the note above the destroyers.
+    unsafe { d.destroy_image_view(h, None) }
+}
+/// Frees device memory.
+pub fn free_memory(d: &ash::Device, h: vk::DeviceMemory) {
+    // SAFETY: see the note above the destroyers.
+    unsafe { d.free_memory(h, None) }
 }
 
 impl Buffer {

@@ -5,6 +5,7 @@
 
 pub mod compressed;
 pub mod context;
+pub mod interface;
 pub mod pass;
 pub mod validation;
 

@@ -3,7 +3,8 @@
 //! the classic vertex pipeline (one indexed draw of the same mesh) as the baseline.
 
 use super::compressed::{Decoder, Upload};
-use super::context::{Buffer, Context};
+use super::context::{self as vkc, Buffer, Context, Owned};
+use super::interface::{self, Compact, Layout, Shader, Size};
 use super::{vk_err, Camera, RenderError, HEIGHT, WIDTH};
 use crate::lod::flat::{loaded, Flat, Query, ViewData};
 use crate::mesh::Mesh;
@@ -14,8 +15,7 @@ use ash::vk;
 const SAMPLES: vk::SampleCountFlags = vk::SampleCountFlags::TYPE_4;
 const COLOR: vk::Format = vk::Format::R8G8B8A8_UNORM;
 const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
-/// Meshlets per task workgroup (`TASK_GROUP` in glsl/common.glsl).
-const TASK_GROUP: u32 = 32;
+use interface::{FLAG_CONE, FLAG_FRUSTUM, FLAG_RECORD_IDS, FLAG_UNLIT, TASK_GROUP};
 
 /// Which pipeline draws, and how.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -105,10 +105,8 @@ struct Push {
     flags: u32,
 }
 
-/// Bytes of the task shader's counters (`glsl/common.glsl`); a LOD pass's drawn-id bitmap follows.
-const COUNTER_BYTES: u64 = 32;
-/// Push-constant flag: the LOD task shader records each drawn meshlet's bit after the counters.
-const FLAG_RECORD_IDS: u32 = 1 << 3;
+/// Bytes of the task shader's counters; a LOD pass's drawn-id bitmap follows.
+const COUNTER_BYTES: u64 = 4 * interface::COUNTER_WORDS as u64;
 
 /// Where each level starts in a flattened DAG (see [`Flat`]).
 struct LodLayout {
@@ -140,10 +138,66 @@ struct Fields {
     device_bytes: usize,
 }
 
+/// A render target (fields drop in order: the view before the image before its memory).
 struct Target {
-    image: vk::Image,
-    memory: vk::DeviceMemory,
-    view: vk::ImageView,
+    view: Owned<vk::ImageView>,
+    image: Owned<vk::Image>,
+    _memory: Owned<vk::DeviceMemory>,
+}
+
+/// The storage buffers of descriptor set 0, one field per binding in binding order
+/// ([`interface::BINDINGS`]; a test checks [`Bindings::NAMES`] against it).
+struct Bindings {
+    positions: Buffer,
+    descriptors: Buffer,
+    data: Buffer,
+    triangles: Buffer,
+    task: Buffer,
+    counters: Buffer,
+    lod_records: Buffer,
+    lod_view: Buffer,
+}
+
+impl Bindings {
+    /// The field names, in declaration order.
+    #[cfg(test)]
+    const NAMES: [&'static str; 8] = [
+        "positions",
+        "descriptors",
+        "data",
+        "triangles",
+        "task",
+        "counters",
+        "lod_records",
+        "lod_view",
+    ];
+
+    /// The buffers in binding order.
+    fn in_order(&self) -> [&Buffer; 8] {
+        [
+            &self.positions,
+            &self.descriptors,
+            &self.data,
+            &self.triangles,
+            &self.task,
+            &self.counters,
+            &self.lod_records,
+            &self.lod_view,
+        ]
+    }
+}
+
+/// What a pass uploads: every binding but the counters (made by `finish`), and the index buffer
+/// of the vertex baseline (not a storage binding).
+struct Uploads {
+    positions: Buffer,
+    descriptors: Buffer,
+    data: Buffer,
+    triangles: Buffer,
+    task: Buffer,
+    index: Buffer,
+    lod_records: Buffer,
+    lod_view: Buffer,
 }
 
 /// What a pass holds on the device.
@@ -178,12 +232,14 @@ enum Input {
     Pulled,
 }
 
-/// A mesh and its meshlets on the device, with the pipelines and targets to draw them.
+/// Shaded and meshlet-id pipelines of one task shader.
+type PipelinePair = (Owned<vk::Pipeline>, Owned<vk::Pipeline>);
+
+/// A mesh and its meshlets on the device, with the pipelines and targets to draw them. Every
+/// Vulkan object is owned by a field that frees it; fields drop in declaration order, after
+/// `drop` has waited for the device.
 pub struct Pass<'a> {
     ctx: &'a Context,
-    buffers: Vec<Buffer>,
-    counters: Buffer,
-    readback: Buffer,
     index_count: u32,
     meshlet_count: u32,
     drawn: Drawn,
@@ -191,19 +247,25 @@ pub struct Pass<'a> {
     device_bytes: usize,
     /// The largest storage buffer bound (the one `maxStorageBufferRange` limits).
     largest_binding: u64,
-    set_layout: vk::DescriptorSetLayout,
-    pool: vk::DescriptorPool,
-    set: vk::DescriptorSet,
-    layout: vk::PipelineLayout,
-    mesh_shade: vk::Pipeline,
-    mesh_ids: vk::Pipeline,
-    vertex: vk::Pipeline,
-    /// For a LOD pass: the DAG's level layout and the (shaded, meshlet-id) LOD pipelines.
-    lod: Option<(LodLayout, (vk::Pipeline, vk::Pipeline))>,
-    targets: [Target; 3],
-    queries: vk::QueryPool,
+    queries: Owned<vk::QueryPool>,
     /// Pipeline statistics (task, mesh invocations) and mesh primitives generated.
-    mesh_queries: Option<(vk::QueryPool, vk::QueryPool)>,
+    mesh_queries: Option<(Owned<vk::QueryPool>, Owned<vk::QueryPool>)>,
+    targets: [Target; 3],
+    /// Task + mesh pipelines, shaded and coloured by meshlet id (none for GI and TS compact).
+    mesh_shade: Option<Owned<vk::Pipeline>>,
+    mesh_ids: Option<Owned<vk::Pipeline>>,
+    /// The vertex pipeline (none for the mesh-shader-only compressed formats).
+    vertex: Option<Owned<vk::Pipeline>>,
+    /// For a LOD pass: the DAG's level layout and the (shaded, meshlet-id) LOD pipelines.
+    lod: Option<(LodLayout, PipelinePair)>,
+    layout: Owned<vk::PipelineLayout>,
+    /// Freed with its pool.
+    set: vk::DescriptorSet,
+    _pool: Owned<vk::DescriptorPool>,
+    _set_layout: Owned<vk::DescriptorSetLayout>,
+    bindings: Bindings,
+    index: Buffer,
+    readback: Buffer,
 }
 
 /// Vulkan has no empty buffers: an unused binding gets one zero vec4.
@@ -223,12 +285,18 @@ fn spirv(bytes: &[u8]) -> Result<Vec<u32>, RenderError> {
         .map_err(|e| RenderError::NoVulkan(format!("bad SPIR-V: {e}")))
 }
 
-fn shader(name: &str) -> &'static [u8] {
-    super::SHADERS
-        .iter()
-        .find(|(n, _)| *n == name)
-        .map(|(_, b)| *b)
-        .unwrap_or_else(|| panic!("shader {name} not in SHADERS"))
+fn shader(s: Shader) -> &'static [u8] {
+    super::SHADERS[s.index()]
+}
+
+/// The shaders' name for a descriptor layout.
+fn layout_of(f: Format) -> Layout {
+    match f {
+        Format::Split => Layout::Split,
+        Format::NvidiaA => Layout::NvidiaA,
+        Format::NvidiaB => Layout::NvidiaB,
+        Format::Monolithic => Layout::Monolithic,
+    }
 }
 
 impl<'a> Pass<'a> {
@@ -314,36 +382,40 @@ impl<'a> Pass<'a> {
                 t.max(m.triangle_count as usize),
             )
         });
-        let size = if small(limits) { "64/126" } else { "256/256" };
-        let task_spv = shader(&format!("meshlet.task ({format})"));
-        let mesh_spv = shader(&format!("meshlet.mesh ({format}, {size})"));
+        let size = if small(limits) {
+            Size::Small
+        } else {
+            Size::Large
+        };
+        let task_spv = shader(Shader::MeshletTask(layout_of(format)));
+        let mesh_spv = shader(Shader::MeshletMesh(layout_of(format), size));
         let packed = descriptor::pack(mesh, ml, format)?;
         let task: Vec<[f32; 4]> = if packed.task.is_empty() {
             vec![[0.0; 4]]
         } else {
             packed.task.clone()
         };
-        let buffers = vec![
-            ctx.upload(
+        let uploads = Uploads {
+            positions: ctx.upload(
                 &mesh.positions,
                 storage | vk::BufferUsageFlags::VERTEX_BUFFER,
             )?,
-            ctx.upload(&nonempty(&packed.descriptors), storage)?,
-            ctx.upload(&nonempty(&packed.data), storage)?,
-            ctx.upload(&nonempty(&packed.triangles), storage)?,
-            ctx.upload(&task, storage)?,
-            ctx.upload(&mesh.indices, vk::BufferUsageFlags::INDEX_BUFFER)?,
-            match lod {
+            descriptors: ctx.upload(&nonempty(&packed.descriptors), storage)?,
+            data: ctx.upload(&nonempty(&packed.data), storage)?,
+            triangles: ctx.upload(&nonempty(&packed.triangles), storage)?,
+            task: ctx.upload(&task, storage)?,
+            index: ctx.upload(&mesh.indices, vk::BufferUsageFlags::INDEX_BUFFER)?,
+            lod_records: match lod {
                 Some(f) if !f.records.is_empty() => ctx.upload(&f.records, storage)?,
                 _ => ctx.upload(&[0u32; 4], storage)?,
             },
-            ctx.buffer(std::mem::size_of::<ViewData>() as u64, storage)?,
-        ];
-        let lod_task = lod.map(|_| shader("meshlet.task (split, lod)"));
+            lod_view: ctx.buffer(std::mem::size_of::<ViewData>() as u64, storage)?,
+        };
+        let lod_task = lod.map(|_| shader(Shader::LodTask));
         let modules = Modules {
             task: Some(task_spv),
             mesh: Some(mesh_spv),
-            vertex: Some((shader("baseline.vert"), Input::Buffer)),
+            vertex: Some((shader(Shader::BaselineVert), Input::Buffer)),
             lod_task,
         };
         let lod_layout = lod.map(|f| LodLayout {
@@ -352,7 +424,7 @@ impl<'a> Pass<'a> {
         });
         Self::finish(
             ctx,
-            buffers,
+            uploads,
             modules,
             Fields {
                 index_count: mesh.indices.len() as u32,
@@ -374,36 +446,40 @@ impl<'a> Pass<'a> {
         use crate::compress::file::Format as C;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let how = super::compressed::decoder(up.format)?;
-        let name = up.format.name();
-        let size = if small { "64/126" } else { "256/256" };
-        let (task, mesh, vertex) = match (up.format, how) {
-            (C::LacedWires, _) => (
-                Some(shader("compressed.task (laced-wires)")),
-                Some(shader(&format!(
-                    "laced.mesh (64/{}{})",
-                    if small { 126 } else { 256 },
-                    if subgroups { ", subgroups" } else { "" }
-                ))),
+        let size = if small { Size::Small } else { Size::Large };
+        let compact = match up.format {
+            C::TsCompact => Some(Compact::Ts),
+            C::IxCompact => Some(Compact::Ix),
+            C::ScCompact => Some(Compact::Sc),
+            C::GiCompact => Some(Compact::Gi),
+            _ => None,
+        };
+        let (task, mesh, vertex) = match (up.format, how, compact) {
+            (C::LacedWires, _, _) => (
+                Some(shader(Shader::CompressedTask { laced: true })),
+                Some(shader(Shader::LacedMesh { small, subgroups })),
                 None,
             ),
-            (_, Decoder::Mesh) => (
-                Some(shader("compressed.task")),
-                Some(shader(&format!("compact.mesh ({name}, {size})"))),
+            (_, Decoder::Mesh, Some(c)) => (
+                Some(shader(Shader::CompressedTask { laced: false })),
+                Some(shader(Shader::CompactMesh(c, size))),
                 None,
             ),
-            (_, Decoder::Vertex) => (None, None, Some(shader(&format!("compact.vert ({name})")))),
+            (_, Decoder::Vertex, Some(c)) => (None, None, Some(shader(Shader::CompactVert(c)))),
+            // `decoder` refuses every other format.
+            _ => return Err(RenderError::NoShaderDecoder(up.format.name())),
         };
         let dummy = [0u32; 4];
-        let buffers = vec![
-            ctx.upload(&dummy, storage)?,
-            ctx.upload(&up.offsets, storage)?,
-            ctx.upload(&up.words, storage)?,
-            ctx.upload(&nonempty(&up.first_triangle), storage)?,
-            ctx.upload(&dummy, storage)?,
-            ctx.upload(&dummy, vk::BufferUsageFlags::INDEX_BUFFER)?,
-            ctx.upload(&dummy, storage)?,
-            ctx.upload(&dummy, storage)?,
-        ];
+        let uploads = Uploads {
+            positions: ctx.upload(&dummy, storage)?,
+            descriptors: ctx.upload(&up.offsets, storage)?,
+            data: ctx.upload(&up.words, storage)?,
+            triangles: ctx.upload(&nonempty(&up.first_triangle), storage)?,
+            task: ctx.upload(&dummy, storage)?,
+            index: ctx.upload(&dummy, vk::BufferUsageFlags::INDEX_BUFFER)?,
+            lod_records: ctx.upload(&dummy, storage)?,
+            lod_view: ctx.upload(&dummy, storage)?,
+        };
         let modules = Modules {
             task,
             mesh,
@@ -412,7 +488,7 @@ impl<'a> Pass<'a> {
         };
         Self::finish(
             ctx,
-            buffers,
+            uploads,
             modules,
             Fields {
                 index_count: 3 * up.triangles as u32,
@@ -430,33 +506,51 @@ impl<'a> Pass<'a> {
 
     fn finish(
         ctx: &'a Context,
-        buffers: Vec<Buffer>,
+        up: Uploads,
         modules: Modules,
         fields: Fields,
         lod_layout: Option<LodLayout>,
     ) -> Result<Self, RenderError> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        const NAMES: [&str; 5] = [
-            "positions",
-            "descriptors / offsets",
-            "meshlet data",
-            "triangles / first triangles",
-            "task data",
+        // What the limit check names (the first five bindings hold the data).
+        let checked = [
+            (&up.positions, "positions"),
+            (&up.descriptors, "descriptors / offsets"),
+            (&up.data, "meshlet data"),
+            (&up.triangles, "triangles / first triangles"),
+            (&up.task, "task data"),
         ];
-        let largest_binding = buffers.iter().take(NAMES.len()).map(|b| b.size).max();
-        for (b, what) in buffers.iter().zip(NAMES) {
+        let largest_binding = checked.iter().map(|(b, _)| b.size).max().unwrap_or(0);
+        for (b, what) in checked {
             if b.size > ctx.max_storage_range {
                 let (bytes, limit) = (b.size, ctx.max_storage_range);
-                for b in &buffers {
-                    ctx.destroy_buffer(b);
-                }
                 return Err(RenderError::TooLarge { what, bytes, limit });
             }
         }
-        // Eight counters; a LOD pass adds one bit per meshlet for the drawn-id record
+        // The counters; a LOD pass adds one bit per meshlet for the drawn-id record
         // (`render_lod_ids`).
         let id_words = lod_layout.as_ref().map_or(0, |l| l.total.div_ceil(32));
         let counters = ctx.buffer(COUNTER_BYTES + 4 * id_words as u64, storage)?;
+        let Uploads {
+            positions,
+            descriptors,
+            data,
+            triangles,
+            task,
+            index,
+            lod_records,
+            lod_view,
+        } = up;
+        let bindings = Bindings {
+            positions,
+            descriptors,
+            data,
+            triangles,
+            task,
+            counters,
+            lod_records,
+            lod_view,
+        };
         let readback = ctx.buffer(
             WIDTH as u64 * HEIGHT as u64 * 4,
             vk::BufferUsageFlags::TRANSFER_DST,
@@ -466,7 +560,7 @@ impl<'a> Pass<'a> {
             | vk::ShaderStageFlags::MESH_EXT
             | vk::ShaderStageFlags::VERTEX
             | vk::ShaderStageFlags::FRAGMENT;
-        let bindings: Vec<_> = (0..8)
+        let layout_bindings: Vec<_> = (0..interface::BINDINGS.len() as u32)
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)
@@ -475,38 +569,49 @@ impl<'a> Pass<'a> {
                     .stage_flags(stages)
             })
             .collect();
-        let set_layout = unsafe {
-            d.create_descriptor_set_layout(
-                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
-                None,
-            )
-        }
-        .map_err(vk_err("descriptor set layout"))?;
+        // SAFETY: valid create infos on the context's live device; each handle goes straight
+        // into an `Owned`, which destroys it on every path out of here.
+        let set_layout = Owned::new(
+            d,
+            unsafe {
+                d.create_descriptor_set_layout(
+                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
+                    None,
+                )
+            }
+            .map_err(vk_err("descriptor set layout"))?,
+            vkc::destroy_descriptor_set_layout,
+        );
         let sizes = [vk::DescriptorPoolSize::default()
             .ty(vk::DescriptorType::STORAGE_BUFFER)
-            .descriptor_count(8)];
-        let pool = unsafe {
-            d.create_descriptor_pool(
-                &vk::DescriptorPoolCreateInfo::default()
-                    .max_sets(1)
-                    .pool_sizes(&sizes),
-                None,
-            )
-        }
-        .map_err(vk_err("descriptor pool"))?;
-        let layouts = [set_layout];
+            .descriptor_count(interface::BINDINGS.len() as u32)];
+        // SAFETY: as above.
+        let pool = Owned::new(
+            d,
+            unsafe {
+                d.create_descriptor_pool(
+                    &vk::DescriptorPoolCreateInfo::default()
+                        .max_sets(1)
+                        .pool_sizes(&sizes),
+                    None,
+                )
+            }
+            .map_err(vk_err("descriptor pool"))?,
+            vkc::destroy_descriptor_pool,
+        );
+        let layouts = [set_layout.get()];
+        // SAFETY: one set from a pool sized for it; freed with the pool.
         let set = unsafe {
             d.allocate_descriptor_sets(
                 &vk::DescriptorSetAllocateInfo::default()
-                    .descriptor_pool(pool)
+                    .descriptor_pool(pool.get())
                     .set_layouts(&layouts),
             )
         }
         .map_err(vk_err("descriptor set"))?[0];
-        // Bindings 0-4: positions and the packed meshlets; 5: counters; 6, 7: LOD records, view.
-        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers[..5]
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
+            .in_order()
             .iter()
-            .chain([&counters, &buffers[6], &buffers[7]])
             .map(|b| {
                 [vk::DescriptorBufferInfo::default()
                     .buffer(b.buf)
@@ -515,83 +620,84 @@ impl<'a> Pass<'a> {
             .collect();
         let writes: Vec<_> = infos
             .iter()
-            .enumerate()
-            .map(|(i, info)| {
+            .zip(0..)
+            .map(|(info, binding)| {
                 vk::WriteDescriptorSet::default()
                     .dst_set(set)
-                    .dst_binding(i as u32)
+                    .dst_binding(binding)
                     .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                     .buffer_info(info)
             })
             .collect();
+        // SAFETY: the set is not in use yet; every write names a live buffer of this device.
         unsafe { d.update_descriptor_sets(&writes, &[]) };
         let ranges = [vk::PushConstantRange::default()
             .stage_flags(stages)
             .size(std::mem::size_of::<Push>() as u32)];
-        let layout = unsafe {
-            d.create_pipeline_layout(
-                &vk::PipelineLayoutCreateInfo::default()
-                    .set_layouts(&layouts)
-                    .push_constant_ranges(&ranges),
-                None,
-            )
-        }
-        .map_err(vk_err("pipeline layout"))?;
-        let module = |bytes: &[u8]| -> Result<vk::ShaderModule, RenderError> {
-            let code = spirv(bytes)?;
+        // SAFETY: as for the set layout.
+        let layout = Owned::new(
+            d,
             unsafe {
+                d.create_pipeline_layout(
+                    &vk::PipelineLayoutCreateInfo::default()
+                        .set_layouts(&layouts)
+                        .push_constant_ranges(&ranges),
+                    None,
+                )
+            }
+            .map_err(vk_err("pipeline layout"))?,
+            vkc::destroy_pipeline_layout,
+        );
+        // Shader modules live until the pipelines are made: dropped at the end of this function.
+        let module = |bytes: &[u8]| -> Result<Owned<vk::ShaderModule>, RenderError> {
+            let code = spirv(bytes)?;
+            // SAFETY: `code` is SPIR-V words read by ash; owned right away.
+            let m = unsafe {
                 d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None)
             }
-            .map_err(vk_err("shader module"))
+            .map_err(vk_err("shader module"))?;
+            Ok(Owned::new(d, m, vkc::destroy_shader_module))
         };
-        let shade = module(shader("shade.frag"))?;
-        let ids = module(shader("meshlet_id.frag"))?;
-        let mut made = vec![shade, ids];
-        let null = vk::Pipeline::null();
-        let mut vertex = null;
+        let shade = module(shader(Shader::ShadeFrag))?;
+        let ids = module(shader(Shader::MeshletIdFrag))?;
+        let mut vertex = None;
         if let Some((code, input)) = modules.vertex {
             let vert = module(code)?;
-            made.push(vert);
-            vertex = pipeline(
+            vertex = Some(pipeline(
                 d,
-                layout,
+                layout.get(),
                 &[
-                    (vk::ShaderStageFlags::VERTEX, vert),
-                    (vk::ShaderStageFlags::FRAGMENT, shade),
+                    (vk::ShaderStageFlags::VERTEX, vert.get()),
+                    (vk::ShaderStageFlags::FRAGMENT, shade.get()),
                 ],
                 input,
-            )?;
+            )?);
         }
         // Task + mesh pipelines, shaded and coloured by meshlet id.
-        let mut mesh_pair = |task: &[u8], mesh: vk::ShaderModule| {
+        let mesh_pair = |task: &[u8], mesh: vk::ShaderModule| {
             let t = module(task)?;
-            made.push(t);
-            let mut pair = [null; 2];
-            for (p, frag) in pair.iter_mut().zip([shade, ids]) {
-                *p = pipeline(
+            let pair = |frag: &Owned<vk::ShaderModule>| {
+                pipeline(
                     d,
-                    layout,
+                    layout.get(),
                     &[
-                        (vk::ShaderStageFlags::TASK_EXT, t),
+                        (vk::ShaderStageFlags::TASK_EXT, t.get()),
                         (vk::ShaderStageFlags::MESH_EXT, mesh),
-                        (vk::ShaderStageFlags::FRAGMENT, frag),
+                        (vk::ShaderStageFlags::FRAGMENT, frag.get()),
                     ],
                     Input::Mesh,
-                )?;
-            }
-            Ok::<_, RenderError>((pair[0], pair[1]))
+                )
+            };
+            Ok::<_, RenderError>((pair(&shade)?, pair(&ids)?))
         };
-        let (mut mesh_shade, mut mesh_ids, mut lod_pipelines) = (null, null, None);
+        let (mut mesh_shade, mut mesh_ids, mut lod_pipelines) = (None, None, None);
         if let (Some(task), Some(mesh)) = (modules.task, modules.mesh) {
             let meshm = module(mesh)?;
-            (mesh_shade, mesh_ids) = mesh_pair(task, meshm)?;
+            let (s, i) = mesh_pair(task, meshm.get())?;
+            (mesh_shade, mesh_ids) = (Some(s), Some(i));
             if let Some(lod_task) = modules.lod_task {
-                lod_pipelines = Some(mesh_pair(lod_task, meshm)?);
+                lod_pipelines = Some(mesh_pair(lod_task, meshm.get())?);
             }
-            made.push(meshm);
-        }
-        for m in made {
-            unsafe { d.destroy_shader_module(m, None) };
         }
         let targets = [
             target(ctx, COLOR, SAMPLES, vk::ImageUsageFlags::COLOR_ATTACHMENT)?,
@@ -608,64 +714,61 @@ impl<'a> Pass<'a> {
                 vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
             )?,
         ];
-        let queries = unsafe {
-            d.create_query_pool(
-                &vk::QueryPoolCreateInfo::default()
-                    .query_type(vk::QueryType::TIMESTAMP)
-                    .query_count(2),
-                None,
-            )
-        }
-        .map_err(vk_err("query pool"))?;
+        let query_pool = |info: &vk::QueryPoolCreateInfo, what| {
+            // SAFETY: a valid create info; owned right away.
+            unsafe { d.create_query_pool(info, None) }
+                .map(|q| Owned::new(d, q, vkc::destroy_query_pool))
+                .map_err(vk_err(what))
+        };
+        let queries = query_pool(
+            &vk::QueryPoolCreateInfo::default()
+                .query_type(vk::QueryType::TIMESTAMP)
+                .query_count(2),
+            "query pool",
+        )?;
         let mesh_queries = if ctx.mesh_queries {
-            let stats = unsafe {
-                d.create_query_pool(
-                    &vk::QueryPoolCreateInfo::default()
-                        .query_type(vk::QueryType::PIPELINE_STATISTICS)
-                        .pipeline_statistics(
-                            vk::QueryPipelineStatisticFlags::TASK_SHADER_INVOCATIONS_EXT
-                                | vk::QueryPipelineStatisticFlags::MESH_SHADER_INVOCATIONS_EXT,
-                        )
-                        .query_count(1),
-                    None,
-                )
-            }
-            .map_err(vk_err("statistics query pool"))?;
-            let prims = unsafe {
-                d.create_query_pool(
-                    &vk::QueryPoolCreateInfo::default()
-                        .query_type(vk::QueryType::MESH_PRIMITIVES_GENERATED_EXT)
-                        .query_count(1),
-                    None,
-                )
-            }
-            .map_err(vk_err("primitives query pool"))?;
+            let stats = query_pool(
+                &vk::QueryPoolCreateInfo::default()
+                    .query_type(vk::QueryType::PIPELINE_STATISTICS)
+                    .pipeline_statistics(
+                        vk::QueryPipelineStatisticFlags::TASK_SHADER_INVOCATIONS_EXT
+                            | vk::QueryPipelineStatisticFlags::MESH_SHADER_INVOCATIONS_EXT,
+                    )
+                    .query_count(1),
+                "statistics query pool",
+            )?;
+            let prims = query_pool(
+                &vk::QueryPoolCreateInfo::default()
+                    .query_type(vk::QueryType::MESH_PRIMITIVES_GENERATED_EXT)
+                    .query_count(1),
+                "primitives query pool",
+            )?;
             Some((stats, prims))
         } else {
             None
         };
         Ok(Self {
             ctx,
-            buffers,
-            counters,
-            readback,
             index_count: fields.index_count,
             meshlet_count: fields.meshlet_count,
             drawn: fields.drawn,
             object: fields.object,
             device_bytes: fields.device_bytes,
-            largest_binding: largest_binding.unwrap_or(0),
-            set_layout,
-            pool,
-            set,
-            layout,
+            largest_binding,
+            queries,
+            mesh_queries,
+            targets,
             mesh_shade,
             mesh_ids,
             vertex,
             lod: lod_layout.zip(lod_pipelines),
-            targets,
-            queries,
-            mesh_queries,
+            layout,
+            set,
+            _pool: pool,
+            _set_layout: set_layout,
+            bindings,
+            index,
+            readback,
         })
     }
 
@@ -710,6 +813,7 @@ impl<'a> Pass<'a> {
         how: Pipeline,
         shading: Shading,
     ) -> Result<Frame, RenderError> {
+        let flag = |on: bool, f: u32| if on { f } else { 0 };
         let (pipeline, flags) = match how {
             Pipeline::Mesh {
                 frustum,
@@ -717,16 +821,16 @@ impl<'a> Pass<'a> {
                 colour_ids,
             } => (
                 if colour_ids {
-                    self.mesh_ids
+                    &self.mesh_ids
                 } else {
-                    self.mesh_shade
+                    &self.mesh_shade
                 },
-                frustum as u32 | (cone as u32) << 1,
+                flag(frustum, FLAG_FRUSTUM) | flag(cone, FLAG_CONE),
             ),
-            Pipeline::Vertex => (self.vertex, 0),
+            Pipeline::Vertex => (&self.vertex, 0),
         };
         let mesh = matches!(how, Pipeline::Mesh { .. });
-        if pipeline == vk::Pipeline::null() {
+        let Some(pipeline) = pipeline else {
             // Only compressed passes lack a pipeline: each format has one decoder.
             let what = match self.drawn {
                 Drawn::Compressed(f, _) => f.name(),
@@ -736,8 +840,15 @@ impl<'a> Pass<'a> {
                 "{what} through the {} pipeline",
                 if mesh { "mesh" } else { "vertex" }
             )));
-        }
-        self.frame(camera, pipeline, flags, shading, self.meshlet_count, mesh)
+        };
+        self.frame(
+            camera,
+            pipeline.get(),
+            flags,
+            shading,
+            self.meshlet_count,
+            mesh,
+        )
     }
 
     /// Draws one frame of a LOD pass ([`Pass::with_lod`]) from `camera`: the task shader selects
@@ -763,7 +874,8 @@ impl<'a> Pass<'a> {
         shading: Shading,
     ) -> Result<(Frame, Vec<u32>), RenderError> {
         let frame = self.lod_frame(camera, q, false, shading, FLAG_RECORD_IDS)?;
-        let bits = self.counters.read(self.counters.size as usize);
+        let counters = &self.bindings.counters;
+        let bits = counters.read(counters.size as usize);
         let words: &[u32] = bytemuck::cast_slice(&bits[COUNTER_BYTES as usize..]);
         let ids = words
             .iter()
@@ -787,8 +899,8 @@ impl<'a> Pass<'a> {
     ) -> Result<Frame, RenderError> {
         let (layout, (shade, ids)) = self.lod.as_ref().ok_or(RenderError::NotLod)?;
         let view = ViewData::new(q, layout.loaded(q.finest));
-        self.buffers[7].write(bytemuck::bytes_of(&view));
-        let pipeline = if colour_ids { *ids } else { *shade };
+        self.bindings.lod_view.write(bytemuck::bytes_of(&view));
+        let pipeline = if colour_ids { ids.get() } else { shade.get() };
         self.frame(camera, pipeline, flags, shading, view.loaded, true)
     }
 
@@ -806,9 +918,9 @@ impl<'a> Pass<'a> {
         // The drawn-id bitmap only when this frame records it (render_lod_ids reads it back).
         let clear = match flags & FLAG_RECORD_IDS {
             0 => COUNTER_BYTES,
-            _ => self.counters.size,
+            _ => self.bindings.counters.size,
         };
-        self.counters.write(&vec![0u8; clear as usize]);
+        self.bindings.counters.write(&vec![0u8; clear as usize]);
         let push = Push {
             view_proj: camera
                 .view_proj(WIDTH as f32 / HEIGHT as f32)
@@ -827,12 +939,26 @@ impl<'a> Pass<'a> {
                 0.0,
             ],
             meshlet_count,
-            flags: flags | u32::from(shading == Shading::Unlit) << 2,
+            flags: flags
+                | if shading == Shading::Unlit {
+                    FLAG_UNLIT
+                } else {
+                    0
+                },
         };
         let [msaa, resolve, depth] = &self.targets;
+        let (msaa, resolve, depth) = (
+            (msaa.image.get(), msaa.view.get()),
+            (resolve.image.get(), resolve.view.get()),
+            (depth.image.get(), depth.view.get()),
+        );
+        let timestamps = self.queries.get();
+        let mesh_pools = self.mesh_queries.as_ref().map(|(s, p)| (s.get(), p.get()));
+        // SAFETY: `submit` hands a command buffer in the recording state and waits for it; every
+        // handle recorded is owned by this pass and lives past the wait.
         ctx.submit(|cmd| unsafe {
-            d.cmd_reset_query_pool(cmd, self.queries, 0, 2);
-            if let Some((stats, prims)) = self.mesh_queries {
+            d.cmd_reset_query_pool(cmd, timestamps, 0, 2);
+            if let Some((stats, prims)) = mesh_pools {
                 d.cmd_reset_query_pool(cmd, stats, 0, 1);
                 d.cmd_reset_query_pool(cmd, prims, 0, 1);
             }
@@ -858,7 +984,7 @@ impl<'a> Pass<'a> {
                 | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS;
             let start = [
                 barrier(
-                    msaa.image,
+                    msaa.0,
                     vk::ImageLayout::UNDEFINED,
                     vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
                     vk::ImageAspectFlags::COLOR,
@@ -868,7 +994,7 @@ impl<'a> Pass<'a> {
                     vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
                 ),
                 barrier(
-                    resolve.image,
+                    resolve.0,
                     vk::ImageLayout::UNDEFINED,
                     vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
                     vk::ImageAspectFlags::COLOR,
@@ -878,7 +1004,7 @@ impl<'a> Pass<'a> {
                     vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
                 ),
                 barrier(
-                    depth.image,
+                    depth.0,
                     vk::ImageLayout::UNDEFINED,
                     vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
                     vk::ImageAspectFlags::DEPTH,
@@ -894,10 +1020,10 @@ impl<'a> Pass<'a> {
                 &vk::DependencyInfo::default().image_memory_barriers(&start),
             );
             let colour = [vk::RenderingAttachmentInfo::default()
-                .image_view(msaa.view)
+                .image_view(msaa.1)
                 .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
                 .resolve_mode(vk::ResolveModeFlags::AVERAGE)
-                .resolve_image_view(resolve.view)
+                .resolve_image_view(resolve.1)
                 .resolve_image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
                 .load_op(vk::AttachmentLoadOp::CLEAR)
                 .store_op(vk::AttachmentStoreOp::DONT_CARE)
@@ -907,7 +1033,7 @@ impl<'a> Pass<'a> {
                     },
                 })];
             let depth_att = vk::RenderingAttachmentInfo::default()
-                .image_view(depth.view)
+                .image_view(depth.1)
                 .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
                 .load_op(vk::AttachmentLoadOp::CLEAR)
                 .store_op(vk::AttachmentStoreOp::DONT_CARE)
@@ -921,9 +1047,9 @@ impl<'a> Pass<'a> {
                 width: WIDTH,
                 height: HEIGHT,
             });
-            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, self.queries, 0);
+            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, timestamps, 0);
             // Queries span the whole rendering (lavapipe left them unavailable when begun inside).
-            let mesh_queries = if mesh { self.mesh_queries } else { None };
+            let mesh_queries = if mesh { mesh_pools } else { None };
             if let Some((stats, prims)) = mesh_queries {
                 d.cmd_begin_query(cmd, stats, 0, vk::QueryControlFlags::empty());
                 d.cmd_begin_query(cmd, prims, 0, vk::QueryControlFlags::empty());
@@ -949,14 +1075,14 @@ impl<'a> Pass<'a> {
             d.cmd_bind_descriptor_sets(
                 cmd,
                 vk::PipelineBindPoint::GRAPHICS,
-                self.layout,
+                self.layout.get(),
                 0,
                 &[self.set],
                 &[],
             );
             d.cmd_push_constants(
                 cmd,
-                self.layout,
+                self.layout.get(),
                 vk::ShaderStageFlags::TASK_EXT
                     | vk::ShaderStageFlags::MESH_EXT
                     | vk::ShaderStageFlags::VERTEX
@@ -970,8 +1096,8 @@ impl<'a> Pass<'a> {
             } else if matches!(self.drawn, Drawn::Compressed(..)) {
                 d.cmd_draw(cmd, self.index_count, 1, 0, 0);
             } else {
-                d.cmd_bind_vertex_buffers(cmd, 0, &[self.buffers[0].buf], &[0]);
-                d.cmd_bind_index_buffer(cmd, self.buffers[5].buf, 0, vk::IndexType::UINT32);
+                d.cmd_bind_vertex_buffers(cmd, 0, &[self.bindings.positions.buf], &[0]);
+                d.cmd_bind_index_buffer(cmd, self.index.buf, 0, vk::IndexType::UINT32);
                 d.cmd_draw_indexed(cmd, self.index_count, 1, 0, 0, 0);
             }
             d.cmd_end_rendering(cmd);
@@ -979,14 +1105,9 @@ impl<'a> Pass<'a> {
                 d.cmd_end_query(cmd, prims, 0);
                 d.cmd_end_query(cmd, stats, 0);
             }
-            d.cmd_write_timestamp2(
-                cmd,
-                vk::PipelineStageFlags2::BOTTOM_OF_PIPE,
-                self.queries,
-                1,
-            );
+            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, timestamps, 1);
             let to_copy = [barrier(
-                resolve.image,
+                resolve.0,
                 vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                 vk::ImageAspectFlags::COLOR,
@@ -1001,7 +1122,7 @@ impl<'a> Pass<'a> {
             );
             d.cmd_copy_image_to_buffer(
                 cmd,
-                resolve.image,
+                resolve.0,
                 vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                 self.readback.buf,
                 &[vk::BufferImageCopy::default()
@@ -1024,22 +1145,25 @@ impl<'a> Pass<'a> {
             d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&host));
         })?;
         let mut ts = [0u64; 2];
+        // SAFETY: the submission that wrote both timestamps has completed (`submit` waits).
         unsafe {
             d.get_query_pool_results(
-                self.queries,
+                timestamps,
                 0,
                 &mut ts,
                 vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
             )
         }
         .map_err(vk_err("timestamps"))?;
-        let c: Vec<u32> = bytemuck::cast_slice(&self.counters.read(24)).to_vec();
-        let queries = match (mesh, self.mesh_queries) {
+        let c: Vec<u32> =
+            bytemuck::cast_slice(&self.bindings.counters.read(COUNTER_BYTES as usize)).to_vec();
+        let queries = match (mesh, mesh_pools) {
             (true, Some((stats, prims))) => {
                 // In ash the slice length is the number of queries: one query, two statistics.
                 let mut s = [[0u64; 2]];
                 let mut p = [0u64];
                 let flags = vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT;
+                // SAFETY: both queries ended in the completed submission.
                 unsafe {
                     d.get_query_pool_results(stats, 0, &mut s, flags)
                         .map_err(vk_err("pipeline statistics"))?;
@@ -1057,11 +1181,14 @@ impl<'a> Pass<'a> {
         Ok(Frame {
             pixels: self.readback.read((WIDTH * HEIGHT * 4) as usize),
             gpu_ns: ts[1].saturating_sub(ts[0]) as f64 * ctx.timestamp_period as f64,
-            culled_frustum: c[0],
-            culled_cone: c[1],
-            drawn: c[2],
-            culled_triangles: [c[3], c[4]],
-            not_selected: c[5],
+            culled_frustum: c[interface::COUNTER_CULLED_FRUSTUM],
+            culled_cone: c[interface::COUNTER_CULLED_CONE],
+            drawn: c[interface::COUNTER_DRAWN],
+            culled_triangles: [
+                c[interface::COUNTER_TRIANGLES_FRUSTUM],
+                c[interface::COUNTER_TRIANGLES_CONE],
+            ],
+            not_selected: c[interface::COUNTER_NOT_SELECTED],
             queries,
         })
     }
@@ -1069,34 +1196,9 @@ impl<'a> Pass<'a> {
 
 impl Drop for Pass<'_> {
     fn drop(&mut self) {
-        let ctx = self.ctx;
-        let d = &ctx.device;
-        unsafe {
-            let _ = d.device_wait_idle();
-            d.destroy_query_pool(self.queries, None);
-            if let Some((stats, prims)) = self.mesh_queries {
-                d.destroy_query_pool(stats, None);
-                d.destroy_query_pool(prims, None);
-            }
-            for t in &self.targets {
-                d.destroy_image_view(t.view, None);
-                d.destroy_image(t.image, None);
-                d.free_memory(t.memory, None);
-            }
-            for p in [self.mesh_shade, self.mesh_ids, self.vertex] {
-                d.destroy_pipeline(p, None);
-            }
-            if let Some((_, (a, b))) = &self.lod {
-                d.destroy_pipeline(*a, None);
-                d.destroy_pipeline(*b, None);
-            }
-            d.destroy_pipeline_layout(self.layout, None);
-            d.destroy_descriptor_pool(self.pool, None);
-            d.destroy_descriptor_set_layout(self.set_layout, None);
-        }
-        for b in self.buffers.iter().chain([&self.counters, &self.readback]) {
-            ctx.destroy_buffer(b);
-        }
+        // SAFETY: waiting is always allowed; afterwards no submitted work uses the pass's objects,
+        // which its fields then free in declaration order.
+        let _ = unsafe { self.ctx.device.device_wait_idle() };
     }
 }
 
@@ -1107,6 +1209,8 @@ fn target(
     usage: vk::ImageUsageFlags,
 ) -> Result<Target, RenderError> {
     let d = &ctx.device;
+    // SAFETY (this function's calls): valid create infos on a live device; every handle is owned
+    // by an `Owned` as soon as it exists, so a later failure frees the earlier ones.
     let image = unsafe {
         d.create_image(
             &vk::ImageCreateInfo::default()
@@ -1126,18 +1230,26 @@ fn target(
         )
     }
     .map_err(vk_err("create image"))?;
-    let req = unsafe { d.get_image_memory_requirements(image) };
-    let memory = ctx.allocate(req, vk::MemoryPropertyFlags::empty())?;
-    unsafe { d.bind_image_memory(image, memory, 0) }.map_err(vk_err("bind image"))?;
+    let image = Owned::new(d, image, vkc::destroy_image);
+    // SAFETY: `image` is a live image of this device.
+    let req = unsafe { d.get_image_memory_requirements(image.get()) };
+    let memory = Owned::new(
+        d,
+        ctx.allocate(req, vk::MemoryPropertyFlags::empty())?,
+        vkc::free_memory,
+    );
+    // SAFETY: fresh memory of a type the requirements allow, bound once at offset 0.
+    unsafe { d.bind_image_memory(image.get(), memory.get(), 0) }.map_err(vk_err("bind image"))?;
     let aspect = if format == DEPTH {
         vk::ImageAspectFlags::DEPTH
     } else {
         vk::ImageAspectFlags::COLOR
     };
+    // SAFETY: a view of the bound image with a matching format and aspect; owned below.
     let view = unsafe {
         d.create_image_view(
             &vk::ImageViewCreateInfo::default()
-                .image(image)
+                .image(image.get())
                 .view_type(vk::ImageViewType::TYPE_2D)
                 .format(format)
                 .subresource_range(
@@ -1151,9 +1263,9 @@ fn target(
     }
     .map_err(vk_err("create image view"))?;
     Ok(Target {
+        view: Owned::new(d, view, vkc::destroy_image_view),
         image,
-        memory,
-        view,
+        _memory: memory,
     })
 }
 
@@ -1162,7 +1274,7 @@ fn pipeline(
     layout: vk::PipelineLayout,
     mods: &[(vk::ShaderStageFlags, vk::ShaderModule)],
     input: Input,
-) -> Result<vk::Pipeline, RenderError> {
+) -> Result<Owned<vk::Pipeline>, RenderError> {
     let stages: Vec<_> = mods
         .iter()
         .map(|&(s, m)| {
@@ -1224,7 +1336,49 @@ fn pipeline(
     if input != Input::Mesh {
         info = info.vertex_input_state(&vi).input_assembly_state(&ia);
     }
+    // SAFETY: every state the info points to lives until the call returns; owned right away.
     unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) }
-        .map(|p| p[0])
+        .map(|p| Owned::new(d, p[0], vkc::destroy_pipeline))
         .map_err(|(_, e)| RenderError::Vulkan("create graphics pipeline", e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bindings_are_declared_in_binding_order() {
+        assert_eq!(Bindings::NAMES, interface::BINDINGS);
+        for (i, name) in interface::BINDINGS.iter().enumerate() {
+            assert_eq!(interface::binding(name), i as u32);
+        }
+    }
+
+    #[test]
+    fn every_descriptor_layout_has_its_shaders() {
+        for f in [
+            Format::Split,
+            Format::NvidiaA,
+            Format::NvidiaB,
+            Format::Monolithic,
+        ] {
+            assert_eq!(layout_of(f).name(), f.to_string());
+        }
+        let all = Shader::all();
+        assert_eq!(all.len(), super::super::SHADERS.len());
+        for (i, s) in all.iter().enumerate() {
+            assert_eq!(s.index(), i, "{} listed twice", s.label());
+        }
+    }
+
+    #[test]
+    fn the_glsl_header_defines_every_constant() {
+        let h = interface::glsl_header();
+        for name in interface::BINDINGS {
+            assert!(h.contains(&format!("#define BINDING_{} ", name.to_uppercase())));
+        }
+        assert!(h.contains(&format!("const uint FLAG_RECORD_IDS = {FLAG_RECORD_IDS}u;")));
+        assert!(h.contains(&format!("#define TASK_GROUP {TASK_GROUP}\n")));
+        assert_eq!(COUNTER_BYTES, 32);
+    }
 }

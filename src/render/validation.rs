@@ -19,6 +19,8 @@ pub struct Messenger {
     log: Box<Mutex<Log>>,
 }
 
+// SAFETY: Vulkan calls it with valid (possibly null) pointers during the messenger's life;
+// `user` is the Log registered with it.
 unsafe extern "system" fn callback(
     severity: vk::DebugUtilsMessageSeverityFlagsEXT,
     _types: vk::DebugUtilsMessageTypeFlagsEXT,
@@ -28,6 +30,7 @@ unsafe extern "system" fn callback(
     if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) && !user.is_null() {
         // SAFETY: `user` is the boxed Mutex<Log> owned by the Messenger, alive until destroy().
         let log = unsafe { &*(user as *const Mutex<Log>) };
+        // SAFETY: `data` is null or points to the callback data for this call.
         let msg = unsafe { data.as_ref() }
             .and_then(|d| unsafe { d.message_as_c_str() })
             .map(|c| c.to_string_lossy().into_owned())
@@ -59,6 +62,7 @@ impl Messenger {
             )
             .pfn_user_callback(Some(callback))
             .user_data(&*log as *const Mutex<Log> as *mut std::ffi::c_void);
+        // SAFETY: a valid create info whose user pointer (the boxed Log) outlives the messenger.
         let handle = unsafe { loader.create_debug_utils_messenger(&info, None) }
             .map_err(|e| RenderError::Vulkan("create debug messenger", e))?;
         Ok(Self {
@@ -76,6 +80,7 @@ impl Messenger {
 
     /// Unregisters the callback (before the instance goes).
     pub fn destroy(self) {
+        // SAFETY: the messenger was made by this loader and is destroyed once, before the instance.
         unsafe { self.loader.destroy_debug_utils_messenger(self.handle, None) };
     }
 }
