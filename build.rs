@@ -8,6 +8,11 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+// Laced wires' bit layout, shared with the codec: the shaders include it as GLSL constants.
+#[path = "src/compress/laced/layout.rs"]
+#[allow(dead_code)] // Only the GLSL rendering is used here; the codec uses the rest.
+mod laced_layout;
+
 /// Descriptor layouts: (name, DESC value), as `meshlet::descriptor::Format`.
 const FORMATS: &[(&str, u32)] = &[
     ("split", 0),
@@ -106,6 +111,14 @@ fn shaders() -> Vec<(String, &'static str, String, Vec<String>)> {
     list
 }
 
+/// Writes `laced_layout.glsl` (laced wires' record layout as GLSL constants, from the table the
+/// encoder and decoder read) into `out`, which is on glslangValidator's include path.
+fn write_laced_layout_header(out: &Path) {
+    println!("cargo:rerun-if-changed=src/compress/laced/layout.rs");
+    std::fs::write(out.join("laced_layout.glsl"), laced_layout::glsl())
+        .expect("write laced_layout.glsl");
+}
+
 fn main() {
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     // results/ headers name the build: custom profiles (fuzz) are told apart by their settings.
@@ -117,12 +130,15 @@ fn main() {
         return;
     }
     let glsl = Path::new("glsl");
+    write_laced_layout_header(&out);
     let mut missing = false;
     let mut table = String::from("/// Every compiled shader as (name, SPIR-V bytes; empty when glslangValidator was missing).\npub const SHADERS: &[(&str, &[u8])] = &[\n");
     for (name, src, dst, defines) in shaders() {
         let target = out.join(&dst);
         let status = Command::new("glslangValidator")
-            .args(["--target-env", "vulkan1.3", "-o"])
+            .args(["--target-env", "vulkan1.3"])
+            .arg(format!("-I{}", out.display()))
+            .arg("-o")
             .arg(&target)
             .args(&defines)
             .arg(glsl.join(src))
