@@ -14,6 +14,19 @@ use std::process::Command;
 #[path = "src/render/interface.rs"]
 mod interface;
 
+// Laced wires' bit layout, shared with the codec: the shaders include it as GLSL constants.
+#[path = "src/compress/laced/layout.rs"]
+#[allow(dead_code)] // Only the GLSL rendering is used here; the codec uses the rest.
+mod laced_layout;
+
+/// Writes `laced_layout.glsl` (laced wires' record layout as GLSL constants, from the table the
+/// encoder and decoder read) into `out`, which is on glslangValidator's include path.
+fn write_laced_layout_header(out: &Path) {
+    println!("cargo:rerun-if-changed=src/compress/laced/layout.rs");
+    std::fs::write(out.join("laced_layout.glsl"), laced_layout::glsl())
+        .expect("write laced_layout.glsl");
+}
+
 fn main() {
     let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
     // results/ headers name the build: custom profiles (fuzz) are told apart by their settings.
@@ -26,6 +39,7 @@ fn main() {
         return;
     }
     let glsl = Path::new("glsl");
+    write_laced_layout_header(&out);
     let mut missing = false;
     // Included by glsl/common.glsl: bindings, flags, counter slots, the task group size.
     std::fs::write(out.join("interface.glsl"), interface::glsl_header())
@@ -35,9 +49,10 @@ fn main() {
         let (src, dst, defines) = (shader.source(), shader.spirv_file(), shader.defines());
         let target = out.join(&dst);
         let status = Command::new("glslangValidator")
-            .args(["--target-env", "vulkan1.3", "-o"])
-            .arg(&target)
+            .args(["--target-env", "vulkan1.3"])
             .arg(format!("-I{}", out.display()))
+            .arg("-o")
+            .arg(&target)
             .args(&defines)
             .arg(glsl.join(src))
             .output();

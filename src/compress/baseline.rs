@@ -29,10 +29,8 @@
 //! TS and SC carry no vertex ids; like laced wires, provenance tables (not counted) map their
 //! stored vertices to the source mesh for checking.
 
-use super::{
-    anchored_box, bits_for, dequantise, quantise, read_bits, width, write_bits, DecodeError,
-    Decoded, Encoded, Sizes,
-};
+use super::bits::{bits_for, width, BitReader, BitWriter};
+use super::{anchored_box, dequantise, quantise, DecodeError, Decoded, Encoded, Sizes};
 use crate::mesh::Mesh;
 use crate::meshlet::Meshlets;
 
@@ -73,37 +71,29 @@ pub enum EncodeError {
     GridTooFine,
 }
 
-/// A bit writer that keeps the byte tally by kind (connectivity, positions, headers).
-struct Bits {
-    out: Vec<u8>,
-    at: usize,
+/// A record's bit stream with its bits tallied by kind (connectivity, positions, headers).
+struct Tallied {
+    w: BitWriter,
     kind: [usize; 3],
 }
 
-impl Bits {
+impl Tallied {
     fn new() -> Self {
         Self {
-            out: Vec::new(),
-            at: 0,
+            w: BitWriter::new(),
             kind: [0; 3],
         }
     }
     fn put(&mut self, k: usize, bits: u32, v: u32) {
-        write_bits(&mut self.out, self.at, bits, v);
-        self.at += bits as usize;
+        self.w.put(bits, v);
         self.kind[k] += bits as usize;
     }
     fn f32(&mut self, v: f32) {
         self.put(1, 32, v.to_bits());
     }
-    /// Pads to a byte (`word` false) or a 32-bit word; returns the padding bits.
-    fn pad(&mut self, word: bool) -> usize {
-        let unit = if word { 32 } else { 8 };
-        let to = self.at.div_ceil(unit) * unit;
-        let p = to - self.at;
-        self.at = to;
-        self.out.resize(to / 8, 0);
-        p
+    /// Pads to a 32-bit word; returns the padding bits.
+    fn pad(&mut self) -> usize {
+        self.w.pad(32)
     }
 }
 
@@ -151,7 +141,7 @@ pub fn encode(
         if vc == 0 || tc == 0 || vc > 256 || tc > 256 {
             return Err(EncodeError::Size(i));
         }
-        let mut b = Bits::new();
+        let mut b = Tallied::new();
         // Positions held by the meshlet (TS: every corner; SC: every vertex).
         let held: Vec<u32> = match kind {
             Kind::Ts => lt.iter().map(|&c| lv[c as usize]).collect(),
@@ -185,7 +175,7 @@ pub fn encode(
                 }
             }
             (Kind::Ts | Kind::Sc, false) => {
-                tally[3] += b.pad(true);
+                tally[3] += b.pad();
                 for &v in &held {
                     for x in mesh.positions[v as usize] {
                         b.f32(x);
@@ -194,7 +184,7 @@ pub fn encode(
             }
             (Kind::Ix, _) => {
                 if !compact {
-                    tally[3] += b.pad(true);
+                    tally[3] += b.pad();
                 }
                 for &v in lv {
                     b.put(CONN, vbits, v);
@@ -202,7 +192,7 @@ pub fn encode(
             }
             (Kind::Gi, _) => {
                 if !compact {
-                    tally[3] += b.pad(true);
+                    tally[3] += b.pad();
                 }
                 for &c in lt {
                     b.put(CONN, vbits, lv[c as usize]);
@@ -214,16 +204,16 @@ pub fn encode(
                 b.put(CONN, ibits, c as u32);
             }
         }
-        tally[3] += b.pad(true);
+        tally[3] += b.pad();
         for (t, k) in tally.iter_mut().zip(b.kind) {
             *t += k;
         }
         offsets.push(data.len() as u32);
-        data.extend_from_slice(&b.out);
+        data.extend_from_slice(b.w.bytes());
     }
     let global = data.len();
     if matches!(kind, Kind::Ix | Kind::Gi) {
-        let mut b = Bits::new();
+        let mut b = Tallied::new();
         for v in 0..nv as u32 {
             if compact {
                 for x in grid(v) {
@@ -235,9 +225,9 @@ pub fn encode(
                 }
             }
         }
-        tally[3] += b.pad(true);
+        tally[3] += b.pad();
         tally[POS] += b.kind[POS];
-        data.extend_from_slice(&b.out);
+        data.extend_from_slice(b.w.bytes());
     }
     data[0] = kind.id();
     data[1] = compact as u8;
@@ -286,12 +276,7 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
     if g > 31 || vbits > 32 || h[1] > 1 {
         return Err(bad("section header out of range".into()));
     }
-    let mut r = super::BitReader {
-        data: d,
-        at: 8 * start,
-        meshlet: i,
-        what: "record",
-    };
+    let mut r = BitReader::new(d, 8 * start, i, "record");
     let vc = if kind != Kind::Ts && kind != Kind::Gi {
         r.get(8)? as usize + 1
     } else {
@@ -331,7 +316,7 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
                 positions.push(p);
             }
         } else {
-            r.at = r.at.div_ceil(32) * 32;
+            r.align(32);
             for _ in 0..held {
                 let mut p = [0f32; 3];
                 for x in &mut p {
@@ -344,7 +329,7 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
             vertices.push(provenance(k)?);
         }
     }
-    let read_ref = |r: &mut super::BitReader| {
+    let read_ref = |r: &mut BitReader| {
         let v = r.get(vbits)? as usize;
         if v >= nv || v >= enc.source_vertices as usize {
             return Err(bad(format!("reference {v} beyond {nv} vertices")));
@@ -354,7 +339,7 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
     match kind {
         Kind::Gi => {
             if !compact {
-                r.at = r.at.div_ceil(32) * 32;
+                r.align(32);
             }
             // Global indices, one per corner (merged into local vertices below).
             for _ in 0..3 * tc {
@@ -364,7 +349,7 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
         Kind::Ts => {}
         Kind::Ix => {
             if !compact {
-                r.at = r.at.div_ceil(32) * 32;
+                r.align(32);
             }
             for _ in 0..vc {
                 vertices.push(read_ref(&mut r)?);
@@ -393,10 +378,7 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
             let base = 8 * global + v as usize * per;
             for (a, x) in p.iter_mut().enumerate() {
                 let b = if compact { g } else { 32 };
-                let raw = read_bits(d, base + a * b as usize, b).ok_or(DecodeError::Truncated {
-                    meshlet: i,
-                    what: "vertex buffer",
-                })?;
+                let raw = BitReader::new(d, base + a * b as usize, i, "vertex buffer").get(b)?;
                 *x = if compact {
                     dequantise(raw as i64, enc.origin[a], enc.exponent)
                 } else {

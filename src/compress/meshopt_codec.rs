@@ -20,7 +20,8 @@
 //! plus a u32 offset per meshlet for random access. Position k belongs to the k-th decoded
 //! vertex reference.
 
-use super::{anchored_box, dequantise, quantise, read_bits, write_bits, DecodeError, Sizes};
+use super::bits::{BitReader, BitWriter};
+use super::{anchored_box, dequantise, quantise, DecodeError, Sizes};
 pub use super::{Decoded, Encoded};
 use crate::mesh::Mesh;
 use crate::meshlet::Meshlets;
@@ -107,14 +108,13 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
         }
         data.extend((conn.len() as u16).to_le_bytes());
         data.extend_from_slice(&conn);
-        let mut packed = Vec::new();
-        let mut at = 0;
+        let mut w = BitWriter::new();
         for p in &q {
             for a in 0..3 {
-                write_bits(&mut packed, at, bits[a], (p[a] - anchor[a]) as u32);
-                at += bits[a] as usize;
+                w.put(bits[a], (p[a] - anchor[a]) as u32);
             }
         }
+        let packed = w.into_bytes();
         data.extend_from_slice(&packed);
         let pad = (4 - data.len() % 4) % 4;
         data.resize(data.len() + pad, 0);
@@ -189,14 +189,12 @@ pub fn decode(enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
             what: format!("triangle {t:?} beyond {vc} vertices"),
         });
     }
-    let packed = &rec[HEADER + clen..];
-    let mut at = 0;
+    let mut r = BitReader::new(&rec[HEADER + clen..], 0, i, "positions");
     let mut positions = Vec::with_capacity(vc);
     for _ in 0..vc {
         let mut p = [0f32; 3];
         for a in 0..3 {
-            let d = read_bits(packed, at, bits[a]).ok_or(trunc("positions"))?;
-            at += bits[a] as usize;
+            let d = r.get(bits[a])?;
             p[a] = dequantise(anchor[a] + d as i64, enc.origin[a], enc.exponent);
         }
         positions.push(p);

@@ -12,13 +12,19 @@
 //! small for a mesh far from the origin (1e6 away, a 14-bit grid still needs 15 bits, not 35), and
 //! where the grid is finer than f32's spacing at that distance the rounding lands back on the
 //! original value exactly, so f32 never adds error beyond the tolerance.
+//!
+//! **Bits.** Every codec packs its fields through one bit writer and reader (`bits.rs`), least
+//! significant bit first: the order the shaders (glsl/compressed.glsl `bits_at`) read the same
+//! bytes in.
 
 pub mod baseline;
+mod bits;
 pub mod file;
 pub mod laced;
 pub mod meshopt_codec;
 
 use crate::mesh::Mesh;
+use bits::width;
 use thiserror::Error;
 
 /// Why a meshlet set cannot be encoded, by format.
@@ -142,39 +148,6 @@ impl Sizes {
     }
 }
 
-/// Reads `bits` bits (<= 32) at bit offset `at` of `data` (little-endian bit order), or `None`
-/// past the end.
-pub(crate) fn read_bits(data: &[u8], at: usize, bits: u32) -> Option<u32> {
-    if bits == 0 {
-        return Some(0);
-    }
-    let end = at.checked_add(bits as usize)?;
-    if end > data.len() * 8 {
-        return None;
-    }
-    let mut v = 0u64;
-    let first = at / 8;
-    let last = (end - 1) / 8;
-    for (k, &b) in data[first..=last].iter().enumerate() {
-        v |= (b as u64) << (8 * k);
-    }
-    Some(((v >> (at % 8)) & ((1u64 << bits) - 1)) as u32)
-}
-
-/// Bits of a non-negative value (0 for 0).
-pub(crate) fn width(v: u64) -> u32 {
-    64 - v.leading_zeros()
-}
-
-/// Bits that hold the values `0..n`.
-pub(crate) fn bits_for(n: usize) -> u32 {
-    if n <= 1 {
-        0
-    } else {
-        usize::BITS - (n - 1).leading_zeros()
-    }
-}
-
 /// The box of grid points, (lowest, highest) per axis, and its bits per axis; zeros when empty.
 /// Every format that anchors positions (per wire, per meshlet) stores `lo` and offsets in `bits`.
 pub(crate) fn anchored_box(q: &[[i64; 3]]) -> ([i64; 3], [i64; 3], [u32; 3]) {
@@ -191,65 +164,9 @@ pub(crate) fn anchored_box(q: &[[i64; 3]]) -> ([i64; 3], [i64; 3], [u32; 3]) {
     (lo, hi, [0, 1, 2].map(|a| width((hi[a] - lo[a]) as u64)))
 }
 
-/// Sequential bit reader for decoders: a truncated read is a typed error naming the meshlet.
-pub(crate) struct BitReader<'a> {
-    pub(crate) data: &'a [u8],
-    /// Bit offset of the next read.
-    pub(crate) at: usize,
-    pub(crate) meshlet: usize,
-    pub(crate) what: &'static str,
-}
-
-impl BitReader<'_> {
-    /// Reads `bits` (<= 32) bits.
-    pub(crate) fn get(&mut self, bits: u32) -> Result<u32, DecodeError> {
-        let v = read_bits(self.data, self.at, bits).ok_or(DecodeError::Truncated {
-            meshlet: self.meshlet,
-            what: self.what,
-        })?;
-        self.at += bits as usize;
-        Ok(v)
-    }
-}
-
-/// Appends `bits` bits of `v` at bit offset `at` (the buffer grows as needed).
-pub(crate) fn write_bits(data: &mut Vec<u8>, at: usize, bits: u32, v: u32) {
-    let end = at + bits as usize;
-    data.resize(data.len().max(end.div_ceil(8)), 0);
-    for k in 0..bits as usize {
-        if v >> k & 1 == 1 {
-            data[(at + k) / 8] |= 1 << ((at + k) % 8);
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn bits_round_trip() {
-        let mut d = Vec::new();
-        let vals = [
-            (3u32, 5u32),
-            (0, 0),
-            (17, 99_999),
-            (1, 1),
-            (32, u32::MAX),
-            (9, 300),
-        ];
-        let mut at = 0;
-        for &(b, v) in &vals {
-            write_bits(&mut d, at, b, v);
-            at += b as usize;
-        }
-        let mut at = 0;
-        for &(b, v) in &vals {
-            assert_eq!(read_bits(&d, at, b), Some(v));
-            at += b as usize;
-        }
-        assert_eq!(read_bits(&d, at, 64), None);
-    }
 
     #[test]
     fn the_grid_meets_the_tolerance() {
