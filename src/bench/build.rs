@@ -4,7 +4,7 @@
 //! every meshoptimizer builder at each of [`Limits::COUNT_PRESETS`].
 
 use super::{
-    evaluate, machine_note, median, paper, plot, quality_cells, right_align_numbers, today,
+    evaluate, machine_note, median, paper, plot, quality_cells, right_align_numbers, today, Common,
     Evaluation, QUALITY_HEADER,
 };
 use crate::mesh::{self, Mesh};
@@ -37,6 +37,46 @@ pub struct Config {
     pub refined: bool,
     /// Include the `+refine-max` rows (minutes on the biggest meshes).
     pub refine_max: bool,
+}
+
+/// The arguments of `meshletlab bench build` but the strategy options (the command's own,
+/// shared with `stats` and `build`), resolved into a [`Config`] by [`Args::config`].
+#[derive(clap::Args, Clone, Debug)]
+pub struct Args {
+    /// Builds per mesh and strategy (>= 5 for reported numbers).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..), display_order = 1)]
+    pub runs: u32,
+    /// Mesh folder, output folder, smoke run (one run, no `+refine-max` rows), quiet.
+    #[command(flatten)]
+    pub common: Common,
+    /// Only these strategies (repeatable; default all but the slow kmedoids-paper, plus the
+    /// `+refine` rows and the per-preset count comparison).
+    #[arg(short, long)]
+    pub strategy: Vec<String>,
+    /// Skip the `+refine` rows and the per-preset count comparison (64/84, 128/128).
+    #[arg(long)]
+    pub no_refined: bool,
+    /// Skip the `+refine-max` rows (they take minutes on the biggest meshes).
+    #[arg(long)]
+    pub no_refine_max: bool,
+}
+
+impl Args {
+    /// What to run at `limits` with strategy `options`: the mesh folder (for a smoke run the smoke
+    /// meshes, written now), one run and no `+refine-max` rows in a smoke run.
+    pub fn config(&self, limits: Limits, options: Options) -> Result<Config> {
+        Ok(Config {
+            meshes: self.common.meshes_dir()?,
+            runs: self.common.or_smoke(self.runs as usize, 1),
+            out: self.common.out.clone(),
+            limits,
+            strategies: self.strategy.clone(),
+            options,
+            quiet: self.common.quiet,
+            refined: !self.no_refined,
+            refine_max: !self.no_refine_max && !self.common.smoke,
+        })
+    }
 }
 
 /// Refined rows of the main table: every grower at the default effort, and the maximum effort

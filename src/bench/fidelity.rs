@@ -9,7 +9,9 @@
 //! growers fill meshlets to the same size whatever the bunny.
 
 use super::build::mesh_name;
-use super::{evaluate, machine_note, median, paper, right_align_numbers, today, Evaluation};
+use super::{
+    evaluate, machine_note, median, paper, right_align_numbers, today, Common, Evaluation,
+};
 use crate::mesh;
 use crate::meshlet::Limits;
 use crate::strategy::{self, GreedyPaper, Options, Strategy};
@@ -29,6 +31,32 @@ pub struct Config {
     pub runs: usize,
     /// Output folder.
     pub out: PathBuf,
+}
+
+/// The arguments of `meshletlab bench fidelity`, resolved into a [`Config`] by [`Args::config`].
+#[derive(clap::Args, Clone, Debug)]
+pub struct Args {
+    /// The bunny (file stem in the folder; the paper's figures are for it).
+    #[arg(long, default_value = "stanford_bunny", display_order = 1)]
+    pub mesh: String,
+    /// Builds per row (median time).
+    #[arg(long, default_value_t = 9, display_order = 2)]
+    pub runs: usize,
+    /// Mesh folder, output folder, smoke run (the first smoke mesh, one build per row), quiet.
+    #[command(flatten)]
+    pub common: Common,
+}
+
+impl Args {
+    /// What to run: the mesh file (for a smoke run the first smoke mesh, written now), the runs (one
+    /// in a smoke run) and the output folder.
+    pub fn config(&self) -> Result<Config> {
+        Ok(Config {
+            mesh: self.common.mesh_file(&self.mesh)?.1,
+            runs: self.common.or_smoke(self.runs.max(1), 1),
+            out: self.common.out.clone(),
+        })
+    }
 }
 
 /// One measured row.

@@ -8,7 +8,7 @@
 
 use super::kmedoids::PAPER_TIMES;
 use super::plot::{line_chart, Axes, Series};
-use super::{machine_note, today};
+use super::{machine_note, today, Common};
 use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::gpu::{self, timed as secs, Gpu, Profile};
 use crate::mesh::{self, subdivide::subdivide, Mesh};
@@ -18,28 +18,33 @@ use crate::strategy::{self, parallel};
 use anyhow::{bail, Context, Result};
 use indicatif::ProgressBar;
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
-/// What to run.
-#[derive(Clone, Debug)]
+/// What to run: the arguments of `meshletlab bench gpu`.
+#[derive(clap::Args, Clone, Debug)]
 pub struct Config {
-    /// Folder of meshes.
-    pub meshes: PathBuf,
-    /// Output folder.
-    pub out: PathBuf,
+    /// Mesh folder, output folder, smoke run (every mesh in the folder instead of the bunny, igea
+    /// and the dragon, the first one profiled, and no subdivided dragons), quiet.
+    #[command(flatten)]
+    pub common: Common,
     /// Meshlet limits.
+    #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
     pub limits: Limits,
     /// Above this many triangles, skip the GPU k-medoids (rayon still runs).
+    #[arg(long, default_value_t = 16_000_000)]
     pub kmedoids_gpu_max: usize,
     /// Above this many triangles, skip the one-thread CPU runs and the GPU grower.
+    #[arg(long, default_value_t = 4_000_000)]
     pub one_thread_max: usize,
-    /// Skip the subdivided dragons (a quick run).
+    /// Leave out the subdivided dragons (3.5 M and 14 M triangles).
+    #[arg(long)]
     pub quick: bool,
-    /// Every mesh in `meshes` instead of the bunny, igea and the dragon, the first one profiled
-    /// (`bench gpu --smoke` over [`crate::bench::smoke`]'s meshes).
-    pub smoke: bool,
-    /// No progress output.
-    pub quiet: bool,
+}
+
+impl Config {
+    /// Whether the subdivided dragons are left out (asked, or a smoke run).
+    pub fn quick(&self) -> bool {
+        self.quick || self.common.smoke
+    }
 }
 
 struct Row {
@@ -136,9 +141,10 @@ type Sweep = Vec<(f64, GrowRow, f64)>;
 
 /// Runs the benchmark and writes the results.
 pub fn run(cfg: &Config) -> Result<()> {
+    let meshes = cfg.common.meshes_dir()?;
     let g = Gpu::new()?;
     let say = |m: String| {
-        if !cfg.quiet {
+        if !cfg.common.quiet {
             eprintln!("{m}");
         }
     };
@@ -150,12 +156,12 @@ pub fn run(cfg: &Config) -> Result<()> {
     gpu::kmedoids::cluster(&g, &warm, cfg.limits, &KConfig::default())?;
     gpu::grow::grow(&g, &warm, cfg.limits, parallel::DEFAULT_SPACING)?;
     let load = |stem: &str| -> Result<Mesh> {
-        let p = cfg.meshes.join(format!("{stem}.ply.zst"));
+        let p = meshes.join(format!("{stem}.ply.zst"));
         mesh::load(&p).with_context(|| format!("bench gpu needs {}", p.display()))
     };
     let mut inputs: Vec<(String, Mesh)> = Vec::new();
-    if cfg.smoke {
-        for p in super::build::mesh_files(&cfg.meshes)? {
+    if cfg.common.smoke {
+        for p in super::build::mesh_files(&meshes)? {
             inputs.push((super::build::mesh_name(&p), mesh::load(&p)?));
         }
     } else {
@@ -164,7 +170,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         inputs.push(("igea".into(), load("igea")?));
         inputs.push(("stanford_dragon_vrip".into(), dragon));
     }
-    if !cfg.quick {
+    if !cfg.quick() {
         let dragon = &inputs[2].1;
         let x4 = subdivide(dragon, 1).map_err(anyhow::Error::msg)?;
         let x16 = subdivide(dragon, 2).map_err(anyhow::Error::msg)?;
@@ -176,7 +182,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     let mut rows = Vec::new();
     for (name, m) in &inputs {
         let t = m.triangle_count();
-        let pb = if cfg.quiet {
+        let pb = if cfg.common.quiet {
             ProgressBar::hidden()
         } else {
             ProgressBar::new_spinner()
@@ -226,7 +232,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         };
         // The profile: the same run again with every dispatch timed on its own (its pass
         // boundaries cost a little, so its times are not the table's).
-        let profiled = PROFILED.contains(&name.as_str()) || (cfg.smoke && rows.is_empty());
+        let profiled = PROFILED.contains(&name.as_str()) || (cfg.common.smoke && rows.is_empty());
         let profile = if km_gpu.is_some() && profiled {
             pb.set_message(format!("{name} ({t} triangles): k-medoids, GPU profile"));
             g.time_each_kernel(true);
@@ -437,7 +443,7 @@ Kernel time per entry point (GPU timestamps around each dispatch, in a second ru
 }
 
 fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) -> Result<()> {
-    std::fs::create_dir_all(&cfg.out)?;
+    std::fs::create_dir_all(&cfg.common.out)?;
     let opt =
         |x: Option<f64>, f: &dyn Fn(f64) -> String| x.map(f).unwrap_or_else(|| "skipped".into());
     let mut md = String::new();
@@ -599,15 +605,15 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
         md,
         "\n![scaling](gpu_scaling.svg)\n\n![time vs error](gpu_time_vs_error.svg)\n\n![grower](gpu_grower_sweep.svg)"
     )?;
-    crate::atomic::write(cfg.out.join("gpu.md"), md)?;
-    crate::atomic::write(cfg.out.join("gpu.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("gpu.md"), md)?;
+    crate::atomic::write(cfg.common.out.join("gpu.csv"), csv)?;
     let pts = |f: &dyn Fn(&Row) -> Option<f64>| {
         rows.iter()
             .filter_map(|r| f(r).map(|y| (r.triangles as f64, y)))
             .collect::<Vec<_>>()
     };
     line_chart(
-        &cfg.out.join("gpu_scaling.svg"),
+        &cfg.common.out.join("gpu_scaling.svg"),
         "k-medoids and adjacency run time against mesh size",
         "triangles (log)",
         "seconds",
@@ -639,7 +645,7 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
         },
     )?;
     line_chart(
-        &cfg.out.join("gpu_time_vs_error.svg"),
+        &cfg.common.out.join("gpu_time_vs_error.svg"),
         "bunny: k-medoids objective against run time (iteration caps 0..16)",
         "seconds (initial clustering)",
         "mean hops to medoid",
@@ -656,7 +662,7 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
         Axes::default(),
     )?;
     line_chart(
-        &cfg.out.join("gpu_grower_sweep.svg"),
+        &cfg.common.out.join("gpu_grower_sweep.svg"),
         "bunny: bsphere-parallel meshlets against rounds (seed spacing 1, 2, 4, 8)",
         "growth rounds (parallel depth)",
         "meshlets",

@@ -3,14 +3,13 @@
 //! results/kmedoids.csv, results/kmedoids_sweep.csv and two plots.
 
 use super::build::{mesh_files, mesh_name};
-use super::{machine_note, plot, right_align_numbers, today};
+use super::{machine_note, plot, right_align_numbers, today, Common};
 use crate::mesh;
 use crate::meshlet::{bounds, validate, Limits, Metrics};
 use crate::strategy::kmedoids::{cluster, Clustering, Config as KConfig, Mode};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt::Write as _;
-use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 /// The paper's published k-medoids times (Table 4 and §5): (model, triangles, seconds).
@@ -20,23 +19,37 @@ pub const PAPER_TIMES: &[(&str, u32, f64)] = &[
     ("Asian Dragon", 7_200_000, 455_300.0),
 ];
 
-/// What to run.
-#[derive(Clone, Debug)]
+/// What to run: the arguments of `meshletlab bench kmedoids`.
+#[derive(clap::Args, Clone, Debug)]
 pub struct Config {
-    /// Folder of meshes.
-    pub meshes: PathBuf,
-    /// Output folder.
-    pub out: PathBuf,
-    /// Limits.
+    /// Mesh folder, output folder, smoke run (a half-second paper budget, the sweep on the first
+    /// smoke mesh), quiet.
+    #[command(flatten)]
+    pub common: Common,
+    /// Meshlet limits.
+    #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
     pub limits: Limits,
-    /// Paper mode's time budget per mesh.
-    pub paper_budget: Duration,
-    /// Skip paper mode (only fast).
+    /// Seconds paper mode may spend per mesh before finishing the fast way.
+    #[arg(long, default_value_t = 60.0)]
+    pub paper_budget: f64,
+    /// Run only the fast mode.
+    #[arg(long)]
     pub skip_paper: bool,
-    /// Mesh (file stem) for the sweep.
+    /// Mesh (file stem) for the iteration/threshold sweep.
+    #[arg(long, default_value = "stanford_bunny")]
     pub sweep_mesh: String,
-    /// No progress bar.
-    pub quiet: bool,
+}
+
+impl Config {
+    /// Paper mode's time budget per mesh (half a second in a smoke run).
+    pub fn paper_budget(&self) -> Duration {
+        Duration::from_secs_f64(self.common.or_smoke(self.paper_budget, 0.5).max(0.0))
+    }
+
+    /// The sweep's mesh (file stem): the first smoke mesh in a smoke run.
+    pub fn sweep_mesh(&self) -> &str {
+        self.common.or_smoke(&self.sweep_mesh, super::smoke::FIRST)
+    }
 }
 
 /// (threshold, max iterations, seconds, clustering, metrics) of one sweep point.
@@ -75,13 +88,14 @@ fn run_one(
 
 /// Runs both parts and writes the results.
 pub fn run(cfg: &Config) -> Result<()> {
-    let files = mesh_files(&cfg.meshes)?;
+    let meshes = cfg.common.meshes_dir()?;
+    let files = mesh_files(&meshes)?;
     let modes: Vec<Mode> = if cfg.skip_paper {
         vec![Mode::Fast]
     } else {
         vec![Mode::Fast, Mode::Paper]
     };
-    let pb = if cfg.quiet {
+    let pb = if cfg.common.quiet {
         ProgressBar::hidden()
     } else {
         ProgressBar::new((files.len() * modes.len()) as u64)
@@ -99,7 +113,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             pb.set_message(format!("{name} / {mode:?}"));
             let kc = KConfig {
                 mode,
-                paper_budget: cfg.paper_budget,
+                paper_budget: cfg.paper_budget(),
                 ..KConfig::default()
             };
             let (seconds, c, metrics) = run_one(&m, cfg.limits, kc, &name)?;
@@ -119,11 +133,11 @@ pub fn run(cfg: &Config) -> Result<()> {
     runs.sort_by_key(|r| (r.triangles, r.mesh.clone(), r.mode == Mode::Paper));
 
     // The sweep.
-    let Some((_, sm)) = loaded.iter().find(|(n, _)| *n == cfg.sweep_mesh) else {
+    let Some((_, sm)) = loaded.iter().find(|(n, _)| *n == cfg.sweep_mesh()) else {
         bail!(
             "sweep mesh '{}' is not in {}",
-            cfg.sweep_mesh,
-            cfg.meshes.display()
+            cfg.sweep_mesh(),
+            meshes.display()
         );
     };
     let iterations = [0u32, 1, 2, 4, 8, 16, 32];
@@ -136,12 +150,12 @@ pub fn run(cfg: &Config) -> Result<()> {
                 shift_threshold: th,
                 ..KConfig::default()
             };
-            let (secs, c, met) = run_one(sm, cfg.limits, kc, &cfg.sweep_mesh)?;
+            let (secs, c, met) = run_one(sm, cfg.limits, kc, cfg.sweep_mesh())?;
             sweep.push((th, it, secs, c, met));
         }
     }
 
-    std::fs::create_dir_all(&cfg.out)?;
+    std::fs::create_dir_all(&cfg.common.out)?;
     let mut csv = String::from("mesh,triangles,mode,seconds,meshlets,iterations,splits,budget_exhausted,mean_hops,primitive_fill,vertex_fill\n");
     for r in &runs {
         let _ = writeln!(
@@ -160,7 +174,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             r.metrics.vertex_fill
         );
     }
-    crate::atomic::write(cfg.out.join("kmedoids.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("kmedoids.csv"), csv)?;
     let mut scsv = String::from(
         "mesh,threshold,max_iterations,clustering_seconds,clustering_iterations,clustering_mean_hops,\
          seconds,iterations_run,mean_hops,meshlets,primitive_fill,vertex_fill\n",
@@ -169,7 +183,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         let _ = writeln!(
             scsv,
             "{},{th},{it},{:.4},{},{:.4},{secs:.4},{},{:.4},{},{:.5},{:.5}",
-            cfg.sweep_mesh,
+            cfg.sweep_mesh(),
             c.initial_seconds,
             c.initial_iterations,
             c.initial_mean_distance,
@@ -180,7 +194,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             met.vertex_fill
         );
     }
-    crate::atomic::write(cfg.out.join("kmedoids_sweep.csv"), scsv)?;
+    crate::atomic::write(cfg.common.out.join("kmedoids_sweep.csv"), scsv)?;
     let series = |x: &dyn Fn(&SweepRow) -> f64, y: &dyn Fn(&Clustering) -> f64| {
         thresholds
             .iter()
@@ -195,10 +209,10 @@ pub fn run(cfg: &Config) -> Result<()> {
             .collect::<Vec<_>>()
     };
     plot::line_chart(
-        &cfg.out.join("kmedoids_sweep_hops.svg"),
+        &cfg.common.out.join("kmedoids_sweep_hops.svg"),
         &format!(
             "k-medoids on {}: clustering time against objective (before fitting)",
-            cfg.sweep_mesh
+            cfg.sweep_mesh()
         ),
         "seconds of the k-medoids loop (log scale)",
         "mean hops to the medoid",
@@ -209,10 +223,10 @@ pub fn run(cfg: &Config) -> Result<()> {
         },
     )?;
     plot::line_chart(
-        &cfg.out.join("kmedoids_sweep_meshlets.svg"),
+        &cfg.common.out.join("kmedoids_sweep_meshlets.svg"),
         &format!(
             "k-medoids on {}: total time against final meshlet count",
-            cfg.sweep_mesh
+            cfg.sweep_mesh()
         ),
         "seconds in total (log scale)",
         "meshlets",
@@ -229,7 +243,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         s,
         "Written by `meshletlab bench kmedoids --limits {} --paper-budget {}` on {}. Do not edit: rerun the command.\n",
         cfg.limits,
-        cfg.paper_budget.as_secs_f64(),
+        cfg.paper_budget().as_secs_f64(),
         today()
     );
     let _ = writeln!(s, "Machine: {}.\n", machine_note());
@@ -239,7 +253,7 @@ pub fn run(cfg: &Config) -> Result<()> {
          split per round, a few iterations after each; `paper`: one cluster added and everything re-run per \
          overflow, as the paper does; when its budget of {} s runs out it finishes the fast way (marked). \
          Every output passed the validator.\n",
-        cfg.paper_budget.as_secs_f64()
+        cfg.paper_budget().as_secs_f64()
     );
     let mut t = comfy_table::Table::new();
     t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
@@ -310,7 +324,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     let _ = writeln!(
         s,
         "\n## Run time against error ({}, fast mode)\n",
-        cfg.sweep_mesh
+        cfg.sweep_mesh()
     );
     let _ = writeln!(
         s,
@@ -350,6 +364,6 @@ pub fn run(cfg: &Config) -> Result<()> {
     }
     right_align_numbers(&mut t, 0..10);
     let _ = writeln!(s, "{t}");
-    crate::atomic::write(cfg.out.join("kmedoids.md"), s)?;
+    crate::atomic::write(cfg.common.out.join("kmedoids.md"), s)?;
     Ok(())
 }

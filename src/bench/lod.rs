@@ -15,7 +15,7 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{line_chart, Axes, Series};
-use super::{machine_note, median, today};
+use super::{machine_note, median, today, Common};
 use crate::lod::flat::{self, Flat};
 use crate::lod::{self, Grouping, Level, LodInfo, NO_GROUP};
 use crate::mesh::{self, Mesh};
@@ -26,36 +26,77 @@ use crate::strategy::{self, Options};
 use anyhow::{Context as _, Result};
 use indicatif::ProgressBar;
 use std::fmt::Write as _;
-use std::path::PathBuf;
 use std::time::Instant;
 
-/// What to run.
-#[derive(Clone, Debug)]
+/// What to run: the arguments of `meshletlab bench lod`.
+#[derive(clap::Args, Clone, Debug)]
 pub struct Config {
-    /// Folder of meshes.
-    pub meshes: PathBuf,
-    /// Output folder.
-    pub out: PathBuf,
+    /// Mesh folder, output folder, smoke run (one run, two selection views, at most one render
+    /// view, no 14 M dragon), quiet.
+    #[command(flatten)]
+    pub common: Common,
     /// Interleaved build runs per configuration (median reported).
-    pub runs: usize,
-    /// Camera distances in bounding radii.
-    pub distances: Vec<f32>,
-    /// Views per distance for the triangle counts.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    pub runs: u32,
+    /// Random directions per camera distance for the triangle counts.
+    #[arg(long, default_value_t = 16)]
     pub select_views: usize,
-    /// Views per distance for frame times (0: no rendering).
+    /// Views per camera distance for frame times (0: do not render).
+    #[arg(long, default_value_t = 3)]
     pub render_views: usize,
     /// LOD threshold in pixels.
+    #[arg(long, default_value_t = 1.0)]
     pub threshold: f32,
-    /// Level-0 strategies compared on the meshes below `strategy_max_triangles`.
-    pub strategies: Vec<String>,
-    /// Largest mesh of the strategy comparison.
+    /// Level-0 strategies to compare (comma-separated).
+    #[arg(short, long, value_delimiter = ',', default_values_t = DEFAULT_STRATEGIES.iter().map(|s| s.to_string()))]
+    pub strategy: Vec<String>,
+    /// Largest mesh (triangles) of the level-0 strategy comparison.
+    #[arg(long, default_value_t = 400_000)]
     pub strategy_max_triangles: usize,
     /// Leave out the dragon subdivided to 14 M triangles.
+    #[arg(long)]
     pub quick: bool,
+    /// Our DAG: target meshlets per group.
+    #[arg(long, default_value_t = lod::Config::default().group_size as u32, value_parser = clap::value_parser!(u32).range(2..=64))]
+    pub group_size: u32,
+    /// Our DAG: permissive simplification (as clod).
+    #[arg(long)]
+    pub permissive: bool,
+    /// Camera distances in bounding radii (not an argument: [`DISTANCES`]).
+    #[arg(skip = DISTANCES.to_vec())]
+    pub distances: Vec<f32>,
+}
+
+impl Config {
+    /// Interleaved build runs per configuration: one in a smoke run.
+    pub fn runs(&self) -> usize {
+        self.common.or_smoke(self.runs as usize, 1)
+    }
+
+    /// Views per distance for the triangle counts (at least one; two in a smoke run).
+    pub fn select_views(&self) -> usize {
+        self.common.or_smoke(self.select_views.max(1), 2)
+    }
+
+    /// Views per distance for frame times (0: no rendering; at most one in a smoke run).
+    pub fn render_views(&self) -> usize {
+        self.common
+            .or_smoke(self.render_views, self.render_views.min(1))
+    }
+
+    /// Whether the 14 M-triangle dragon is left out (asked, or a smoke run).
+    pub fn quick(&self) -> bool {
+        self.quick || self.common.smoke
+    }
+
     /// Our DAG's build settings.
-    pub lod: lod::Config,
-    /// No progress output.
-    pub quiet: bool,
+    pub fn lod(&self) -> lod::Config {
+        lod::Config {
+            group_size: self.group_size as usize,
+            permissive: self.permissive,
+            ..Default::default()
+        }
+    }
 }
 
 /// The default camera distances (bounding radii): 1.5 to 48 in steps of sqrt(2).
@@ -281,14 +322,14 @@ fn bench_mesh(
     let confs = configs();
     let mut times: Vec<(Vec<f64>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); confs.len()];
     let mut built: Vec<Option<(Vec<Level>, usize)>> = (0..confs.len()).map(|_| None).collect();
-    for _ in 0..cfg.runs.max(1) {
+    for _ in 0..cfg.runs().max(1) {
         for (k, (label, limits)) in confs.iter().enumerate() {
             pb.set_message(format!("{name}: building {label}"));
             match limits {
                 Some((l, grouping)) => {
                     let lc = lod::Config {
                         grouping: *grouping,
-                        ..cfg.lod
+                        ..cfg.lod()
                     };
                     let (levels, stuck, t2) = ours(m, "meshopt", *l, 2, &lc)?;
                     let (levels1, _, t1) = ours(m, "meshopt", *l, 1, &lc)?;
@@ -335,7 +376,7 @@ fn bench_mesh(
                 .iter()
                 .enumerate()
                 .map(|(k, &d)| {
-                    let cams = Camera::random_views(m, cfg.select_views, 0x10d + k as u64, d);
+                    let cams = Camera::random_views(m, cfg.select_views(), 0x10d + k as u64, d);
                     let sum: usize = cams
                         .iter()
                         .map(|c| selected_triangles(fl, c, cfg.threshold))
@@ -346,7 +387,7 @@ fn bench_mesh(
         })
         .collect();
     let (mut frame_ms, mut full_ms) = (Vec::new(), Vec::new());
-    if let (Some(ctx), true) = (ctx, cfg.render_views > 0) {
+    if let (Some(ctx), true) = (ctx, cfg.render_views() > 0) {
         pb.set_message(format!("{name}: rendering"));
         let passes: Vec<Pass> = flats
             .iter()
@@ -360,7 +401,7 @@ fn bench_mesh(
         };
         frame_ms = vec![Vec::new(); passes.len()];
         for (k, &d) in cfg.distances.iter().enumerate() {
-            let cams = Camera::random_views(m, cfg.render_views + 1, 0x10d + k as u64, d);
+            let cams = Camera::random_views(m, cfg.render_views() + 1, 0x10d + k as u64, d);
             let mut t: Vec<Vec<f64>> = vec![Vec::new(); passes.len()];
             let mut tf = Vec::new();
             // Interleaved per view; the first view warms up and is discarded.
@@ -396,7 +437,7 @@ fn bench_mesh(
 /// Level-0 strategy comparison on one mesh: per strategy, mean selected triangles per distance of
 /// its 64/126 DAG (equal error: the same threshold and views).
 fn strategy_curve(cfg: &Config, m: &Mesh, strategy: &str) -> Result<(Vec<f64>, usize, f64)> {
-    let (levels, _, secs) = ours(m, strategy, Limits::DEFAULT, 2, &cfg.lod)?;
+    let (levels, _, secs) = ours(m, strategy, Limits::DEFAULT, 2, &cfg.lod())?;
     let fl = Flat::from_levels(m, &levels);
     let total: usize = levels.iter().map(lod::level_triangles).sum();
     let curve = cfg
@@ -404,7 +445,7 @@ fn strategy_curve(cfg: &Config, m: &Mesh, strategy: &str) -> Result<(Vec<f64>, u
         .iter()
         .enumerate()
         .map(|(k, &d)| {
-            let cams = Camera::random_views(m, cfg.select_views, 0x10d + k as u64, d);
+            let cams = Camera::random_views(m, cfg.select_views(), 0x10d + k as u64, d);
             cams.iter()
                 .map(|c| selected_triangles(&fl, c, cfg.threshold))
                 .sum::<usize>() as f64
@@ -502,15 +543,18 @@ fn fmt_ratio(a: usize, b: usize) -> String {
 
 /// Runs the benchmark and writes the results.
 pub fn run(cfg: &Config) -> Result<()> {
-    let files = mesh_files(&cfg.meshes)?;
-    std::fs::create_dir_all(&cfg.out)
-        .with_context(|| format!("{}: cannot create", cfg.out.display()))?;
-    let ctx = if cfg.render_views > 0 {
+    if !(cfg.threshold > 0.0 && cfg.threshold.is_finite()) {
+        anyhow::bail!("--threshold must be a positive number of pixels");
+    }
+    let files = mesh_files(&cfg.common.meshes_dir()?)?;
+    std::fs::create_dir_all(&cfg.common.out)
+        .with_context(|| format!("{}: cannot create", cfg.common.out.display()))?;
+    let ctx = if cfg.render_views() > 0 {
         Some(Context::new(false)?)
     } else {
         None
     };
-    let pb = if cfg.quiet {
+    let pb = if cfg.common.quiet {
         ProgressBar::hidden()
     } else {
         ProgressBar::new(files.len() as u64)
@@ -535,7 +579,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         .iter()
         .filter(|(_, m)| m.triangle_count() <= cfg.strategy_max_triangles)
     {
-        for s in &cfg.strategies {
+        for s in &cfg.strategy {
             pb.set_message(format!("{name}: level-0 strategy {s}"));
             let (c, total, secs) = strategy_curve(cfg, m, s)?;
             strat.push((name.clone(), s.clone(), c, total, secs));
@@ -543,7 +587,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     }
     // The dragon at 14 M triangles: builds only (ours on 2 threads, clod on one).
     let mut big = None;
-    if !cfg.quick {
+    if !cfg.quick() {
         if let Some((_, dragon)) = meshes.iter().find(|(n, _)| n.contains("dragon")) {
             pb.set_message("dragon x16: subdividing");
             let m = mesh::subdivide::subdivide(dragon, 2).map_err(anyhow::Error::msg)?;
@@ -551,7 +595,7 @@ pub fn run(cfg: &Config) -> Result<()> {
                 "dragon x16 ({} triangles): ours",
                 m.triangle_count()
             ));
-            let (levels, stuck, t2) = ours(&m, "meshopt", Limits::DEFAULT, 2, &cfg.lod)?;
+            let (levels, stuck, t2) = ours(&m, "meshopt", Limits::DEFAULT, 2, &cfg.lod())?;
             let d_ours = Dag {
                 label: "ours 64/126".into(),
                 levels,
@@ -601,7 +645,7 @@ fn write_results(
         machine_note(),
         device.as_deref().unwrap_or("not rendered")
     )?;
-    writeln!(md, "Ours: `meshletlab::lod::build` with meshoptimizer's splitter (`meshopt` strategy) at 64/126 and at clod's 128/128, groups of 8 (meshoptimizer's partition_clusters; the last row per mesh groups by our k-medoids on the meshlet graph instead, `lod::group`), simplify_with_locks to half. Peer: meshoptimizer 1.3 `clod_build(clod_default_config(128))`, single-threaded by design. Build times: median of {} interleaved runs; ours on 1 and 2 rayon threads (the same DAG on both, checked).\n", cfg.runs)?;
+    writeln!(md, "Ours: `meshletlab::lod::build` with meshoptimizer's splitter (`meshopt` strategy) at 64/126 and at clod's 128/128, groups of 8 (meshoptimizer's partition_clusters; the last row per mesh groups by our k-medoids on the meshlet graph instead, `lod::group`), simplify_with_locks to half. Peer: meshoptimizer 1.3 `clod_build(clod_default_config(128))`, single-threaded by design. Build times: median of {} interleaved runs; ours on 1 and 2 rayon threads (the same DAG on both, checked).\n", cfg.runs())?;
     writeln!(md, "## Builds\n")?;
     writeln!(md, "| mesh | triangles | DAG | build s (1 thr) | build s (2 thr) | M tri/s (best) | levels | roots | stuck | monotonic violations | meshlets | all levels / source | tri/meshlet | level ratios |")?;
     writeln!(
@@ -679,7 +723,7 @@ fn write_results(
         "\n## Triangles selected against camera distance ({} px threshold)\n",
         cfg.threshold
     )?;
-    writeln!(md, "Mean over {} random directions per distance (1280x720, 60 degree field of view), LOD rule only (no culling), the same selection code for every DAG. Ratio = ours 128/128 over clod 128 (same limits); below 1 means fewer triangles at the same error bound.\n", cfg.select_views)?;
+    writeln!(md, "Mean over {} random directions per distance (1280x720, 60 degree field of view), LOD rule only (no culling), the same selection code for every DAG. Ratio = ours 128/128 over clod 128 (same limits); below 1 means fewer triangles at the same error bound.\n", cfg.select_views())?;
     let dist_head: Vec<String> = cfg.distances.iter().map(|d| format!("{d} r")).collect();
     writeln!(md, "| mesh | DAG | {} |", dist_head.join(" | "))?;
     writeln!(md, "|---|---|{}", "---:|".repeat(cfg.distances.len()))?;
@@ -735,7 +779,7 @@ fn write_results(
     )?;
     writeln!(md, "![ours / clod](lod_ratio.svg)\n")?;
     line_chart(
-        &cfg.out.join("lod_ratio.svg"),
+        &cfg.common.out.join("lod_ratio.svg"),
         "Triangles selected at 1 px: ours 128/128 / clod 128",
         "camera distance (bounding radii)",
         "ours / clod",
@@ -748,7 +792,7 @@ fn write_results(
     if let Some(r) = results.iter().find(|r| r.name.contains("dragon")) {
         let series = dag_series(cfg, r, &r.curve);
         line_chart(
-            &cfg.out.join("lod_dragon_triangles.svg"),
+            &cfg.common.out.join("lod_dragon_triangles.svg"),
             &format!("{}: triangles selected at {} px", r.name, cfg.threshold),
             "camera distance (bounding radii)",
             "triangles",
@@ -763,7 +807,7 @@ fn write_results(
     // Frame times.
     if results.iter().any(|r| !r.frame_ms.is_empty()) {
         writeln!(md, "## Frame time against camera distance ({} px, task-shader LOD with frustum and cone culling)\n", cfg.threshold)?;
-        writeln!(md, "Median GPU ms per frame over {} views per distance (one discarded first), on {}; \"full\" draws the source's 64/126 meshlets with culling. On lavapipe the GPU is the CPU: compare ratios, not absolute numbers.\n", cfg.render_views, device.as_deref().unwrap_or("?"))?;
+        writeln!(md, "Median GPU ms per frame over {} views per distance (one discarded first), on {}; \"full\" draws the source's 64/126 meshlets with culling. On lavapipe the GPU is the CPU: compare ratios, not absolute numbers.\n", cfg.render_views(), device.as_deref().unwrap_or("?"))?;
         writeln!(md, "| mesh | DAG | {} |", dist_head.join(" | "))?;
         writeln!(md, "|---|---|{}", "---:|".repeat(cfg.distances.len()))?;
         for r in results.iter().filter(|r| !r.frame_ms.is_empty()) {
@@ -784,7 +828,7 @@ fn write_results(
                 points: along(&cfg.distances, &r.full_ms),
             });
             line_chart(
-                &cfg.out.join("lod_dragon_frame_time.svg"),
+                &cfg.common.out.join("lod_dragon_frame_time.svg"),
                 &format!("{}: frame time at {} px", r.name, cfg.threshold),
                 "camera distance (bounding radii)",
                 "GPU ms per frame",
@@ -838,9 +882,9 @@ fn write_results(
                 .join(", ")
         )?;
     }
-    crate::atomic::write(cfg.out.join("lod.md"), md)?;
-    crate::atomic::write(cfg.out.join("lod.csv"), csv)?;
-    crate::atomic::write(cfg.out.join("lod_levels.csv"), level_csv)?;
-    crate::atomic::write(cfg.out.join("lod_curve.csv"), curve_csv)?;
+    crate::atomic::write(cfg.common.out.join("lod.md"), md)?;
+    crate::atomic::write(cfg.common.out.join("lod.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("lod_levels.csv"), level_csv)?;
+    crate::atomic::write(cfg.common.out.join("lod_curve.csv"), curve_csv)?;
     Ok(())
 }

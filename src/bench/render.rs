@@ -8,7 +8,7 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{bar_chart, line_chart, Axes, Bars, Series};
-use super::{machine_note, median, p95, today};
+use super::{machine_note, median, p95, today, Common};
 use crate::mesh::{self, Mesh};
 use crate::meshlet::descriptor::Format;
 use crate::meshlet::order::{
@@ -20,35 +20,55 @@ use crate::strategy::{self, Options};
 use anyhow::{Context as _, Result};
 use indicatif::ProgressBar;
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 /// The paper's Table 6: ns per triangle of its linear regressions on an RTX 2080 Ti (range over its
 /// strategies).
 pub const PAPER_NS_PER_TRIANGLE: (f64, f64) = (0.0899, 0.0974);
 
-/// What to run.
-#[derive(Clone, Debug)]
+/// What to run: the arguments of `meshletlab bench render`.
+#[derive(clap::Args, Clone, Debug)]
 pub struct Config {
-    /// Folder of meshes.
-    pub meshes: PathBuf,
-    /// Output folder.
-    pub out: PathBuf,
+    /// Mesh folder, output folder, smoke run (one view per mesh), quiet.
+    #[command(flatten)]
+    pub common: Common,
     /// Meshlet limits.
+    #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
     pub limits: Limits,
-    /// Strategies (names).
-    pub strategies: Vec<String>,
-    /// Strategies of the layout and ordering experiments (Figures 10 and 12, triangle order).
-    pub experiment_strategies: Vec<String>,
-    /// Views per mesh (one more is rendered first and discarded).
+    /// Strategies (comma-separated).
+    #[arg(short, long, value_delimiter = ',', default_values_t = DEFAULT_STRATEGIES.iter().map(|s| s.to_string()))]
+    pub strategy: Vec<String>,
+    /// Strategies of the experiments: the four descriptor layouts, meshlets ordered by
+    /// primitive count, triangle order inside meshlets (comma-separated; empty: none).
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_EXPERIMENT_STRATEGIES.iter().map(|s| s.to_string()))]
+    pub experiment_strategy: Vec<String>,
+    /// Views per mesh (sized for lavapipe; the paper used 100,000 frames on a GPU).
+    #[arg(long, default_value_t = 10)]
     pub views: usize,
     /// Seed of the view sequence.
+    #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Camera distance in bounding radii (every view sees the whole mesh).
+    /// Camera distance from the mesh centre in bounding radii (every view sees the whole mesh).
+    #[arg(long, default_value_t = 2.5)]
     pub distance: f32,
-    /// Distance of the close views, inside the bounding sphere (the frustum culls).
+    /// Distance of the close views for the culling shares (inside the bounding sphere, so the
+    /// frustum culls).
+    #[arg(long, default_value_t = 0.9)]
     pub near_distance: f32,
-    /// No progress output.
-    pub quiet: bool,
+}
+
+impl Config {
+    /// Views per mesh (one more is rendered first and discarded): one in a smoke run.
+    pub fn views(&self) -> usize {
+        self.common.or_smoke(self.views, 1)
+    }
+
+    /// Strategies of the layout and ordering experiments (Figures 10 and 12, triangle order), the
+    /// empty names of `--experiment-strategy ''` left out.
+    pub fn experiment_strategies(&self) -> Vec<String> {
+        let mut v = self.experiment_strategy.clone();
+        v.retain(|s| !s.is_empty());
+        v
+    }
 }
 
 /// The default strategies: the paper's, the peer, and ours.
@@ -180,11 +200,12 @@ fn build(m: &Mesh, s: &str, limits: Limits, name: &str) -> Result<Meshlets> {
 
 /// Runs the benchmark and writes the results.
 pub fn run(cfg: &Config) -> Result<()> {
+    let meshes = cfg.common.meshes_dir()?;
     let ctx = Context::new(false)?;
-    let files = mesh_files(&cfg.meshes)?;
-    std::fs::create_dir_all(&cfg.out)?;
-    let per_mesh = cfg.strategies.len() + cfg.experiment_strategies.len();
-    let pb = if cfg.quiet {
+    let files = mesh_files(&meshes)?;
+    std::fs::create_dir_all(&cfg.common.out)?;
+    let per_mesh = cfg.strategy.len() + cfg.experiment_strategies().len();
+    let pb = if cfg.common.quiet {
         ProgressBar::hidden()
     } else {
         ProgressBar::new((files.len() * per_mesh) as u64)
@@ -194,15 +215,15 @@ pub fn run(cfg: &Config) -> Result<()> {
     for path in &files {
         let name = mesh_name(path);
         let m = load(path)?;
-        let views = Camera::random_views(&m, cfg.views.max(1), cfg.seed, cfg.distance);
-        let near = Camera::random_views(&m, cfg.views.max(1), cfg.seed, cfg.near_distance);
-        for s in &cfg.strategies {
+        let views = Camera::random_views(&m, cfg.views().max(1), cfg.seed, cfg.distance);
+        let near = Camera::random_views(&m, cfg.views().max(1), cfg.seed, cfg.near_distance);
+        for s in &cfg.strategy {
             pb.set_message(format!("{name}: {s}"));
             let ml = build(&m, s, cfg.limits, &name)?;
             rows.push(strategy_row(cfg, &ctx, &m, &name, s, &ml, &views, &near)?);
             pb.inc(1);
         }
-        for s in &cfg.experiment_strategies {
+        for s in &cfg.experiment_strategies() {
             pb.set_message(format!("{name}: {s}, layouts and orders"));
             variants.extend(experiments(cfg, &ctx, &m, &name, s, &views)?);
             pb.inc(1);
@@ -247,7 +268,8 @@ fn strategy_row(
             &pass,
             &fig,
             true,
-            &cfg.out
+            &cfg.common
+                .out
                 .join(format!("render_bunny_{}.png", s.replace('+', "_"))),
         )?;
     }
@@ -396,7 +418,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
         today(),
         machine_note()
     )?;
-    writeln!(md, "Device: **{}** (Vulkan, VK_EXT_mesh_shader). {}×{}, 4× MSAA resolved, D32 depth, back faces culled by the rasteriser in both pipelines. {} seeded random views per mesh at {} bounding radii (seed {}; every view sees the whole mesh), the first frame discarded; GPU time from timestamps around the draw. Close views for the culling shares: the same directions at {} radii. Limits {}/{}. Meshlets in the split layout unless a table says otherwise.\n", ctx.name, WIDTH, HEIGHT, cfg.views, cfg.distance, cfg.seed, cfg.near_distance, cfg.limits.max_vertices, cfg.limits.max_triangles)?;
+    writeln!(md, "Device: **{}** (Vulkan, VK_EXT_mesh_shader). {}×{}, 4× MSAA resolved, D32 depth, back faces culled by the rasteriser in both pipelines. {} seeded random views per mesh at {} bounding radii (seed {}; every view sees the whole mesh), the first frame discarded; GPU time from timestamps around the draw. Close views for the culling shares: the same directions at {} radii. Limits {}/{}. Meshlets in the split layout unless a table says otherwise.\n", ctx.name, WIDTH, HEIGHT, cfg.views(), cfg.distance, cfg.seed, cfg.near_distance, cfg.limits.max_vertices, cfg.limits.max_triangles)?;
     writeln!(md, "On lavapipe the \"GPU\" is this machine's CPU cores running LLVM-compiled shaders: the ratios say how the two pipelines map onto a software rasteriser, not onto a GPU.\n")?;
     writeln!(md, "## ms per frame\n")?;
     writeln!(md, "| mesh | triangles | strategy | meshlets | mesh, culling: median (p95) | mesh, no culling: median (p95) | vertex pipeline: median (p95) | mesh culling / vertex |")?;
@@ -449,7 +471,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
     writeln!(md, "| pipeline | ns per triangle | intercept ms |")?;
     writeln!(md, "|---|---:|---:|")?;
     let mut series = Vec::new();
-    let mut names: Vec<&str> = cfg.strategies.iter().map(String::as_str).collect();
+    let mut names: Vec<&str> = cfg.strategy.iter().map(String::as_str).collect();
     names.push("vertex pipeline");
     for s in names {
         let pts: Vec<(f64, f64)> = if s == "vertex pipeline" {
@@ -487,7 +509,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
         "## The bunny coloured by meshlet (paper Figure 1)\n\nThe first view's direction, the camera moved in until the bunny fills {:.0} % of the frame's height or width; task-shader culling on, so culled meshlets are absent.\n",
         100.0 * crate::render::FRAME_FILL
     )?;
-    for s in &cfg.strategies {
+    for s in &cfg.strategy {
         writeln!(
             md,
             "{s}:\n\n![{s}](render_bunny_{}.png)\n",
@@ -495,10 +517,10 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
         )?;
     }
     write_experiments(cfg, &mut md, variants)?;
-    crate::atomic::write(cfg.out.join("render.md"), md)?;
-    crate::atomic::write(cfg.out.join("render.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("render.md"), md)?;
+    crate::atomic::write(cfg.common.out.join("render.csv"), csv)?;
     line_chart(
-        &cfg.out.join("render_per_triangle.svg"),
+        &cfg.common.out.join("render_per_triangle.svg"),
         "median ms per frame against triangles (no culling)",
         "triangles",
         "ms per frame",
@@ -544,7 +566,7 @@ fn write_culling(cfg: &Config, md: &mut String, rows: &[Row]) -> Result<()> {
         let v: Vec<f64> = rows.iter().filter(|r| r.strategy == s).map(f).collect();
         v.iter().sum::<f64>() / v.len().max(1) as f64
     };
-    let cats: Vec<String> = cfg.strategies.clone();
+    let cats: Vec<String> = cfg.strategy.clone();
     let series = |label: &str, stack: usize, f: &dyn Fn(&Row) -> f64| Bars {
         label: label.to_string(),
         values: cats.iter().map(|s| mean(s, f)).collect(),
@@ -558,7 +580,7 @@ fn write_culling(cfg: &Config, md: &mut String, rows: &[Row]) -> Result<()> {
     ];
     writeln!(md, "\nMean over the meshes (left bar of each pair: far views; right: close views):\n\n![culled meshlets](render_culling.svg)\n")?;
     bar_chart(
-        &cfg.out.join("render_culling.svg"),
+        &cfg.common.out.join("render_culling.svg"),
         "meshlets culled by the task shader, % (mean over the meshes)",
         "% of meshlets",
         &cats,
@@ -600,9 +622,9 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
             p95(&v.no_cull)
         )?;
     }
-    crate::atomic::write(cfg.out.join("render_experiments.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("render_experiments.csv"), csv)?;
     writeln!(md, "\n## Experiments\n")?;
-    writeln!(md, "Each experiment renders its variants of the same meshlets over the same far views in interleaved order (view 0 for every variant, then view 1, ...), so machine noise hits them alike; ratios are of medians against the first variant (< 1: faster). Strategies: {}.\n", cfg.experiment_strategies.join(", "))?;
+    writeln!(md, "Each experiment renders its variants of the same meshlets over the same far views in interleaved order (view 0 for every variant, then view 1, ...), so machine noise hits them alike; ratios are of medians against the first variant (< 1: faster). Strategies: {}.\n", cfg.experiment_strategies().join(", "))?;
 
     writeln!(
         md,
@@ -656,7 +678,7 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
         Format::ALL.map(|f| f.name()).join(" | ")
     )?;
     writeln!(md, "|---|{}", "---:|".repeat(Format::ALL.len()))?;
-    for s in &cfg.experiment_strategies {
+    for s in &cfg.experiment_strategies() {
         let cells: Vec<String> = Format::ALL
             .iter()
             .map(|f| {
@@ -673,7 +695,7 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
         .map(|(i, f)| Bars {
             label: f.name().to_string(),
             values: cfg
-                .experiment_strategies
+                .experiment_strategies()
                 .iter()
                 .map(|s| {
                     ratios
@@ -685,10 +707,10 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
         })
         .collect();
     bar_chart(
-        &cfg.out.join("render_descriptors.svg"),
+        &cfg.common.out.join("render_descriptors.svg"),
         "ms per frame with culling relative to split (geometric mean over the meshes)",
         "ratio to split",
-        &cfg.experiment_strategies,
+        &cfg.experiment_strategies(),
         &bars,
     )?;
     writeln!(md, "\n![descriptor layouts](render_descriptors.svg)\n")?;
@@ -741,7 +763,7 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
                 n1 / n0
             )?;
         }
-        for s in &cfg.experiment_strategies {
+        for s in &cfg.experiment_strategies() {
             let (c, n): (Vec<f64>, Vec<f64>) = all
                 .iter()
                 .filter(|a| &a.0 == s)
