@@ -3,7 +3,11 @@
 //! results/kmedoids.csv, results/kmedoids_sweep.csv and two plots.
 
 use super::build::{mesh_files, mesh_name};
-use super::{machine_note, plot, right_align_numbers, today, Common};
+use super::table::{
+    Align::{Left, Right},
+    Style, Table,
+};
+use super::{machine_note, plot, today, Common};
 use crate::mesh;
 use crate::meshlet::{bounds, validate, Limits, Metrics};
 use crate::strategy::kmedoids::{cluster, Clustering, Config as KConfig, Mode};
@@ -86,6 +90,112 @@ fn run_one(
     Ok((secs, c, metrics))
 }
 
+/// Both modes on every mesh: kmedoids.md's table and kmedoids.csv.
+fn runs_table<'a>() -> Table<'a, Run> {
+    Table::new(Style::Padded)
+        .col("mesh", Left, |r: &Run| r.mesh.clone())
+        .col("triangles", Right, |r| r.triangles.to_string())
+        .split(
+            "mode",
+            Left,
+            |r| format!("{:?}", r.mode).to_lowercase(),
+            "mode",
+            |r| format!("{:?}", r.mode),
+        )
+        .split(
+            "seconds",
+            Right,
+            |r| format!("{:.2}", r.seconds),
+            "seconds",
+            |r| format!("{:.4}", r.seconds),
+        )
+        .col("meshlets", Right, |r| r.c.meshlets.len().to_string())
+        .col("iterations", Right, |r| r.c.iterations.to_string())
+        .col("splits", Right, |r| r.c.splits.to_string())
+        .csv_only("budget_exhausted", |r| r.c.budget_exhausted.to_string())
+        .split(
+            "mean hops",
+            Right,
+            |r| format!("{:.2}", r.c.mean_distance()),
+            "mean_hops",
+            |r| format!("{:.4}", r.c.mean_distance()),
+        )
+        .split(
+            "pfill",
+            Right,
+            |r| format!("{:.3}", r.metrics.primitive_fill),
+            "primitive_fill",
+            |r| format!("{:.5}", r.metrics.primitive_fill),
+        )
+        .csv_only("vertex_fill", |r| format!("{:.5}", r.metrics.vertex_fill))
+        .md("note", Left, |r| {
+            if r.c.budget_exhausted {
+                "budget ran out: finished fast".into()
+            } else {
+                String::new()
+            }
+        })
+}
+
+/// The sweep on `mesh`: kmedoids.md's last table and kmedoids_sweep.csv.
+fn sweep_table(mesh: &str) -> Table<'_, SweepRow> {
+    Table::new(Style::Padded)
+        .csv_only("mesh", move |_: &SweepRow| mesh.to_string())
+        .col("threshold", Right, |(th, ..)| th.to_string())
+        .renamed("max iterations", "max_iterations", Right, |(_, it, ..)| {
+            it.to_string()
+        })
+        .csv_only("clustering_seconds", |(.., c, _)| {
+            format!("{:.4}", c.initial_seconds)
+        })
+        .renamed(
+            "clustering iterations",
+            "clustering_iterations",
+            Right,
+            |(.., c, _)| c.initial_iterations.to_string(),
+        )
+        .md("clustering s", Right, |(.., c, _)| {
+            format!("{:.3}", c.initial_seconds)
+        })
+        .split(
+            "clustering mean hops",
+            Right,
+            |(.., c, _)| format!("{:.3}", c.initial_mean_distance),
+            "clustering_mean_hops",
+            |(.., c, _)| format!("{:.4}", c.initial_mean_distance),
+        )
+        .split(
+            "total s",
+            Right,
+            |(_, _, secs, ..)| format!("{secs:.3}"),
+            "seconds",
+            |(_, _, secs, ..)| format!("{secs:.4}"),
+        )
+        .csv_only("iterations_run", |(.., c, _)| c.iterations.to_string())
+        .split(
+            "final mean hops",
+            Right,
+            |(.., c, _)| format!("{:.3}", c.mean_distance()),
+            "mean_hops",
+            |(.., c, _)| format!("{:.4}", c.mean_distance()),
+        )
+        .col("meshlets", Right, |(.., c, _)| c.meshlets.len().to_string())
+        .split(
+            "pfill",
+            Right,
+            |(.., met)| format!("{:.3}", met.primitive_fill),
+            "primitive_fill",
+            |(.., met)| format!("{:.5}", met.primitive_fill),
+        )
+        .split(
+            "vfill",
+            Right,
+            |(.., met)| format!("{:.3}", met.vertex_fill),
+            "vertex_fill",
+            |(.., met)| format!("{:.5}", met.vertex_fill),
+        )
+}
+
 /// Runs both parts and writes the results.
 pub fn run(cfg: &Config) -> Result<()> {
     let meshes = cfg.common.meshes_dir()?;
@@ -156,45 +266,11 @@ pub fn run(cfg: &Config) -> Result<()> {
     }
 
     std::fs::create_dir_all(&cfg.common.out)?;
-    let mut csv = String::from("mesh,triangles,mode,seconds,meshlets,iterations,splits,budget_exhausted,mean_hops,primitive_fill,vertex_fill\n");
-    for r in &runs {
-        let _ = writeln!(
-            csv,
-            "{},{},{:?},{:.4},{},{},{},{},{:.4},{:.5},{:.5}",
-            r.mesh,
-            r.triangles,
-            r.mode,
-            r.seconds,
-            r.c.meshlets.len(),
-            r.c.iterations,
-            r.c.splits,
-            r.c.budget_exhausted,
-            r.c.mean_distance(),
-            r.metrics.primitive_fill,
-            r.metrics.vertex_fill
-        );
-    }
-    crate::atomic::write(cfg.common.out.join("kmedoids.csv"), csv)?;
-    let mut scsv = String::from(
-        "mesh,threshold,max_iterations,clustering_seconds,clustering_iterations,clustering_mean_hops,\
-         seconds,iterations_run,mean_hops,meshlets,primitive_fill,vertex_fill\n",
-    );
-    for (th, it, secs, c, met) in &sweep {
-        let _ = writeln!(
-            scsv,
-            "{},{th},{it},{:.4},{},{:.4},{secs:.4},{},{:.4},{},{:.5},{:.5}",
-            cfg.sweep_mesh(),
-            c.initial_seconds,
-            c.initial_iterations,
-            c.initial_mean_distance,
-            c.iterations,
-            c.mean_distance(),
-            c.meshlets.len(),
-            met.primitive_fill,
-            met.vertex_fill
-        );
-    }
-    crate::atomic::write(cfg.common.out.join("kmedoids_sweep.csv"), scsv)?;
+    crate::atomic::write(cfg.common.out.join("kmedoids.csv"), runs_table().csv(&runs))?;
+    crate::atomic::write(
+        cfg.common.out.join("kmedoids_sweep.csv"),
+        sweep_table(cfg.sweep_mesh()).csv(&sweep),
+    )?;
     let series = |x: &dyn Fn(&SweepRow) -> f64, y: &dyn Fn(&Clustering) -> f64| {
         thresholds
             .iter()
@@ -255,41 +331,7 @@ pub fn run(cfg: &Config) -> Result<()> {
          Every output passed the validator.\n",
         cfg.paper_budget().as_secs_f64()
     );
-    let mut t = comfy_table::Table::new();
-    t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
-    t.set_header([
-        "mesh",
-        "triangles",
-        "mode",
-        "seconds",
-        "meshlets",
-        "iterations",
-        "splits",
-        "mean hops",
-        "pfill",
-        "note",
-    ]);
-    for r in &runs {
-        t.add_row([
-            r.mesh.clone(),
-            r.triangles.to_string(),
-            format!("{:?}", r.mode).to_lowercase(),
-            format!("{:.2}", r.seconds),
-            r.c.meshlets.len().to_string(),
-            r.c.iterations.to_string(),
-            r.c.splits.to_string(),
-            format!("{:.2}", r.c.mean_distance()),
-            format!("{:.3}", r.metrics.primitive_fill),
-            if r.c.budget_exhausted {
-                "budget ran out: finished fast".into()
-            } else {
-                String::new()
-            },
-        ]);
-    }
-    right_align_numbers(&mut t, 1..2);
-    right_align_numbers(&mut t, 3..9);
-    let _ = writeln!(s, "{t}\n");
+    let _ = writeln!(s, "{}\n", runs_table().markdown(&runs));
     let _ = writeln!(s, "## The paper's k-medoids times (their machine)\n");
     let _ = writeln!(
         s,
@@ -334,36 +376,7 @@ pub fn run(cfg: &Config) -> Result<()> {
          (2 iterations each) largely even out the final result. Data: kmedoids_sweep.csv.\n\n\
          ![hops](kmedoids_sweep_hops.svg)\n\n![meshlets](kmedoids_sweep_meshlets.svg)\n"
     );
-    let mut t = comfy_table::Table::new();
-    t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
-    t.set_header([
-        "threshold",
-        "max iterations",
-        "clustering iterations",
-        "clustering s",
-        "clustering mean hops",
-        "total s",
-        "final mean hops",
-        "meshlets",
-        "pfill",
-        "vfill",
-    ]);
-    for (th, it, secs, c, met) in &sweep {
-        t.add_row([
-            th.to_string(),
-            it.to_string(),
-            c.initial_iterations.to_string(),
-            format!("{:.3}", c.initial_seconds),
-            format!("{:.3}", c.initial_mean_distance),
-            format!("{secs:.3}"),
-            format!("{:.3}", c.mean_distance()),
-            c.meshlets.len().to_string(),
-            format!("{:.3}", met.primitive_fill),
-            format!("{:.3}", met.vertex_fill),
-        ]);
-    }
-    right_align_numbers(&mut t, 0..10);
-    let _ = writeln!(s, "{t}");
+    let _ = writeln!(s, "{}", sweep_table(cfg.sweep_mesh()).markdown(&sweep));
     crate::atomic::write(cfg.common.out.join("kmedoids.md"), s)?;
     Ok(())
 }

@@ -18,6 +18,7 @@ pub mod render;
 pub mod robustness;
 pub mod smoke;
 pub mod stability;
+pub mod table;
 
 use crate::mesh::Mesh;
 use crate::meshlet::{bounds, validate, Limits, Meshlets, Metrics};
