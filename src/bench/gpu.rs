@@ -8,6 +8,10 @@
 
 use super::kmedoids::PAPER_TIMES;
 use super::plot::{line_chart, Axes, Series};
+use super::table::{
+    Align::{Left, Right},
+    Style, Table,
+};
 use super::{machine_note, today, Common};
 use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::gpu::{self, timed as secs, Gpu, Profile};
@@ -442,6 +446,61 @@ Kernel time per entry point (GPU timestamps around each dispatch, in a second ru
     Ok(())
 }
 
+/// Adjacency per mesh: gpu.md's first table, and gpu.csv with more digits and the k-medoids
+/// times too (gpu.md shows those in its second table).
+fn adjacency_table<'a>() -> Table<'a, Row> {
+    let s6 = |x: fn(&Row) -> f64| move |r: &Row| format!("{:.6}", x(r));
+    let s3 = |x: fn(&Row) -> f64| move |r: &Row| format!("{:.3}", x(r));
+    let s4 = |x: Option<f64>| x.map(|x| format!("{x:.4}")).unwrap_or_default();
+    Table::new(Style::Compact)
+        .col("mesh", Left, |r: &Row| r.mesh.clone())
+        .col("triangles", Right, |r| r.triangles.to_string())
+        .split(
+            "CPU (1 thread) s",
+            Right,
+            s3(|r| r.adj_cpu),
+            "adjacency_cpu_s",
+            s6(|r| r.adj_cpu),
+        )
+        .split(
+            "GPU kernel s",
+            Right,
+            s3(|r| r.adj_gpu.kernel),
+            "adjacency_gpu_kernel_s",
+            s6(|r| r.adj_gpu.kernel),
+        )
+        .split(
+            "GPU upload s",
+            Right,
+            s3(|r| r.adj_gpu.upload),
+            "adjacency_gpu_upload_s",
+            s6(|r| r.adj_gpu.upload),
+        )
+        .split(
+            "GPU readback s",
+            Right,
+            s3(|r| r.adj_gpu.readback),
+            "adjacency_gpu_readback_s",
+            s6(|r| r.adj_gpu.readback),
+        )
+        .md("GPU Mtri/s (kernel)", Right, |r| {
+            format!("{:.1}", r.triangles as f64 / r.adj_gpu.kernel / 1e6)
+        })
+        .md("GPU kernel / CPU", Right, |r| {
+            format!("{:.2}x", r.adj_gpu.kernel / r.adj_cpu)
+        })
+        .csv_only("kmedoids_cpu1_s", move |r| s4(r.km_cpu1))
+        .csv_only("kmedoids_rayon_s", |r| format!("{:.4}", r.km_rayon))
+        .csv_only("kmedoids_gpu_s", move |r| {
+            s4(r.km_gpu.as_ref().map(|x| x.seconds))
+        })
+        .csv_only("kmedoids_gpu_kernel_s", move |r| {
+            s4(r.km_gpu.as_ref().map(|x| x.timing.kernel))
+        })
+        .csv_only("meshlets", |r| r.meshlets.to_string())
+        .csv_only("iterations", |r| r.iterations.to_string())
+}
+
 fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) -> Result<()> {
     std::fs::create_dir_all(&cfg.common.out)?;
     let opt =
@@ -457,45 +516,7 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
     writeln!(md, "GPU adapter: **{}**{}. Every GPU output below was compared with the CPU reference and is identical (adjacency CSR arrays; k-medoids labels and meshlets; parallel-grower claims, orders and meshlets); a difference aborts the benchmark.\n", g.describe(), if g.timestamps { "; kernel times from GPU timestamp queries" } else { "; no timestamp queries: kernel times are wall time" })?;
     writeln!(md, "Lavapipe is itself a CPU renderer on this machine's cores: a GPU/CPU ratio here compares LLVM-compiled compute shaders with native Rust on the same {} cores, not a GPU with a CPU.\n", std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1))?;
     writeln!(md, "## Adjacency (vertex -> triangle CSR + dual graph)\n")?;
-    writeln!(md, "| mesh | triangles | CPU (1 thread) s | GPU kernel s | GPU upload s | GPU readback s | GPU Mtri/s (kernel) | GPU kernel / CPU |")?;
-    writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|")?;
-    let mut csv = String::from("mesh,triangles,adjacency_cpu_s,adjacency_gpu_kernel_s,adjacency_gpu_upload_s,adjacency_gpu_readback_s,kmedoids_cpu1_s,kmedoids_rayon_s,kmedoids_gpu_s,kmedoids_gpu_kernel_s,meshlets,iterations\n");
-    for r in rows {
-        writeln!(
-            md,
-            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.1} | {:.2}x |",
-            r.mesh,
-            r.triangles,
-            r.adj_cpu,
-            r.adj_gpu.kernel,
-            r.adj_gpu.upload,
-            r.adj_gpu.readback,
-            r.triangles as f64 / r.adj_gpu.kernel / 1e6,
-            r.adj_gpu.kernel / r.adj_cpu
-        )?;
-        writeln!(
-            csv,
-            "{},{},{:.6},{:.6},{:.6},{:.6},{},{:.4},{},{},{},{}",
-            r.mesh,
-            r.triangles,
-            r.adj_cpu,
-            r.adj_gpu.kernel,
-            r.adj_gpu.upload,
-            r.adj_gpu.readback,
-            r.km_cpu1.map(|x| format!("{x:.4}")).unwrap_or_default(),
-            r.km_rayon,
-            r.km_gpu
-                .as_ref()
-                .map(|x| format!("{:.4}", x.seconds))
-                .unwrap_or_default(),
-            r.km_gpu
-                .as_ref()
-                .map(|x| format!("{:.4}", x.timing.kernel))
-                .unwrap_or_default(),
-            r.meshlets,
-            r.iterations
-        )?;
-    }
+    writeln!(md, "{}", adjacency_table().markdown(rows))?;
     writeln!(md, "\nTarget: >= 20 M triangles/s on lavapipe.\n")?;
     writeln!(
         md,
@@ -606,7 +627,7 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
         "\n![scaling](gpu_scaling.svg)\n\n![time vs error](gpu_time_vs_error.svg)\n\n![grower](gpu_grower_sweep.svg)"
     )?;
     crate::atomic::write(cfg.common.out.join("gpu.md"), md)?;
-    crate::atomic::write(cfg.common.out.join("gpu.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("gpu.csv"), adjacency_table().csv(rows))?;
     let pts = |f: &dyn Fn(&Row) -> Option<f64>| {
         rows.iter()
             .filter_map(|r| f(r).map(|y| (r.triangles as f64, y)))

@@ -15,6 +15,10 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{line_chart, Axes, Series};
+use super::table::{
+    Align::{Left, Right},
+    Style, Table,
+};
 use super::{machine_note, median, today, Common};
 use crate::lod::flat::{self, Flat};
 use crate::lod::{self, Grouping, Level, LodInfo, NO_GROUP};
@@ -481,60 +485,109 @@ fn dag_series(cfg: &Config, r: &MeshResult, per_dag: &[Vec<f64>]) -> Vec<Series>
 /// ratio by 0.1 (they are all in lod_levels.csv).
 const RATIO_MIN_TRIANGLES: usize = 512;
 
-/// One DAG's row in the builds table and the CSV.
-fn dag_rows(name: &str, tris: usize, d: &Dag, md: &mut String, csv: &mut String) -> Result<()> {
-    let lt = d.level_triangles();
-    let total: usize = lt.iter().sum();
-    let meshlets: usize = d.levels.iter().map(|l| l.meshlets.len()).sum();
-    let ratios: Vec<f64> = lt
-        .windows(2)
-        .filter(|w| w[0] >= RATIO_MIN_TRIANGLES)
-        .map(|w| w[1] as f64 / w[0].max(1) as f64)
-        .collect();
-    let (rmin, rmax) = ratios
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(a, b), &r| (a.min(r), b.max(r)));
-    let best = d.seconds_2t.unwrap_or(d.seconds_1t).min(d.seconds_1t);
-    let best = if best.is_nan() {
-        d.seconds_2t.unwrap_or(f64::NAN)
-    } else {
-        best
-    };
-    let s2 = d.seconds_2t.map_or("–".into(), |s| format!("{s:.3}"));
-    let s1 = if d.seconds_1t.is_nan() {
-        "–".into()
-    } else {
-        format!("{:.3}", d.seconds_1t)
-    };
-    writeln!(
-        md,
-        "| {name} | {tris} | {} | {s1} | {s2} | {:.2} | {} | {} | {} | {} | {meshlets} | {} | {:.1} | {:.3}–{:.3} |",
-        d.label,
-        tris as f64 / best / 1e6,
-        d.levels.len(),
-        d.roots(),
-        d.stuck,
-        d.monotonic_violations(),
-        fmt_ratio(total, tris),
-        total as f64 / meshlets.max(1) as f64,
-        rmin,
-        rmax
-    )?;
-    writeln!(
-        csv,
-        "{name},{tris},{},{},{},{:.4},{},{},{},{},{meshlets},{total},{:.4},{:.2},{rmin:.4},{rmax:.4}",
-        d.label,
-        d.seconds_1t,
-        d.seconds_2t.unwrap_or(f64::NAN),
-        tris as f64 / best / 1e6,
-        d.levels.len(),
-        d.roots(),
-        d.stuck,
-        d.monotonic_violations(),
-        total as f64 / tris as f64,
-        total as f64 / meshlets.max(1) as f64
-    )?;
-    Ok(())
+/// One DAG on one mesh, with what its table row derives from it.
+struct DagRow<'a> {
+    name: &'a str,
+    tris: usize,
+    d: &'a Dag,
+    /// Triangles over all levels.
+    total: usize,
+    meshlets: usize,
+    roots: usize,
+    violations: usize,
+    /// Smallest and largest level ratio (levels whose lower level has enough triangles).
+    ratios: (f64, f64),
+    /// The faster build's seconds (2 threads where the 1-thread one is missing).
+    best: f64,
+}
+
+impl<'a> DagRow<'a> {
+    fn new(name: &'a str, tris: usize, d: &'a Dag) -> Self {
+        let lt = d.level_triangles();
+        let ratios = lt
+            .windows(2)
+            .filter(|w| w[0] >= RATIO_MIN_TRIANGLES)
+            .map(|w| w[1] as f64 / w[0].max(1) as f64)
+            .fold((f64::INFINITY, 0.0f64), |(a, b), r| (a.min(r), b.max(r)));
+        let best = d.seconds_2t.unwrap_or(d.seconds_1t).min(d.seconds_1t);
+        DagRow {
+            name,
+            tris,
+            d,
+            total: lt.iter().sum(),
+            meshlets: d.levels.iter().map(|l| l.meshlets.len()).sum(),
+            roots: d.roots(),
+            violations: d.monotonic_violations(),
+            ratios,
+            best: if best.is_nan() {
+                d.seconds_2t.unwrap_or(f64::NAN)
+            } else {
+                best
+            },
+        }
+    }
+}
+
+/// The builds: lod.md's first table and lod.csv (more digits, the ratios in two columns).
+fn dag_table<'a, 'r>() -> Table<'a, DagRow<'r>> {
+    Table::new(Style::Compact)
+        .col("mesh", Left, |r: &DagRow| r.name.to_string())
+        .col("triangles", Right, |r| r.tris.to_string())
+        .renamed("DAG", "dag", Left, |r| r.d.label.to_string())
+        .split(
+            "build s (1 thr)",
+            Right,
+            |r| match r.d.seconds_1t.is_nan() {
+                true => "–".into(),
+                false => format!("{:.3}", r.d.seconds_1t),
+            },
+            "build_s_1t",
+            |r| r.d.seconds_1t.to_string(),
+        )
+        .split(
+            "build s (2 thr)",
+            Right,
+            |r| r.d.seconds_2t.map_or("–".into(), |s| format!("{s:.3}")),
+            "build_s_2t",
+            |r| r.d.seconds_2t.unwrap_or(f64::NAN).to_string(),
+        )
+        .split(
+            "M tri/s (best)",
+            Right,
+            |r| format!("{:.2}", r.tris as f64 / r.best / 1e6),
+            "mtri_per_s_2t",
+            |r| format!("{:.4}", r.tris as f64 / r.best / 1e6),
+        )
+        .col("levels", Right, |r| r.d.levels.len().to_string())
+        .col("roots", Right, |r| r.roots.to_string())
+        .col("stuck", Right, |r| r.d.stuck.to_string())
+        .renamed("monotonic violations", "monotonic_violations", Right, |r| {
+            r.violations.to_string()
+        })
+        .col("meshlets", Right, |r| r.meshlets.to_string())
+        .csv_only("total_triangles", |r| r.total.to_string())
+        .split(
+            "all levels / source",
+            Right,
+            |r| fmt_ratio(r.total, r.tris),
+            "total_over_source",
+            |r| format!("{:.4}", r.total as f64 / r.tris as f64),
+        )
+        .split(
+            "tri/meshlet",
+            Right,
+            |r| format!("{:.1}", r.total as f64 / r.meshlets.max(1) as f64),
+            "triangles_per_meshlet",
+            |r| format!("{:.2}", r.total as f64 / r.meshlets.max(1) as f64),
+        )
+        .split(
+            "level ratios",
+            Left,
+            |r| format!("{:.3}–{:.3}", r.ratios.0, r.ratios.1),
+            "min_level_ratio",
+            |r| format!("{:.4}", r.ratios.0),
+        )
+        .csv_only("max_level_ratio", |r| format!("{:.4}", r.ratios.1))
 }
 
 fn fmt_ratio(a: usize, b: usize) -> String {
@@ -633,7 +686,6 @@ fn write_results(
     device: Option<String>,
 ) -> Result<()> {
     let mut md = String::new();
-    let mut csv = String::from("mesh,triangles,dag,build_s_1t,build_s_2t,mtri_per_s_2t,levels,roots,stuck,monotonic_violations,meshlets,total_triangles,total_over_source,triangles_per_meshlet,min_level_ratio,max_level_ratio\n");
     writeln!(
         md,
         "# Cluster LOD: ours beside meshoptimizer's clusterlod\n"
@@ -647,21 +699,17 @@ fn write_results(
     )?;
     writeln!(md, "Ours: `meshletlab::lod::build` with meshoptimizer's splitter (`meshopt` strategy) at 64/126 and at clod's 128/128, groups of 8 (meshoptimizer's partition_clusters; the last row per mesh groups by our k-medoids on the meshlet graph instead, `lod::group`), simplify_with_locks to half. Peer: meshoptimizer 1.3 `clod_build(clod_default_config(128))`, single-threaded by design. Build times: median of {} interleaved runs; ours on 1 and 2 rayon threads (the same DAG on both, checked).\n", cfg.runs())?;
     writeln!(md, "## Builds\n")?;
-    writeln!(md, "| mesh | triangles | DAG | build s (1 thr) | build s (2 thr) | M tri/s (best) | levels | roots | stuck | monotonic violations | meshlets | all levels / source | tri/meshlet | level ratios |")?;
-    writeln!(
-        md,
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
-    )?;
+    let mut dags: Vec<DagRow> = Vec::new();
     for r in results {
-        for d in &r.dags {
-            dag_rows(&r.name, r.triangles, d, &mut md, &mut csv)?;
-        }
+        dags.extend(r.dags.iter().map(|d| DagRow::new(&r.name, r.triangles, d)));
     }
-    if let Some((tris, dags)) = big {
-        for d in dags {
-            dag_rows("dragon x16 (subdivided)", *tris, d, &mut md, &mut csv)?;
-        }
+    if let Some((tris, big)) = big {
+        dags.extend(
+            big.iter()
+                .map(|d| DagRow::new("dragon x16 (subdivided)", *tris, d)),
+        );
     }
+    writeln!(md, "{}", dag_table().markdown(&dags))?;
     writeln!(md, "\nLevel ratios: each level's triangles over the level below, over levels whose lower level has at least {RATIO_MIN_TRIANGLES} triangles (all levels: lod_levels.csv).")?;
     writeln!(md, "\n\"stuck\" for clod: groups it emitted as terminal (simplification above its threshold) before the last level. Monotonic violations: meshlets whose parent error is below their own or whose parent sphere does not enclose their own (f64, 1e-6 slack); clod's cluster bounds follow its own documented rule (it warns that cluster `bounds.error` is not monotonic), and both DAGs are selected here with the group bounds.\n")?;
     // Triangles per level, one table per mesh would be long: the dragon's, and the CSV has all.
@@ -883,7 +931,7 @@ fn write_results(
         )?;
     }
     crate::atomic::write(cfg.common.out.join("lod.md"), md)?;
-    crate::atomic::write(cfg.common.out.join("lod.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("lod.csv"), dag_table().csv(&dags))?;
     crate::atomic::write(cfg.common.out.join("lod_levels.csv"), level_csv)?;
     crate::atomic::write(cfg.common.out.join("lod_curve.csv"), curve_csv)?;
     Ok(())

@@ -8,6 +8,10 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{bar_chart, line_chart, Axes, Bars, Series};
+use super::table::{
+    Align::{Left, Right},
+    Style, Table,
+};
 use super::{machine_note, median, p95, today, Common};
 use crate::mesh::{self, Mesh};
 use crate::meshlet::descriptor::Format;
@@ -421,50 +425,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
     writeln!(md, "Device: **{}** (Vulkan, VK_EXT_mesh_shader). {}×{}, 4× MSAA resolved, D32 depth, back faces culled by the rasteriser in both pipelines. {} seeded random views per mesh at {} bounding radii (seed {}; every view sees the whole mesh), the first frame discarded; GPU time from timestamps around the draw. Close views for the culling shares: the same directions at {} radii. Limits {}/{}. Meshlets in the split layout unless a table says otherwise.\n", ctx.name, WIDTH, HEIGHT, cfg.views(), cfg.distance, cfg.seed, cfg.near_distance, cfg.limits.max_vertices, cfg.limits.max_triangles)?;
     writeln!(md, "On lavapipe the \"GPU\" is this machine's CPU cores running LLVM-compiled shaders: the ratios say how the two pipelines map onto a software rasteriser, not onto a GPU.\n")?;
     writeln!(md, "## ms per frame\n")?;
-    writeln!(md, "| mesh | triangles | strategy | meshlets | mesh, culling: median (p95) | mesh, no culling: median (p95) | vertex pipeline: median (p95) | mesh culling / vertex |")?;
-    writeln!(md, "|---|---:|---|---:|---:|---:|---:|---:|")?;
-    let mut csv = String::from("mesh,triangles,strategy,meshlets,frustum_culled_pct,backface_culled_pct,triangles_skipped_pct,near_frustum_culled_pct,near_backface_culled_pct,near_triangles_skipped_pct,task_invocations,mesh_invocations,primitives,mesh_cull_ms_median,mesh_cull_ms_p95,mesh_nocull_ms_median,mesh_nocull_ms_p95,vertex_ms_median,vertex_ms_p95\n");
-    for r in rows {
-        let (a, b, c) = (median(&r.cull), median(&r.no_cull), median(&r.vertex));
-        writeln!(
-            md,
-            "| {} | {} | {} | {} | {:.2} ({:.2}) | {:.2} ({:.2}) | {:.2} ({:.2}) | {:.2}x |",
-            r.mesh,
-            r.triangles,
-            r.strategy,
-            r.meshlets,
-            a,
-            p95(&r.cull),
-            b,
-            p95(&r.no_cull),
-            c,
-            p95(&r.vertex),
-            a / c
-        )?;
-        writeln!(
-            csv,
-            "{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.1},{:.1},{:.1},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
-            r.mesh,
-            r.triangles,
-            r.strategy,
-            r.meshlets,
-            r.far[0],
-            r.far[1],
-            r.far[2],
-            r.near[0],
-            r.near[1],
-            r.near[2],
-            r.invocations[0],
-            r.invocations[1],
-            r.invocations[2],
-            a,
-            p95(&r.cull),
-            b,
-            p95(&r.no_cull),
-            c,
-            p95(&r.vertex)
-        )?;
-    }
+    writeln!(md, "{}", frame_table().markdown(rows))?;
     write_culling(cfg, &mut md, rows)?;
     writeln!(md, "\n## Cost per triangle (paper Table 6)\n")?;
     writeln!(md, "Slope of a least-squares line through (triangles, median ms per frame) over the shared meshes, without culling so that every triangle is drawn. Paper (RTX 2080 Ti): {:.4}–{:.4} ns per triangle.\n", PAPER_NS_PER_TRIANGLE.0, PAPER_NS_PER_TRIANGLE.1)?;
@@ -518,7 +479,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
     }
     write_experiments(cfg, &mut md, variants)?;
     crate::atomic::write(cfg.common.out.join("render.md"), md)?;
-    crate::atomic::write(cfg.common.out.join("render.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("render.csv"), frame_table().csv(rows))?;
     line_chart(
         &cfg.common.out.join("render_per_triangle.svg"),
         "median ms per frame against triangles (no culling)",
@@ -531,6 +492,58 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
         },
     )?;
     Ok(())
+}
+
+/// ms per frame per mesh and strategy: render.md's first table, and render.csv with the culling
+/// shares and pipeline statistics too (render.md shows those in its second table).
+fn frame_table<'a>() -> Table<'a, Row> {
+    let ms = |times: fn(&Row) -> &Vec<f64>| {
+        move |r: &Row| format!("{:.2} ({:.2})", median(times(r)), p95(times(r)))
+    };
+    let ms4 = |x: fn(&Row) -> f64| move |r: &Row| format!("{:.4}", x(r));
+    let mut t = Table::new(Style::Compact)
+        .col("mesh", Left, |r: &Row| r.mesh.clone())
+        .col("triangles", Right, |r| r.triangles.to_string())
+        .col("strategy", Left, |r| r.strategy.clone())
+        .col("meshlets", Right, |r| r.meshlets.to_string());
+    for (k, name) in [
+        "frustum_culled_pct",
+        "backface_culled_pct",
+        "triangles_skipped_pct",
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        t = t.csv_only(name, move |r| format!("{:.3}", r.far[k]));
+    }
+    for (k, name) in [
+        "near_frustum_culled_pct",
+        "near_backface_culled_pct",
+        "near_triangles_skipped_pct",
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        t = t.csv_only(name, move |r| format!("{:.3}", r.near[k]));
+    }
+    for (k, name) in ["task_invocations", "mesh_invocations", "primitives"]
+        .into_iter()
+        .enumerate()
+    {
+        t = t.csv_only(name, move |r| format!("{:.1}", r.invocations[k]));
+    }
+    t.md("mesh, culling: median (p95)", Right, ms(|r| &r.cull))
+        .csv_only("mesh_cull_ms_median", ms4(|r| median(&r.cull)))
+        .csv_only("mesh_cull_ms_p95", ms4(|r| p95(&r.cull)))
+        .md("mesh, no culling: median (p95)", Right, ms(|r| &r.no_cull))
+        .csv_only("mesh_nocull_ms_median", ms4(|r| median(&r.no_cull)))
+        .csv_only("mesh_nocull_ms_p95", ms4(|r| p95(&r.no_cull)))
+        .md("vertex pipeline: median (p95)", Right, ms(|r| &r.vertex))
+        .csv_only("vertex_ms_median", ms4(|r| median(&r.vertex)))
+        .csv_only("vertex_ms_p95", ms4(|r| p95(&r.vertex)))
+        .md("mesh culling / vertex", Right, |r| {
+            format!("{:.2}x", median(&r.cull) / median(&r.vertex))
+        })
 }
 
 /// What the task shader skipped (the paper's Figure 7), far and close, with the pipeline
