@@ -13,6 +13,10 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{bar_chart, line_chart, Axes, Bars, Series};
+use super::table::{
+    Align::{Left, Right},
+    Style, Table,
+};
 use super::{machine_note, median, today, Common};
 use crate::compress::file::Format;
 use crate::compress::{Encoded, Sizes};
@@ -342,38 +346,7 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
 type Fig8 = (String, u32, &'static str, f64, f64, f64);
 
 fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
-    let mut csv = String::from("mesh,triangles,vertices,format,meshlets_from,meshlets,setting,tolerance_rel,connectivity_bytes,position_bytes,header_bytes,geometry_header_bytes,culling_bytes,padding_bytes,total_bytes,bytes_per_triangle,max_error_rel,mean_error_rel,duplication,encode_mtps_1t,encode_mtps_2t,decode_mtps_1t,decode_mtps_2t\n");
-    for r in rows {
-        let s = &r.sizes;
-        writeln!(
-            csv,
-            "{},{},{},{:?},{},{},{},{:.3e},{},{},{},{},{},{},{},{:.4},{:.3e},{:.3e},{:.3},{:.2},{:.2},{:.2},{:.2}",
-            r.mesh,
-            r.triangles,
-            r.vertices,
-            r.format,
-            r.meshlets_from,
-            r.meshlets,
-            r.setting,
-            r.tolerance_rel,
-            s.connectivity,
-            s.positions,
-            s.headers,
-            s.geometry_headers,
-            s.culling,
-            s.padding,
-            s.total(),
-            r.total_per_tri(),
-            r.max_error_rel,
-            r.mean_error_rel,
-            r.duplication,
-            r.encode_mtps[0],
-            r.encode_mtps[1],
-            r.decode_mtps[0],
-            r.decode_mtps[1]
-        )?;
-    }
-    crate::atomic::write(cfg.common.out.join("compress.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("compress.csv"), encodings().csv(rows))?;
     let mut f8 = String::from(
         "mesh,bits_per_axis,series,max_error_rel,geometry_bits_per_vertex,encode_seconds\n",
     );
@@ -476,7 +449,7 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
     writeln!(md, "Paper (Mlakar et al. 2024, Tables 2, 4, 5): laced wires {:.2} B/triangle connectivity, {:.2} B/vertex geometry; IX/SC compact {:.2} B/triangle; GI {:.0} B/triangle, {:.2} B/vertex quantised. Ours: geometry = positions and the boxes that place them (anchors, bit widths, the wire table) per vertex; the other headers (counts, item lists, offsets) are counted apart.\n", paper::LACED_CONNECTIVITY, paper::LACED_GEOMETRY, paper::IX_SC_COMPACT, paper::GI.0, paper::GI.1)?;
     let is_paper =
         |r: &&Row| r.setting == "paper" && matches!(r.format, Format::LacedWires | Format::Meshopt);
-    table(&mut md, rows.iter().filter(is_paper))?;
+    writeln!(md, "{}", encodings().markdown(rows.iter().filter(is_paper)))?;
     writeln!(
         md,
         "\n### The paper's comparison formats on the same meshlets\n"
@@ -522,7 +495,7 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
         "\n## At 1e-4 of the diagonal: laced wires against meshoptimizer's codec\n"
     )?;
     writeln!(md, "The goal: laced wires no larger than meshoptimizer's codec with anchored positions at the same maximum error (both use one grid, so the error is the same). Out-of-tree measurement quoted by the issue for meshoptimizer's codec at 128/128: {}; AMD's DGF blocks need 3.8-5.0 B/triangle on the same meshes (quoted, not built).\n", OUT_OF_TREE.iter().map(|(m, b)| format!("{m} {b:.2}")).collect::<Vec<_>>().join(", "))?;
-    table(&mut md, at4.iter().copied())?;
+    writeln!(md, "{}", encodings().markdown(at4.iter().copied()))?;
     writeln!(md, "\nBest laced-wire meshlets against the peer at its best setting (ratio < 1: laced wires smaller). The peer carries no culling data; laced wires carry 8 bytes per meshlet, so the ratio is given without and with them:\n")?;
     writeln!(md, "| mesh | laced wires B/tri | from | without culling | meshopt codec 128/128 B/tri | ratio without culling | ratio with | out-of-tree peer |")?;
     writeln!(md, "|---|---:|---|---:|---:|---:|---:|---:|")?;
@@ -564,39 +537,79 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
     Ok(())
 }
 
-fn table<'a>(md: &mut String, rows: impl Iterator<Item = &'a Row>) -> Result<()> {
-    writeln!(md, "| mesh | format | meshlets from | meshlets | B/tri | connectivity bits/tri | position bits/tri | header bits/tri | culling bits/tri | padding bits/tri | position B/vertex | geometry B/vertex | max err | mean err | dup | encode 1t / 2t | decode 1t / 2t |")?;
-    writeln!(
-        md,
-        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    )?;
-    for r in rows {
-        let s = &r.sizes;
-        let bt = |b: usize| 8.0 * r.per_tri(b);
-        let v = r.vertices.max(1) as f64;
-        writeln!(
-            md,
-            "| {} | {:?} | {} | {} | **{:.2}** | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} | {:.2e} | {:.2e} | {:.2} | {:.1} / {:.1} | {:.1} / {:.1} |",
-            r.mesh,
-            r.format,
-            r.meshlets_from,
-            r.meshlets,
-            r.total_per_tri(),
-            bt(s.connectivity),
-            bt(s.positions),
-            bt(s.headers),
-            bt(s.culling),
-            bt(s.padding),
-            s.positions as f64 / v,
-            (s.positions + s.geometry_headers) as f64 / v,
-            r.max_error_rel,
-            r.mean_error_rel,
-            r.duplication,
-            r.encode_mtps[0],
-            r.encode_mtps[1],
-            r.decode_mtps[0],
-            r.decode_mtps[1]
-        )?;
-    }
-    Ok(())
+/// Every encoding: compress.csv in bytes, and compress.md's tables of the paper's setting and of
+/// 1e-4 of the diagonal in bits per triangle.
+fn encodings<'a>() -> Table<'a, Row> {
+    let bytes = |part: fn(&Sizes) -> usize| move |r: &Row| part(&r.sizes).to_string();
+    let bits = |part: fn(&Sizes) -> usize| {
+        move |r: &Row| format!("{:.1}", 8.0 * r.per_tri(part(&r.sizes)))
+    };
+    let per_vertex = |part: fn(&Sizes) -> usize| {
+        move |r: &Row| format!("{:.2}", part(&r.sizes) as f64 / r.vertices.max(1) as f64)
+    };
+    let mtps = |x: fn(&Row) -> [f64; 2]| move |r: &Row| format!("{:.1} / {:.1}", x(r)[0], x(r)[1]);
+    let mtps_k = |x: fn(&Row) -> [f64; 2], k: usize| move |r: &Row| format!("{:.2}", x(r)[k]);
+    Table::new(Style::Compact)
+        .col("mesh", Left, |r: &Row| r.mesh.clone())
+        .csv_only("triangles", |r| r.triangles.to_string())
+        .csv_only("vertices", |r| r.vertices.to_string())
+        .col("format", Left, |r| format!("{:?}", r.format))
+        .renamed("meshlets from", "meshlets_from", Left, |r| {
+            r.meshlets_from.to_string()
+        })
+        .col("meshlets", Right, |r| r.meshlets.to_string())
+        .csv_only("setting", |r| r.setting.to_string())
+        .csv_only("tolerance_rel", |r| format!("{:.3e}", r.tolerance_rel))
+        .csv_only("connectivity_bytes", bytes(|s| s.connectivity))
+        .csv_only("position_bytes", bytes(|s| s.positions))
+        .csv_only("header_bytes", bytes(|s| s.headers))
+        .csv_only("geometry_header_bytes", bytes(|s| s.geometry_headers))
+        .csv_only("culling_bytes", bytes(|s| s.culling))
+        .csv_only("padding_bytes", bytes(|s| s.padding))
+        .csv_only("total_bytes", bytes(Sizes::total))
+        .split(
+            "B/tri",
+            Right,
+            |r| format!("**{:.2}**", r.total_per_tri()),
+            "bytes_per_triangle",
+            |r| format!("{:.4}", r.total_per_tri()),
+        )
+        .md("connectivity bits/tri", Right, bits(|s| s.connectivity))
+        .md("position bits/tri", Right, bits(|s| s.positions))
+        .md("header bits/tri", Right, bits(|s| s.headers))
+        .md("culling bits/tri", Right, bits(|s| s.culling))
+        .md("padding bits/tri", Right, bits(|s| s.padding))
+        .md("position B/vertex", Right, per_vertex(|s| s.positions))
+        .md(
+            "geometry B/vertex",
+            Right,
+            per_vertex(|s| s.positions + s.geometry_headers),
+        )
+        .split(
+            "max err",
+            Right,
+            |r| format!("{:.2e}", r.max_error_rel),
+            "max_error_rel",
+            |r| format!("{:.3e}", r.max_error_rel),
+        )
+        .split(
+            "mean err",
+            Right,
+            |r| format!("{:.2e}", r.mean_error_rel),
+            "mean_error_rel",
+            |r| format!("{:.3e}", r.mean_error_rel),
+        )
+        .split(
+            "dup",
+            Right,
+            |r| format!("{:.2}", r.duplication),
+            "duplication",
+            |r| format!("{:.3}", r.duplication),
+        )
+        .md("encode 1t / 2t", Right, mtps(|r| r.encode_mtps))
+        .csv_only("encode_mtps_1t", mtps_k(|r| r.encode_mtps, 0))
+        .csv_only("encode_mtps_2t", mtps_k(|r| r.encode_mtps, 1))
+        .md("decode 1t / 2t", Right, mtps(|r| r.decode_mtps))
+        .csv_only("decode_mtps_1t", mtps_k(|r| r.decode_mtps, 0))
+        .csv_only("decode_mtps_2t", mtps_k(|r| r.decode_mtps, 1))
 }
