@@ -3,8 +3,12 @@
 //! paper's Bunny figures beside ours, and results/strategies.md with the refined counts against
 //! every meshoptimizer builder at each of [`Limits::COUNT_PRESETS`].
 
+use super::table::{
+    Align::{Left, Right},
+    Style, Table,
+};
 use super::{
-    evaluate, machine_note, median, paper, plot, quality_cells, right_align_numbers, today,
+    evaluate, machine_note, median, paper, plot, quality_cells, right_align_numbers, today, Common,
     Evaluation, QUALITY_HEADER,
 };
 use crate::mesh::{self, Mesh};
@@ -37,6 +41,46 @@ pub struct Config {
     pub refined: bool,
     /// Include the `+refine-max` rows (minutes on the biggest meshes).
     pub refine_max: bool,
+}
+
+/// The arguments of `meshletlab bench build` but the strategy options (the command's own,
+/// shared with `stats` and `build`), resolved into a [`Config`] by [`Args::config`].
+#[derive(clap::Args, Clone, Debug)]
+pub struct Args {
+    /// Builds per mesh and strategy (>= 5 for reported numbers).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..), display_order = 1)]
+    pub runs: u32,
+    /// Mesh folder, output folder, smoke run (one run, no `+refine-max` rows), quiet.
+    #[command(flatten)]
+    pub common: Common,
+    /// Only these strategies (repeatable; default all but the slow kmedoids-paper, plus the
+    /// `+refine` rows and the per-preset count comparison).
+    #[arg(short, long)]
+    pub strategy: Vec<String>,
+    /// Skip the `+refine` rows and the per-preset count comparison (64/84, 128/128).
+    #[arg(long)]
+    pub no_refined: bool,
+    /// Skip the `+refine-max` rows (they take minutes on the biggest meshes).
+    #[arg(long)]
+    pub no_refine_max: bool,
+}
+
+impl Args {
+    /// What to run at `limits` with strategy `options`: the mesh folder (for a smoke run the smoke
+    /// meshes, written now), one run and no `+refine-max` rows in a smoke run.
+    pub fn config(&self, limits: Limits, options: Options) -> Result<Config> {
+        Ok(Config {
+            meshes: self.common.meshes_dir()?,
+            runs: self.common.or_smoke(self.runs as usize, 1),
+            out: self.common.out.clone(),
+            limits,
+            strategies: self.strategy.clone(),
+            options,
+            quiet: self.common.quiet,
+            refined: !self.no_refined,
+            refine_max: !self.no_refine_max && !self.common.smoke,
+        })
+    }
 }
 
 /// Refined rows of the main table: every grower at the default effort, and the maximum effort
@@ -230,7 +274,7 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
     std::fs::create_dir_all(&cfg.out)
         .with_context(|| format!("{}: cannot create", cfg.out.display()))?;
     let csv = cfg.out.join("build.csv");
-    crate::atomic::write(&csv, to_csv(rows.iter().chain(&preset_rows)))
+    crate::atomic::write(&csv, table().csv(rows.iter().chain(&preset_rows)))
         .with_context(|| format!("{}: cannot write", csv.display()))?;
     let md = cfg.out.join("build.md");
     crate::atomic::write(&md, to_markdown(&rows, &loads, cfg))
@@ -253,43 +297,70 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
     Ok(rows)
 }
 
-fn to_csv<'a>(rows: impl Iterator<Item = &'a Row>) -> String {
-    let mut s = String::from(
-        "mesh,triangles,strategy,limits,time_ms_median,time_ms_min,runs,meshlets,mean_vertices,mean_triangles,\
-         vertex_fill,primitive_fill,cone_cullable,mean_radius_rel,flatness_rel,duplication,connected,valid\n",
-    );
-    for r in rows {
-        let m = &r.eval.metrics;
-        let min = r
-            .eval
-            .times_ms
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, f64::min);
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{:.4},{:.4},{},{},{:.3},{:.3},{:.5},{:.5},{:.5},{:.6},{:.7},{:.5},{:.5},{}",
-            r.mesh,
-            r.triangles,
-            r.eval.strategy,
-            r.eval.limits,
-            median(&r.eval.times_ms),
-            min,
-            r.eval.times_ms.len(),
-            m.meshlets,
-            m.mean_vertices,
-            m.mean_triangles,
-            m.vertex_fill,
-            m.primitive_fill,
-            m.cone_cullable,
-            m.mean_radius_rel,
-            m.flatness_rel,
-            m.duplication,
-            m.connected,
-            r.eval.invalid.is_none()
-        );
-    }
-    s
+/// The main table: build.md shows it at the main limits, build.csv holds every row (the other
+/// presets' too) with more digits and the columns the markdown leaves out.
+fn table<'a>() -> Table<'a, Row> {
+    let quality = |i: usize| move |r: &Row| quality_cells(&r.eval.metrics)[i].clone();
+    Table::new(Style::Padded)
+        .col("mesh", Left, |r: &Row| r.mesh.clone())
+        .col("triangles", Right, |r| r.triangles.to_string())
+        .col("strategy", Left, |r| r.eval.strategy.clone())
+        .csv_only("limits", |r| r.eval.limits.to_string())
+        .split(
+            "ms",
+            Right,
+            |r| format!("{:.2}", median(&r.eval.times_ms)),
+            "time_ms_median",
+            |r| format!("{:.4}", median(&r.eval.times_ms)),
+        )
+        .csv_only("time_ms_min", |r| {
+            let min = r
+                .eval
+                .times_ms
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min);
+            format!("{min:.4}")
+        })
+        .csv_only("runs", |r| r.eval.times_ms.len().to_string())
+        .col("meshlets", Right, |r| r.eval.metrics.meshlets.to_string())
+        .csv_only("mean_vertices", |r| {
+            format!("{:.3}", r.eval.metrics.mean_vertices)
+        })
+        .csv_only("mean_triangles", |r| {
+            format!("{:.3}", r.eval.metrics.mean_triangles)
+        })
+        .split(QUALITY_HEADER[0], Right, quality(0), "vertex_fill", |r| {
+            format!("{:.5}", r.eval.metrics.vertex_fill)
+        })
+        .split(
+            QUALITY_HEADER[1],
+            Right,
+            quality(1),
+            "primitive_fill",
+            |r| format!("{:.5}", r.eval.metrics.primitive_fill),
+        )
+        .csv_only("cone_cullable", |r| {
+            format!("{:.5}", r.eval.metrics.cone_cullable)
+        })
+        .split(
+            QUALITY_HEADER[2],
+            Right,
+            quality(2),
+            "mean_radius_rel",
+            |r| format!("{:.6}", r.eval.metrics.mean_radius_rel),
+        )
+        .split(QUALITY_HEADER[3], Right, quality(3), "flatness_rel", |r| {
+            format!("{:.7}", r.eval.metrics.flatness_rel)
+        })
+        .md(QUALITY_HEADER[4], Right, quality(4))
+        .split(QUALITY_HEADER[5], Right, quality(5), "duplication", |r| {
+            format!("{:.5}", r.eval.metrics.duplication)
+        })
+        .split(QUALITY_HEADER[6], Right, quality(6), "connected", |r| {
+            format!("{:.5}", r.eval.metrics.connected)
+        })
+        .csv_only("valid", |r| r.eval.invalid.is_none().to_string())
 }
 
 fn opt<T: std::fmt::Display>(x: Option<T>) -> String {
@@ -326,25 +397,7 @@ fn to_markdown(rows: &[Row], loads: &[LoadRow], cfg: &Config) -> String {
     );
 
     let _ = writeln!(s, "## All meshes at {}\n", cfg.limits);
-    let mut t = comfy_table::Table::new();
-    t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
-    let mut header = vec!["mesh", "triangles", "strategy", "ms", "meshlets"];
-    header.extend(QUALITY_HEADER);
-    t.set_header(header);
-    for r in rows {
-        let mut row = vec![
-            r.mesh.clone(),
-            r.triangles.to_string(),
-            r.eval.strategy.clone(),
-            format!("{:.2}", median(&r.eval.times_ms)),
-            r.eval.metrics.meshlets.to_string(),
-        ];
-        row.extend(quality_cells(&r.eval.metrics));
-        t.add_row(row);
-    }
-    right_align_numbers(&mut t, 1..2);
-    right_align_numbers(&mut t, 3..12);
-    let _ = writeln!(s, "{t}\n");
+    let _ = writeln!(s, "{}\n", table().markdown(rows));
 
     let _ = writeln!(s, "## Loading\n");
     let _ = writeln!(

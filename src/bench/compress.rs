@@ -13,7 +13,11 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{bar_chart, line_chart, Axes, Bars, Series};
-use super::{machine_note, median, today};
+use super::table::{
+    Align::{Left, Right},
+    Style, Table,
+};
+use super::{machine_note, median, today, Common};
 use crate::compress::file::Format;
 use crate::compress::{Encoded, Sizes};
 use crate::mesh::{self, Mesh};
@@ -26,17 +30,22 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// What to run.
-#[derive(Clone, Debug)]
+/// What to run: the arguments of `meshletlab bench compress`.
+#[derive(clap::Args, Clone, Debug)]
 pub struct Config {
-    /// Folder of meshes.
-    pub meshes: PathBuf,
-    /// Output folder.
-    pub out: PathBuf,
+    /// Mesh folder, output folder, smoke run (one timing run), quiet.
+    #[command(flatten)]
+    pub common: Common,
     /// Interleaved timing runs (median reported).
-    pub runs: usize,
-    /// No progress output.
-    pub quiet: bool,
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    pub runs: u32,
+}
+
+impl Config {
+    /// Interleaved timing runs: one in a smoke run.
+    pub fn runs(&self) -> usize {
+        self.common.or_smoke(self.runs as usize, 1)
+    }
 }
 
 /// The paper's published sizes (Mlakar et al. 2024, Tables 2, 4, 5; averages over their scanned
@@ -241,16 +250,16 @@ fn scene(files: &[PathBuf]) -> Result<(String, Mesh)> {
 
 /// Runs the benchmark.
 pub fn run(cfg: &Config) -> Result<Vec<Row>> {
-    let files = mesh_files(&cfg.meshes)?;
-    std::fs::create_dir_all(&cfg.out)
-        .with_context(|| format!("{}: cannot create", cfg.out.display()))?;
+    let files = mesh_files(&cfg.common.meshes_dir()?)?;
+    std::fs::create_dir_all(&cfg.common.out)
+        .with_context(|| format!("{}: cannot create", cfg.common.out.display()))?;
     let pools = [pool(1)?, pool(2)?];
     let mut meshes: Vec<(String, Mesh)> = Vec::new();
     for f in &files {
         meshes.push((mesh_name(f), mesh::load(f)?));
     }
     meshes.push(scene(&files)?);
-    let bar = if cfg.quiet {
+    let bar = if cfg.common.quiet {
         ProgressBar::hidden()
     } else {
         ProgressBar::new(meshes.len() as u64)
@@ -275,7 +284,7 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
             (&qem, "qem 64/84", Format::Meshopt, t4),
             (&mo, "meshopt 128/128", Format::Meshopt, t4),
         ] {
-            rows.push(measure(name, m, ml, from, format, t, cfg.runs, &pools)?);
+            rows.push(measure(name, m, ml, from, format, t, cfg.runs(), &pools)?);
         }
         // The paper's comparison formats on the same meshlets (Tables 2, 4, 5).
         for format in Format::ALL.into_iter().skip(2) {
@@ -286,7 +295,7 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
                 "qem 64/84",
                 format,
                 t14,
-                cfg.runs,
+                cfg.runs(),
                 &pools,
             )?);
         }
@@ -337,45 +346,14 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
 type Fig8 = (String, u32, &'static str, f64, f64, f64);
 
 fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
-    let mut csv = String::from("mesh,triangles,vertices,format,meshlets_from,meshlets,setting,tolerance_rel,connectivity_bytes,position_bytes,header_bytes,geometry_header_bytes,culling_bytes,padding_bytes,total_bytes,bytes_per_triangle,max_error_rel,mean_error_rel,duplication,encode_mtps_1t,encode_mtps_2t,decode_mtps_1t,decode_mtps_2t\n");
-    for r in rows {
-        let s = &r.sizes;
-        writeln!(
-            csv,
-            "{},{},{},{:?},{},{},{},{:.3e},{},{},{},{},{},{},{},{:.4},{:.3e},{:.3e},{:.3},{:.2},{:.2},{:.2},{:.2}",
-            r.mesh,
-            r.triangles,
-            r.vertices,
-            r.format,
-            r.meshlets_from,
-            r.meshlets,
-            r.setting,
-            r.tolerance_rel,
-            s.connectivity,
-            s.positions,
-            s.headers,
-            s.geometry_headers,
-            s.culling,
-            s.padding,
-            s.total(),
-            r.total_per_tri(),
-            r.max_error_rel,
-            r.mean_error_rel,
-            r.duplication,
-            r.encode_mtps[0],
-            r.encode_mtps[1],
-            r.decode_mtps[0],
-            r.decode_mtps[1]
-        )?;
-    }
-    crate::atomic::write(cfg.out.join("compress.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("compress.csv"), encodings().csv(rows))?;
     let mut f8 = String::from(
         "mesh,bits_per_axis,series,max_error_rel,geometry_bits_per_vertex,encode_seconds\n",
     );
     for (m, b, s, e, bits, secs) in fig8 {
         writeln!(f8, "{m},{b},{s},{e:.4e},{bits:.3},{secs:.4}")?;
     }
-    crate::atomic::write(cfg.out.join("compress_fig8.csv"), f8)?;
+    crate::atomic::write(cfg.common.out.join("compress_fig8.csv"), f8)?;
 
     // Figure 8 per mesh.
     let mut names: Vec<&String> = fig8.iter().map(|f| &f.0).collect();
@@ -402,7 +380,7 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
             name.split(' ').next().unwrap_or(name)
         );
         line_chart(
-            &cfg.out.join(&file),
+            &cfg.common.out.join(&file),
             &format!("{name}: geometry bits per vertex against maximum error (8-16 bits)"),
             "maximum error / bounding-box diagonal",
             "bits per vertex (positions and boxes)",
@@ -427,7 +405,7 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
             .collect()
     };
     bar_chart(
-        &cfg.out.join("compress_sizes.svg"),
+        &cfg.common.out.join("compress_sizes.svg"),
         "Bytes per triangle at 1e-4 of the diagonal (all bytes)",
         "bytes per triangle",
         &cats,
@@ -462,7 +440,7 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
         "Generated by `meshletlab bench compress` on {} ({}). Sizes count every byte of the encoding: connectivity (topology and vertex references), positions, headers (per-meshlet and per-wire headers, offset tables), culling records (laced wires' 8 bytes per meshlet; the other formats carry none) and padding (the paper's 32-bit words). Errors are Euclidean, measured on decoded positions, over the bounding-box diagonal; the tolerance is per axis. Duplication: stored vertices over used vertices. Speeds: M triangles/s, median of {} interleaved runs on 1 and 2 threads; decode = every meshlet decoded at random access.\n",
         today(),
         machine_note(),
-        cfg.runs
+        cfg.runs()
     )?;
     writeln!(
         md,
@@ -471,7 +449,7 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
     writeln!(md, "Paper (Mlakar et al. 2024, Tables 2, 4, 5): laced wires {:.2} B/triangle connectivity, {:.2} B/vertex geometry; IX/SC compact {:.2} B/triangle; GI {:.0} B/triangle, {:.2} B/vertex quantised. Ours: geometry = positions and the boxes that place them (anchors, bit widths, the wire table) per vertex; the other headers (counts, item lists, offsets) are counted apart.\n", paper::LACED_CONNECTIVITY, paper::LACED_GEOMETRY, paper::IX_SC_COMPACT, paper::GI.0, paper::GI.1)?;
     let is_paper =
         |r: &&Row| r.setting == "paper" && matches!(r.format, Format::LacedWires | Format::Meshopt);
-    table(&mut md, rows.iter().filter(is_paper))?;
+    writeln!(md, "{}", encodings().markdown(rows.iter().filter(is_paper)))?;
     writeln!(
         md,
         "\n### The paper's comparison formats on the same meshlets\n"
@@ -517,7 +495,7 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
         "\n## At 1e-4 of the diagonal: laced wires against meshoptimizer's codec\n"
     )?;
     writeln!(md, "The goal: laced wires no larger than meshoptimizer's codec with anchored positions at the same maximum error (both use one grid, so the error is the same). Out-of-tree measurement quoted by the issue for meshoptimizer's codec at 128/128: {}; AMD's DGF blocks need 3.8-5.0 B/triangle on the same meshes (quoted, not built).\n", OUT_OF_TREE.iter().map(|(m, b)| format!("{m} {b:.2}")).collect::<Vec<_>>().join(", "))?;
-    table(&mut md, at4.iter().copied())?;
+    writeln!(md, "{}", encodings().markdown(at4.iter().copied()))?;
     writeln!(md, "\nBest laced-wire meshlets against the peer at its best setting (ratio < 1: laced wires smaller). The peer carries no culling data; laced wires carry 8 bytes per meshlet, so the ratio is given without and with them:\n")?;
     writeln!(md, "| mesh | laced wires B/tri | from | without culling | meshopt codec 128/128 B/tri | ratio without culling | ratio with | out-of-tree peer |")?;
     writeln!(md, "|---|---:|---|---:|---:|---:|---:|---:|")?;
@@ -555,43 +533,83 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
     for p in &plots {
         writeln!(md, "![{p}]({p})")?;
     }
-    crate::atomic::write(cfg.out.join("compress.md"), md)?;
+    crate::atomic::write(cfg.common.out.join("compress.md"), md)?;
     Ok(())
 }
 
-fn table<'a>(md: &mut String, rows: impl Iterator<Item = &'a Row>) -> Result<()> {
-    writeln!(md, "| mesh | format | meshlets from | meshlets | B/tri | connectivity bits/tri | position bits/tri | header bits/tri | culling bits/tri | padding bits/tri | position B/vertex | geometry B/vertex | max err | mean err | dup | encode 1t / 2t | decode 1t / 2t |")?;
-    writeln!(
-        md,
-        "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    )?;
-    for r in rows {
-        let s = &r.sizes;
-        let bt = |b: usize| 8.0 * r.per_tri(b);
-        let v = r.vertices.max(1) as f64;
-        writeln!(
-            md,
-            "| {} | {:?} | {} | {} | **{:.2}** | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.2} | {:.2} | {:.2e} | {:.2e} | {:.2} | {:.1} / {:.1} | {:.1} / {:.1} |",
-            r.mesh,
-            r.format,
-            r.meshlets_from,
-            r.meshlets,
-            r.total_per_tri(),
-            bt(s.connectivity),
-            bt(s.positions),
-            bt(s.headers),
-            bt(s.culling),
-            bt(s.padding),
-            s.positions as f64 / v,
-            (s.positions + s.geometry_headers) as f64 / v,
-            r.max_error_rel,
-            r.mean_error_rel,
-            r.duplication,
-            r.encode_mtps[0],
-            r.encode_mtps[1],
-            r.decode_mtps[0],
-            r.decode_mtps[1]
-        )?;
-    }
-    Ok(())
+/// Every encoding: compress.csv in bytes, and compress.md's tables of the paper's setting and of
+/// 1e-4 of the diagonal in bits per triangle.
+fn encodings<'a>() -> Table<'a, Row> {
+    let bytes = |part: fn(&Sizes) -> usize| move |r: &Row| part(&r.sizes).to_string();
+    let bits = |part: fn(&Sizes) -> usize| {
+        move |r: &Row| format!("{:.1}", 8.0 * r.per_tri(part(&r.sizes)))
+    };
+    let per_vertex = |part: fn(&Sizes) -> usize| {
+        move |r: &Row| format!("{:.2}", part(&r.sizes) as f64 / r.vertices.max(1) as f64)
+    };
+    let mtps = |x: fn(&Row) -> [f64; 2]| move |r: &Row| format!("{:.1} / {:.1}", x(r)[0], x(r)[1]);
+    let mtps_k = |x: fn(&Row) -> [f64; 2], k: usize| move |r: &Row| format!("{:.2}", x(r)[k]);
+    Table::new(Style::Compact)
+        .col("mesh", Left, |r: &Row| r.mesh.clone())
+        .csv_only("triangles", |r| r.triangles.to_string())
+        .csv_only("vertices", |r| r.vertices.to_string())
+        .col("format", Left, |r| format!("{:?}", r.format))
+        .renamed("meshlets from", "meshlets_from", Left, |r| {
+            r.meshlets_from.to_string()
+        })
+        .col("meshlets", Right, |r| r.meshlets.to_string())
+        .csv_only("setting", |r| r.setting.to_string())
+        .csv_only("tolerance_rel", |r| format!("{:.3e}", r.tolerance_rel))
+        .csv_only("connectivity_bytes", bytes(|s| s.connectivity))
+        .csv_only("position_bytes", bytes(|s| s.positions))
+        .csv_only("header_bytes", bytes(|s| s.headers))
+        .csv_only("geometry_header_bytes", bytes(|s| s.geometry_headers))
+        .csv_only("culling_bytes", bytes(|s| s.culling))
+        .csv_only("padding_bytes", bytes(|s| s.padding))
+        .csv_only("total_bytes", bytes(Sizes::total))
+        .split(
+            "B/tri",
+            Right,
+            |r| format!("**{:.2}**", r.total_per_tri()),
+            "bytes_per_triangle",
+            |r| format!("{:.4}", r.total_per_tri()),
+        )
+        .md("connectivity bits/tri", Right, bits(|s| s.connectivity))
+        .md("position bits/tri", Right, bits(|s| s.positions))
+        .md("header bits/tri", Right, bits(|s| s.headers))
+        .md("culling bits/tri", Right, bits(|s| s.culling))
+        .md("padding bits/tri", Right, bits(|s| s.padding))
+        .md("position B/vertex", Right, per_vertex(|s| s.positions))
+        .md(
+            "geometry B/vertex",
+            Right,
+            per_vertex(|s| s.positions + s.geometry_headers),
+        )
+        .split(
+            "max err",
+            Right,
+            |r| format!("{:.2e}", r.max_error_rel),
+            "max_error_rel",
+            |r| format!("{:.3e}", r.max_error_rel),
+        )
+        .split(
+            "mean err",
+            Right,
+            |r| format!("{:.2e}", r.mean_error_rel),
+            "mean_error_rel",
+            |r| format!("{:.3e}", r.mean_error_rel),
+        )
+        .split(
+            "dup",
+            Right,
+            |r| format!("{:.2}", r.duplication),
+            "duplication",
+            |r| format!("{:.3}", r.duplication),
+        )
+        .md("encode 1t / 2t", Right, mtps(|r| r.encode_mtps))
+        .csv_only("encode_mtps_1t", mtps_k(|r| r.encode_mtps, 0))
+        .csv_only("encode_mtps_2t", mtps_k(|r| r.encode_mtps, 1))
+        .md("decode 1t / 2t", Right, mtps(|r| r.decode_mtps))
+        .csv_only("decode_mtps_1t", mtps_k(|r| r.decode_mtps, 0))
+        .csv_only("decode_mtps_2t", mtps_k(|r| r.decode_mtps, 1))
 }

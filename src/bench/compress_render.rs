@@ -16,7 +16,7 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{line_chart, Axes, Series};
-use super::{machine_note, median, p95, today};
+use super::{machine_note, median, p95, today, Common};
 use crate::compress::file::Format;
 use crate::compress::paper_tolerance;
 use crate::mesh::{self, Mesh};
@@ -42,21 +42,35 @@ pub mod paper {
     pub const KUTH_GTRIS: f64 = 26.0;
 }
 
-/// What to run.
-#[derive(Clone, Debug)]
+/// What to run: the arguments of `meshletlab bench compress-render`.
+#[derive(clap::Args, Clone, Debug)]
 pub struct Config {
-    /// Folder of meshes.
-    pub meshes: PathBuf,
-    /// Output folder.
-    pub out: PathBuf,
-    /// Views per mesh.
-    pub views: usize,
+    /// Mesh folder, output folder, smoke run (one view, one copy of the meshes in the scene),
+    /// quiet.
+    #[command(flatten)]
+    pub common: Common,
+    /// Views per mesh (framed random directions).
+    #[arg(long, default_value_t = 7, value_parser = clap::value_parser!(u64).range(1..))]
+    pub views: u64,
     /// Seed of the view sequence.
+    #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Copies of the ten-mesh set in the scene.
-    pub scene_copies: usize,
-    /// No progress output.
-    pub quiet: bool,
+    /// Copies of the ten shared meshes in the scene (5: the most for
+    /// which GI compact's one buffer stays under lavapipe's 128 MiB storage binding).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..))]
+    pub scene_copies: u64,
+}
+
+impl Config {
+    /// Views per mesh: one in a smoke run.
+    pub fn views(&self) -> usize {
+        self.common.or_smoke(self.views as usize, 1)
+    }
+
+    /// Copies of the ten-mesh set in the scene: one in a smoke run.
+    pub fn scene_copies(&self) -> usize {
+        self.common.or_smoke(self.scene_copies as usize, 1)
+    }
 }
 
 /// A variant: how a mesh's meshlets are held and drawn.
@@ -149,7 +163,7 @@ fn measure(ctx: &Context, name: &str, m: &Mesh, cfg: &Config) -> Result<Vec<Row>
     let tolerance = paper_tolerance(m);
     let views = Camera::framed_views(
         m,
-        cfg.views,
+        cfg.views(),
         cfg.seed,
         WIDTH as f32 / HEIGHT as f32,
         crate::render::FRAME_FILL,
@@ -245,11 +259,11 @@ fn measure(ctx: &Context, name: &str, m: &Mesh, cfg: &Config) -> Result<Vec<Row>
 
 /// Runs the benchmark and writes results/.
 pub fn run(cfg: &Config) -> Result<Vec<Row>> {
-    let files = mesh_files(&cfg.meshes)?;
-    std::fs::create_dir_all(&cfg.out)
-        .with_context(|| format!("{}: cannot create", cfg.out.display()))?;
+    let files = mesh_files(&cfg.common.meshes_dir()?)?;
+    std::fs::create_dir_all(&cfg.common.out)
+        .with_context(|| format!("{}: cannot create", cfg.common.out.display()))?;
     let ctx = Context::new(false)?;
-    let bar = if cfg.quiet {
+    let bar = if cfg.common.quiet {
         ProgressBar::hidden()
     } else {
         ProgressBar::new(files.len() as u64 + 1)
@@ -263,7 +277,7 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
         bar.inc(1);
     }
     bar.set_message("scene");
-    let (name, m) = scene(&files, cfg.scene_copies)?;
+    let (name, m) = scene(&files, cfg.scene_copies())?;
     rows.extend(measure(&ctx, &name, &m, cfg)?);
     bar.finish_and_clear();
     write(cfg, &ctx, &rows)?;
@@ -302,7 +316,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
         today(),
         machine_note()
     )?;
-    writeln!(md, "Device: **{}**. {}×{}, 4× MSAA, D32 depth, back faces culled by the rasteriser. {} framed random views per mesh (seed {}), interleaved across variants, one discarded warm-up frame per variant; GPU time from timestamps around the draw. Meshlets: meshopt 64/126 at the paper's tolerance (14-bit quantisation of the bounding box), the same for every variant. Scene: the ten shared meshes, each scaled to a unit diagonal, {} times over on a grid, as one mesh. Every compressed variant's first view was checked pixel for pixel against the uncompressed pass over its CPU-decoded meshlets before timing.\n", ctx.name, WIDTH, HEIGHT, cfg.views, cfg.seed, cfg.scene_copies)?;
+    writeln!(md, "Device: **{}**. {}×{}, 4× MSAA, D32 depth, back faces culled by the rasteriser. {} framed random views per mesh (seed {}), interleaved across variants, one discarded warm-up frame per variant; GPU time from timestamps around the draw. Meshlets: meshopt 64/126 at the paper's tolerance (14-bit quantisation of the bounding box), the same for every variant. Scene: the ten shared meshes, each scaled to a unit diagonal, {} times over on a grid, as one mesh. Every compressed variant's first view was checked pixel for pixel against the uncompressed pass over its CPU-decoded meshlets before timing.\n", ctx.name, WIDTH, HEIGHT, cfg.views(), cfg.seed, cfg.scene_copies())?;
     if ctx.name.contains("llvmpipe") {
         writeln!(md, "**Lavapipe's figures.** The \"GPU\" here is this machine's CPU cores running LLVM-compiled shaders and a software rasteriser at 1280×720 with 4× MSAA: rasterisation and shading take most of every frame, so decoding costs show up diluted, and a real GPU's balance (where the paper's laced wires take 2.5× SC compact's time) is not what these ratios measure. The memory columns are device-independent.\n")?;
     }
@@ -450,7 +464,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
         });
     }
     line_chart(
-        &cfg.out.join("compress_render_tradeoff.svg"),
+        &cfg.common.out.join("compress_render_tradeoff.svg"),
         &format!("{scene}: size against speed ({})", ctx.name),
         "bits per triangle resident",
         "M triangles / s",
@@ -458,7 +472,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
         Axes::default(),
     )?;
     writeln!(md, "\n![size against speed](compress_render_tradeoff.svg)")?;
-    crate::atomic::write(cfg.out.join("compress-render.md"), md)?;
+    crate::atomic::write(cfg.common.out.join("compress-render.md"), md)?;
     let mut csv = String::from(
         "mesh,triangles,meshlets,variant,bytes,ms_median,ms_p95,meshlets_culled_per_frame\n",
     );
@@ -474,6 +488,6 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
             r.mesh, r.triangles, r.meshlets, r.variant, r.bytes, r.culled
         )?;
     }
-    crate::atomic::write(cfg.out.join("compress-render.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("compress-render.csv"), csv)?;
     Ok(())
 }

@@ -9,7 +9,11 @@
 //! growers fill meshlets to the same size whatever the bunny.
 
 use super::build::mesh_name;
-use super::{evaluate, machine_note, median, paper, right_align_numbers, today, Evaluation};
+use super::table::{
+    Align::{Left, Right},
+    Style, Table,
+};
+use super::{evaluate, machine_note, median, paper, today, Common, Evaluation};
 use crate::mesh;
 use crate::meshlet::Limits;
 use crate::strategy::{self, GreedyPaper, Options, Strategy};
@@ -29,6 +33,32 @@ pub struct Config {
     pub runs: usize,
     /// Output folder.
     pub out: PathBuf,
+}
+
+/// The arguments of `meshletlab bench fidelity`, resolved into a [`Config`] by [`Args::config`].
+#[derive(clap::Args, Clone, Debug)]
+pub struct Args {
+    /// The bunny (file stem in the folder; the paper's figures are for it).
+    #[arg(long, default_value = "stanford_bunny", display_order = 1)]
+    pub mesh: String,
+    /// Builds per row (median time).
+    #[arg(long, default_value_t = 9, display_order = 2)]
+    pub runs: usize,
+    /// Mesh folder, output folder, smoke run (the first smoke mesh, one build per row), quiet.
+    #[command(flatten)]
+    pub common: Common,
+}
+
+impl Args {
+    /// What to run: the mesh file (for a smoke run the first smoke mesh, written now), the runs (one
+    /// in a smoke run) and the output folder.
+    pub fn config(&self) -> Result<Config> {
+        Ok(Config {
+            mesh: self.common.mesh_file(&self.mesh)?.1,
+            runs: self.common.or_smoke(self.runs.max(1), 1),
+            out: self.common.out.clone(),
+        })
+    }
 }
 
 /// One measured row.
@@ -95,7 +125,7 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
     crate::atomic::write(&md, markdown(cfg, &mesh_name(&cfg.mesh), &m, &rows))
         .with_context(|| format!("writing {}", md.display()))?;
     let csv = cfg.out.join("fidelity.csv");
-    crate::atomic::write(&csv, csv_text(&rows))
+    crate::atomic::write(&csv, table().csv(&rows))
         .with_context(|| format!("writing {}", csv.display()))?;
     Ok(rows)
 }
@@ -106,33 +136,96 @@ fn paper_ms(strategy: &str) -> f64 {
         .expect("the paper times greedy and bsphere")
 }
 
-fn csv_text(rows: &[Row]) -> String {
-    let mut s = String::from(
-        "strategy,limits,time_ms_median,meshlets,scaled_meshlets,paper_meshlets,gap,primitive_fill,\
-         primitive_fill_over_126,vertex_fill,mean_radius_rel,cone_cullable,connected\n",
-    );
-    for r in rows {
-        let m = &r.eval.metrics;
-        let p = paper::bunny_row(r.paper_strategy).and_then(|p| p.meshlets);
-        let _ = writeln!(
-            s,
-            "{},{},{:.3},{},{:.1},{},{:.4},{:.4},{:.4},{:.4},{:.5},{:.4},{:.4}",
-            r.eval.strategy,
-            r.eval.limits,
-            median(&r.eval.times_ms),
-            m.meshlets,
-            r.scaled,
-            p.map(|p| p.to_string()).unwrap_or_default(),
-            r.gap(),
-            m.primitive_fill,
-            m.mean_triangles / 126.0,
-            m.vertex_fill,
-            m.mean_radius_rel,
-            m.cone_cullable,
-            m.connected
-        );
-    }
-    s
+/// The experiment's table: fidelity.md rounds for reading, fidelity.csv keeps digits (and leaves
+/// out the paper's times and fills, which are in the source).
+fn table<'a>() -> Table<'a, Row> {
+    let paper = |r: &Row| paper::bunny_row(r.paper_strategy).expect("paper row");
+    let ms = |r: &Row| median(&r.eval.times_ms);
+    let opt = |x: Option<String>| x.unwrap_or_else(|| "—".into());
+    Table::new(Style::Padded)
+        .md("limits", Left, |r: &Row| r.eval.limits.to_string())
+        .col("strategy", Left, |r| r.eval.strategy.clone())
+        .csv_only("limits", |r| r.eval.limits.to_string())
+        .split(
+            "ms",
+            Right,
+            move |r| format!("{:.2}", ms(r)),
+            "time_ms_median",
+            move |r| format!("{:.3}", ms(r)),
+        )
+        .md("paper ms", Right, move |r| {
+            opt(paper(r).time_ms.map(|v| format!("{v:.2}")))
+        })
+        .md("speed-up", Right, move |r| {
+            opt(paper(r).time_ms.map(|v| format!("{:.1}x", v / ms(r))))
+        })
+        .col("meshlets", Right, |r| r.eval.metrics.meshlets.to_string())
+        .split(
+            "scaled",
+            Right,
+            |r| format!("{:.0}", r.scaled),
+            "scaled_meshlets",
+            |r| format!("{:.1}", r.scaled),
+        )
+        .split(
+            "paper",
+            Right,
+            move |r| opt(paper(r).meshlets.map(|v| v.to_string())),
+            "paper_meshlets",
+            move |r| paper(r).meshlets.map(|p| p.to_string()).unwrap_or_default(),
+        )
+        .split(
+            "gap",
+            Right,
+            |r| format!("{:+.1} %", 100.0 * r.gap()),
+            "gap",
+            |r| format!("{:.4}", r.gap()),
+        )
+        .split(
+            "pfill",
+            Right,
+            |r| format!("{:.3}", r.eval.metrics.primitive_fill),
+            "primitive_fill",
+            |r| format!("{:.4}", r.eval.metrics.primitive_fill),
+        )
+        .split(
+            "pfill/126",
+            Right,
+            |r| format!("{:.3}", r.eval.metrics.mean_triangles / 126.0),
+            "primitive_fill_over_126",
+            |r| format!("{:.4}", r.eval.metrics.mean_triangles / 126.0),
+        )
+        .md("paper pfill", Right, move |r| {
+            opt(paper(r).primitive_fill.map(|v| format!("{v:.3}")))
+        })
+        .split(
+            "vfill",
+            Right,
+            |r| format!("{:.3}", r.eval.metrics.vertex_fill),
+            "vertex_fill",
+            |r| format!("{:.4}", r.eval.metrics.vertex_fill),
+        )
+        .split(
+            "radius/diag",
+            Right,
+            |r| format!("{:.4}", r.eval.metrics.mean_radius_rel),
+            "mean_radius_rel",
+            |r| format!("{:.5}", r.eval.metrics.mean_radius_rel),
+        )
+        .split(
+            "cullable",
+            Right,
+            |r| format!("{:.3}", r.eval.metrics.cone_cullable),
+            "cone_cullable",
+            |r| format!("{:.4}", r.eval.metrics.cone_cullable),
+        )
+        .split(
+            "connected",
+            Right,
+            |r| format!("{:.3}", r.eval.metrics.connected),
+            "connected",
+            |r| format!("{:.4}", r.eval.metrics.connected),
+        )
 }
 
 fn markdown(cfg: &Config, name: &str, m: &mesh::Mesh, rows: &[Row]) -> String {
@@ -160,52 +253,7 @@ fn markdown(cfg: &Config, name: &str, m: &mesh::Mesh, rows: &[Row]) -> String {
          meshlets x {PAPER_BUNNY_TRIANGLES} / {}; gap = scaled over the paper's count, minus 1.\n",
         m.triangle_count()
     );
-    let mut t = comfy_table::Table::new();
-    t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
-    t.set_header([
-        "limits",
-        "strategy",
-        "ms",
-        "paper ms",
-        "speed-up",
-        "meshlets",
-        "scaled",
-        "paper",
-        "gap",
-        "pfill",
-        "pfill/126",
-        "paper pfill",
-        "vfill",
-        "radius/diag",
-        "cullable",
-        "connected",
-    ]);
-    for r in rows {
-        let p = paper::bunny_row(r.paper_strategy).expect("paper row");
-        let mm = &r.eval.metrics;
-        let ms = median(&r.eval.times_ms);
-        let opt = |x: Option<String>| x.unwrap_or_else(|| "—".into());
-        t.add_row([
-            r.eval.limits.to_string(),
-            r.eval.strategy.clone(),
-            format!("{ms:.2}"),
-            opt(p.time_ms.map(|v| format!("{v:.2}"))),
-            opt(p.time_ms.map(|v| format!("{:.1}x", v / ms))),
-            mm.meshlets.to_string(),
-            format!("{:.0}", r.scaled),
-            opt(p.meshlets.map(|v| v.to_string())),
-            format!("{:+.1} %", 100.0 * r.gap()),
-            format!("{:.3}", mm.primitive_fill),
-            format!("{:.3}", mm.mean_triangles / 126.0),
-            opt(p.primitive_fill.map(|v| format!("{v:.3}"))),
-            format!("{:.3}", mm.vertex_fill),
-            format!("{:.4}", mm.mean_radius_rel),
-            format!("{:.3}", mm.cone_cullable),
-            format!("{:.3}", mm.connected),
-        ]);
-    }
-    right_align_numbers(&mut t, 2..16);
-    let _ = writeln!(s, "{t}\n");
+    let _ = writeln!(s, "{}\n", table().markdown(rows));
     let row = |n: &str| {
         rows.iter()
             .find(|r| r.eval.strategy == n && r.eval.limits == Limits::DEFAULT)

@@ -8,7 +8,11 @@
 
 use super::kmedoids::PAPER_TIMES;
 use super::plot::{line_chart, Axes, Series};
-use super::{machine_note, today};
+use super::table::{
+    Align::{Left, Right},
+    Style, Table,
+};
+use super::{machine_note, today, Common};
 use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::gpu::{self, timed as secs, Gpu, Profile};
 use crate::mesh::{self, subdivide::subdivide, Mesh};
@@ -18,28 +22,33 @@ use crate::strategy::{self, parallel};
 use anyhow::{bail, Context, Result};
 use indicatif::ProgressBar;
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
-/// What to run.
-#[derive(Clone, Debug)]
+/// What to run: the arguments of `meshletlab bench gpu`.
+#[derive(clap::Args, Clone, Debug)]
 pub struct Config {
-    /// Folder of meshes.
-    pub meshes: PathBuf,
-    /// Output folder.
-    pub out: PathBuf,
+    /// Mesh folder, output folder, smoke run (every mesh in the folder instead of the bunny, igea
+    /// and the dragon, the first one profiled, and no subdivided dragons), quiet.
+    #[command(flatten)]
+    pub common: Common,
     /// Meshlet limits.
+    #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
     pub limits: Limits,
     /// Above this many triangles, skip the GPU k-medoids (rayon still runs).
+    #[arg(long, default_value_t = 16_000_000)]
     pub kmedoids_gpu_max: usize,
     /// Above this many triangles, skip the one-thread CPU runs and the GPU grower.
+    #[arg(long, default_value_t = 4_000_000)]
     pub one_thread_max: usize,
-    /// Skip the subdivided dragons (a quick run).
+    /// Leave out the subdivided dragons (3.5 M and 14 M triangles).
+    #[arg(long)]
     pub quick: bool,
-    /// Every mesh in `meshes` instead of the bunny, igea and the dragon, the first one profiled
-    /// (`bench gpu --smoke` over [`crate::bench::smoke`]'s meshes).
-    pub smoke: bool,
-    /// No progress output.
-    pub quiet: bool,
+}
+
+impl Config {
+    /// Whether the subdivided dragons are left out (asked, or a smoke run).
+    pub fn quick(&self) -> bool {
+        self.quick || self.common.smoke
+    }
 }
 
 struct Row {
@@ -136,9 +145,10 @@ type Sweep = Vec<(f64, GrowRow, f64)>;
 
 /// Runs the benchmark and writes the results.
 pub fn run(cfg: &Config) -> Result<()> {
+    let meshes = cfg.common.meshes_dir()?;
     let g = Gpu::new()?;
     let say = |m: String| {
-        if !cfg.quiet {
+        if !cfg.common.quiet {
             eprintln!("{m}");
         }
     };
@@ -150,12 +160,12 @@ pub fn run(cfg: &Config) -> Result<()> {
     gpu::kmedoids::cluster(&g, &warm, cfg.limits, &KConfig::default())?;
     gpu::grow::grow(&g, &warm, cfg.limits, parallel::DEFAULT_SPACING)?;
     let load = |stem: &str| -> Result<Mesh> {
-        let p = cfg.meshes.join(format!("{stem}.ply.zst"));
+        let p = meshes.join(format!("{stem}.ply.zst"));
         mesh::load(&p).with_context(|| format!("bench gpu needs {}", p.display()))
     };
     let mut inputs: Vec<(String, Mesh)> = Vec::new();
-    if cfg.smoke {
-        for p in super::build::mesh_files(&cfg.meshes)? {
+    if cfg.common.smoke {
+        for p in super::build::mesh_files(&meshes)? {
             inputs.push((super::build::mesh_name(&p), mesh::load(&p)?));
         }
     } else {
@@ -164,7 +174,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         inputs.push(("igea".into(), load("igea")?));
         inputs.push(("stanford_dragon_vrip".into(), dragon));
     }
-    if !cfg.quick {
+    if !cfg.quick() {
         let dragon = &inputs[2].1;
         let x4 = subdivide(dragon, 1).map_err(anyhow::Error::msg)?;
         let x16 = subdivide(dragon, 2).map_err(anyhow::Error::msg)?;
@@ -176,7 +186,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     let mut rows = Vec::new();
     for (name, m) in &inputs {
         let t = m.triangle_count();
-        let pb = if cfg.quiet {
+        let pb = if cfg.common.quiet {
             ProgressBar::hidden()
         } else {
             ProgressBar::new_spinner()
@@ -226,7 +236,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         };
         // The profile: the same run again with every dispatch timed on its own (its pass
         // boundaries cost a little, so its times are not the table's).
-        let profiled = PROFILED.contains(&name.as_str()) || (cfg.smoke && rows.is_empty());
+        let profiled = PROFILED.contains(&name.as_str()) || (cfg.common.smoke && rows.is_empty());
         let profile = if km_gpu.is_some() && profiled {
             pb.set_message(format!("{name} ({t} triangles): k-medoids, GPU profile"));
             g.time_each_kernel(true);
@@ -436,8 +446,63 @@ Kernel time per entry point (GPU timestamps around each dispatch, in a second ru
     Ok(())
 }
 
+/// Adjacency per mesh: gpu.md's first table, and gpu.csv with more digits and the k-medoids
+/// times too (gpu.md shows those in its second table).
+fn adjacency_table<'a>() -> Table<'a, Row> {
+    let s6 = |x: fn(&Row) -> f64| move |r: &Row| format!("{:.6}", x(r));
+    let s3 = |x: fn(&Row) -> f64| move |r: &Row| format!("{:.3}", x(r));
+    let s4 = |x: Option<f64>| x.map(|x| format!("{x:.4}")).unwrap_or_default();
+    Table::new(Style::Compact)
+        .col("mesh", Left, |r: &Row| r.mesh.clone())
+        .col("triangles", Right, |r| r.triangles.to_string())
+        .split(
+            "CPU (1 thread) s",
+            Right,
+            s3(|r| r.adj_cpu),
+            "adjacency_cpu_s",
+            s6(|r| r.adj_cpu),
+        )
+        .split(
+            "GPU kernel s",
+            Right,
+            s3(|r| r.adj_gpu.kernel),
+            "adjacency_gpu_kernel_s",
+            s6(|r| r.adj_gpu.kernel),
+        )
+        .split(
+            "GPU upload s",
+            Right,
+            s3(|r| r.adj_gpu.upload),
+            "adjacency_gpu_upload_s",
+            s6(|r| r.adj_gpu.upload),
+        )
+        .split(
+            "GPU readback s",
+            Right,
+            s3(|r| r.adj_gpu.readback),
+            "adjacency_gpu_readback_s",
+            s6(|r| r.adj_gpu.readback),
+        )
+        .md("GPU Mtri/s (kernel)", Right, |r| {
+            format!("{:.1}", r.triangles as f64 / r.adj_gpu.kernel / 1e6)
+        })
+        .md("GPU kernel / CPU", Right, |r| {
+            format!("{:.2}x", r.adj_gpu.kernel / r.adj_cpu)
+        })
+        .csv_only("kmedoids_cpu1_s", move |r| s4(r.km_cpu1))
+        .csv_only("kmedoids_rayon_s", |r| format!("{:.4}", r.km_rayon))
+        .csv_only("kmedoids_gpu_s", move |r| {
+            s4(r.km_gpu.as_ref().map(|x| x.seconds))
+        })
+        .csv_only("kmedoids_gpu_kernel_s", move |r| {
+            s4(r.km_gpu.as_ref().map(|x| x.timing.kernel))
+        })
+        .csv_only("meshlets", |r| r.meshlets.to_string())
+        .csv_only("iterations", |r| r.iterations.to_string())
+}
+
 fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) -> Result<()> {
-    std::fs::create_dir_all(&cfg.out)?;
+    std::fs::create_dir_all(&cfg.common.out)?;
     let opt =
         |x: Option<f64>, f: &dyn Fn(f64) -> String| x.map(f).unwrap_or_else(|| "skipped".into());
     let mut md = String::new();
@@ -451,45 +516,7 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
     writeln!(md, "GPU adapter: **{}**{}. Every GPU output below was compared with the CPU reference and is identical (adjacency CSR arrays; k-medoids labels and meshlets; parallel-grower claims, orders and meshlets); a difference aborts the benchmark.\n", g.describe(), if g.timestamps { "; kernel times from GPU timestamp queries" } else { "; no timestamp queries: kernel times are wall time" })?;
     writeln!(md, "Lavapipe is itself a CPU renderer on this machine's cores: a GPU/CPU ratio here compares LLVM-compiled compute shaders with native Rust on the same {} cores, not a GPU with a CPU.\n", std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1))?;
     writeln!(md, "## Adjacency (vertex -> triangle CSR + dual graph)\n")?;
-    writeln!(md, "| mesh | triangles | CPU (1 thread) s | GPU kernel s | GPU upload s | GPU readback s | GPU Mtri/s (kernel) | GPU kernel / CPU |")?;
-    writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|")?;
-    let mut csv = String::from("mesh,triangles,adjacency_cpu_s,adjacency_gpu_kernel_s,adjacency_gpu_upload_s,adjacency_gpu_readback_s,kmedoids_cpu1_s,kmedoids_rayon_s,kmedoids_gpu_s,kmedoids_gpu_kernel_s,meshlets,iterations\n");
-    for r in rows {
-        writeln!(
-            md,
-            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.1} | {:.2}x |",
-            r.mesh,
-            r.triangles,
-            r.adj_cpu,
-            r.adj_gpu.kernel,
-            r.adj_gpu.upload,
-            r.adj_gpu.readback,
-            r.triangles as f64 / r.adj_gpu.kernel / 1e6,
-            r.adj_gpu.kernel / r.adj_cpu
-        )?;
-        writeln!(
-            csv,
-            "{},{},{:.6},{:.6},{:.6},{:.6},{},{:.4},{},{},{},{}",
-            r.mesh,
-            r.triangles,
-            r.adj_cpu,
-            r.adj_gpu.kernel,
-            r.adj_gpu.upload,
-            r.adj_gpu.readback,
-            r.km_cpu1.map(|x| format!("{x:.4}")).unwrap_or_default(),
-            r.km_rayon,
-            r.km_gpu
-                .as_ref()
-                .map(|x| format!("{:.4}", x.seconds))
-                .unwrap_or_default(),
-            r.km_gpu
-                .as_ref()
-                .map(|x| format!("{:.4}", x.timing.kernel))
-                .unwrap_or_default(),
-            r.meshlets,
-            r.iterations
-        )?;
-    }
+    writeln!(md, "{}", adjacency_table().markdown(rows))?;
     writeln!(md, "\nTarget: >= 20 M triangles/s on lavapipe.\n")?;
     writeln!(
         md,
@@ -599,15 +626,15 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
         md,
         "\n![scaling](gpu_scaling.svg)\n\n![time vs error](gpu_time_vs_error.svg)\n\n![grower](gpu_grower_sweep.svg)"
     )?;
-    crate::atomic::write(cfg.out.join("gpu.md"), md)?;
-    crate::atomic::write(cfg.out.join("gpu.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("gpu.md"), md)?;
+    crate::atomic::write(cfg.common.out.join("gpu.csv"), adjacency_table().csv(rows))?;
     let pts = |f: &dyn Fn(&Row) -> Option<f64>| {
         rows.iter()
             .filter_map(|r| f(r).map(|y| (r.triangles as f64, y)))
             .collect::<Vec<_>>()
     };
     line_chart(
-        &cfg.out.join("gpu_scaling.svg"),
+        &cfg.common.out.join("gpu_scaling.svg"),
         "k-medoids and adjacency run time against mesh size",
         "triangles (log)",
         "seconds",
@@ -639,7 +666,7 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
         },
     )?;
     line_chart(
-        &cfg.out.join("gpu_time_vs_error.svg"),
+        &cfg.common.out.join("gpu_time_vs_error.svg"),
         "bunny: k-medoids objective against run time (iteration caps 0..16)",
         "seconds (initial clustering)",
         "mean hops to medoid",
@@ -656,7 +683,7 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
         Axes::default(),
     )?;
     line_chart(
-        &cfg.out.join("gpu_grower_sweep.svg"),
+        &cfg.common.out.join("gpu_grower_sweep.svg"),
         "bunny: bsphere-parallel meshlets against rounds (seed spacing 1, 2, 4, 8)",
         "growth rounds (parallel depth)",
         "meshlets",

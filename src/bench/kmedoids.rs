@@ -3,14 +3,17 @@
 //! results/kmedoids.csv, results/kmedoids_sweep.csv and two plots.
 
 use super::build::{mesh_files, mesh_name};
-use super::{machine_note, plot, right_align_numbers, today};
+use super::table::{
+    Align::{Left, Right},
+    Style, Table,
+};
+use super::{machine_note, plot, today, Common};
 use crate::mesh;
 use crate::meshlet::{bounds, validate, Limits, Metrics};
 use crate::strategy::kmedoids::{cluster, Clustering, Config as KConfig, Mode};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt::Write as _;
-use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 /// The paper's published k-medoids times (Table 4 and §5): (model, triangles, seconds).
@@ -20,23 +23,37 @@ pub const PAPER_TIMES: &[(&str, u32, f64)] = &[
     ("Asian Dragon", 7_200_000, 455_300.0),
 ];
 
-/// What to run.
-#[derive(Clone, Debug)]
+/// What to run: the arguments of `meshletlab bench kmedoids`.
+#[derive(clap::Args, Clone, Debug)]
 pub struct Config {
-    /// Folder of meshes.
-    pub meshes: PathBuf,
-    /// Output folder.
-    pub out: PathBuf,
-    /// Limits.
+    /// Mesh folder, output folder, smoke run (a half-second paper budget, the sweep on the first
+    /// smoke mesh), quiet.
+    #[command(flatten)]
+    pub common: Common,
+    /// Meshlet limits.
+    #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
     pub limits: Limits,
-    /// Paper mode's time budget per mesh.
-    pub paper_budget: Duration,
-    /// Skip paper mode (only fast).
+    /// Seconds paper mode may spend per mesh before finishing the fast way.
+    #[arg(long, default_value_t = 60.0)]
+    pub paper_budget: f64,
+    /// Run only the fast mode.
+    #[arg(long)]
     pub skip_paper: bool,
-    /// Mesh (file stem) for the sweep.
+    /// Mesh (file stem) for the iteration/threshold sweep.
+    #[arg(long, default_value = "stanford_bunny")]
     pub sweep_mesh: String,
-    /// No progress bar.
-    pub quiet: bool,
+}
+
+impl Config {
+    /// Paper mode's time budget per mesh (half a second in a smoke run).
+    pub fn paper_budget(&self) -> Duration {
+        Duration::from_secs_f64(self.common.or_smoke(self.paper_budget, 0.5).max(0.0))
+    }
+
+    /// The sweep's mesh (file stem): the first smoke mesh in a smoke run.
+    pub fn sweep_mesh(&self) -> &str {
+        self.common.or_smoke(&self.sweep_mesh, super::smoke::FIRST)
+    }
 }
 
 /// (threshold, max iterations, seconds, clustering, metrics) of one sweep point.
@@ -73,15 +90,122 @@ fn run_one(
     Ok((secs, c, metrics))
 }
 
+/// Both modes on every mesh: kmedoids.md's table and kmedoids.csv.
+fn runs_table<'a>() -> Table<'a, Run> {
+    Table::new(Style::Padded)
+        .col("mesh", Left, |r: &Run| r.mesh.clone())
+        .col("triangles", Right, |r| r.triangles.to_string())
+        .split(
+            "mode",
+            Left,
+            |r| format!("{:?}", r.mode).to_lowercase(),
+            "mode",
+            |r| format!("{:?}", r.mode),
+        )
+        .split(
+            "seconds",
+            Right,
+            |r| format!("{:.2}", r.seconds),
+            "seconds",
+            |r| format!("{:.4}", r.seconds),
+        )
+        .col("meshlets", Right, |r| r.c.meshlets.len().to_string())
+        .col("iterations", Right, |r| r.c.iterations.to_string())
+        .col("splits", Right, |r| r.c.splits.to_string())
+        .csv_only("budget_exhausted", |r| r.c.budget_exhausted.to_string())
+        .split(
+            "mean hops",
+            Right,
+            |r| format!("{:.2}", r.c.mean_distance()),
+            "mean_hops",
+            |r| format!("{:.4}", r.c.mean_distance()),
+        )
+        .split(
+            "pfill",
+            Right,
+            |r| format!("{:.3}", r.metrics.primitive_fill),
+            "primitive_fill",
+            |r| format!("{:.5}", r.metrics.primitive_fill),
+        )
+        .csv_only("vertex_fill", |r| format!("{:.5}", r.metrics.vertex_fill))
+        .md("note", Left, |r| {
+            if r.c.budget_exhausted {
+                "budget ran out: finished fast".into()
+            } else {
+                String::new()
+            }
+        })
+}
+
+/// The sweep on `mesh`: kmedoids.md's last table and kmedoids_sweep.csv.
+fn sweep_table(mesh: &str) -> Table<'_, SweepRow> {
+    Table::new(Style::Padded)
+        .csv_only("mesh", move |_: &SweepRow| mesh.to_string())
+        .col("threshold", Right, |(th, ..)| th.to_string())
+        .renamed("max iterations", "max_iterations", Right, |(_, it, ..)| {
+            it.to_string()
+        })
+        .csv_only("clustering_seconds", |(.., c, _)| {
+            format!("{:.4}", c.initial_seconds)
+        })
+        .renamed(
+            "clustering iterations",
+            "clustering_iterations",
+            Right,
+            |(.., c, _)| c.initial_iterations.to_string(),
+        )
+        .md("clustering s", Right, |(.., c, _)| {
+            format!("{:.3}", c.initial_seconds)
+        })
+        .split(
+            "clustering mean hops",
+            Right,
+            |(.., c, _)| format!("{:.3}", c.initial_mean_distance),
+            "clustering_mean_hops",
+            |(.., c, _)| format!("{:.4}", c.initial_mean_distance),
+        )
+        .split(
+            "total s",
+            Right,
+            |(_, _, secs, ..)| format!("{secs:.3}"),
+            "seconds",
+            |(_, _, secs, ..)| format!("{secs:.4}"),
+        )
+        .csv_only("iterations_run", |(.., c, _)| c.iterations.to_string())
+        .split(
+            "final mean hops",
+            Right,
+            |(.., c, _)| format!("{:.3}", c.mean_distance()),
+            "mean_hops",
+            |(.., c, _)| format!("{:.4}", c.mean_distance()),
+        )
+        .col("meshlets", Right, |(.., c, _)| c.meshlets.len().to_string())
+        .split(
+            "pfill",
+            Right,
+            |(.., met)| format!("{:.3}", met.primitive_fill),
+            "primitive_fill",
+            |(.., met)| format!("{:.5}", met.primitive_fill),
+        )
+        .split(
+            "vfill",
+            Right,
+            |(.., met)| format!("{:.3}", met.vertex_fill),
+            "vertex_fill",
+            |(.., met)| format!("{:.5}", met.vertex_fill),
+        )
+}
+
 /// Runs both parts and writes the results.
 pub fn run(cfg: &Config) -> Result<()> {
-    let files = mesh_files(&cfg.meshes)?;
+    let meshes = cfg.common.meshes_dir()?;
+    let files = mesh_files(&meshes)?;
     let modes: Vec<Mode> = if cfg.skip_paper {
         vec![Mode::Fast]
     } else {
         vec![Mode::Fast, Mode::Paper]
     };
-    let pb = if cfg.quiet {
+    let pb = if cfg.common.quiet {
         ProgressBar::hidden()
     } else {
         ProgressBar::new((files.len() * modes.len()) as u64)
@@ -99,7 +223,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             pb.set_message(format!("{name} / {mode:?}"));
             let kc = KConfig {
                 mode,
-                paper_budget: cfg.paper_budget,
+                paper_budget: cfg.paper_budget(),
                 ..KConfig::default()
             };
             let (seconds, c, metrics) = run_one(&m, cfg.limits, kc, &name)?;
@@ -119,11 +243,11 @@ pub fn run(cfg: &Config) -> Result<()> {
     runs.sort_by_key(|r| (r.triangles, r.mesh.clone(), r.mode == Mode::Paper));
 
     // The sweep.
-    let Some((_, sm)) = loaded.iter().find(|(n, _)| *n == cfg.sweep_mesh) else {
+    let Some((_, sm)) = loaded.iter().find(|(n, _)| *n == cfg.sweep_mesh()) else {
         bail!(
             "sweep mesh '{}' is not in {}",
-            cfg.sweep_mesh,
-            cfg.meshes.display()
+            cfg.sweep_mesh(),
+            meshes.display()
         );
     };
     let iterations = [0u32, 1, 2, 4, 8, 16, 32];
@@ -136,51 +260,17 @@ pub fn run(cfg: &Config) -> Result<()> {
                 shift_threshold: th,
                 ..KConfig::default()
             };
-            let (secs, c, met) = run_one(sm, cfg.limits, kc, &cfg.sweep_mesh)?;
+            let (secs, c, met) = run_one(sm, cfg.limits, kc, cfg.sweep_mesh())?;
             sweep.push((th, it, secs, c, met));
         }
     }
 
-    std::fs::create_dir_all(&cfg.out)?;
-    let mut csv = String::from("mesh,triangles,mode,seconds,meshlets,iterations,splits,budget_exhausted,mean_hops,primitive_fill,vertex_fill\n");
-    for r in &runs {
-        let _ = writeln!(
-            csv,
-            "{},{},{:?},{:.4},{},{},{},{},{:.4},{:.5},{:.5}",
-            r.mesh,
-            r.triangles,
-            r.mode,
-            r.seconds,
-            r.c.meshlets.len(),
-            r.c.iterations,
-            r.c.splits,
-            r.c.budget_exhausted,
-            r.c.mean_distance(),
-            r.metrics.primitive_fill,
-            r.metrics.vertex_fill
-        );
-    }
-    crate::atomic::write(cfg.out.join("kmedoids.csv"), csv)?;
-    let mut scsv = String::from(
-        "mesh,threshold,max_iterations,clustering_seconds,clustering_iterations,clustering_mean_hops,\
-         seconds,iterations_run,mean_hops,meshlets,primitive_fill,vertex_fill\n",
-    );
-    for (th, it, secs, c, met) in &sweep {
-        let _ = writeln!(
-            scsv,
-            "{},{th},{it},{:.4},{},{:.4},{secs:.4},{},{:.4},{},{:.5},{:.5}",
-            cfg.sweep_mesh,
-            c.initial_seconds,
-            c.initial_iterations,
-            c.initial_mean_distance,
-            c.iterations,
-            c.mean_distance(),
-            c.meshlets.len(),
-            met.primitive_fill,
-            met.vertex_fill
-        );
-    }
-    crate::atomic::write(cfg.out.join("kmedoids_sweep.csv"), scsv)?;
+    std::fs::create_dir_all(&cfg.common.out)?;
+    crate::atomic::write(cfg.common.out.join("kmedoids.csv"), runs_table().csv(&runs))?;
+    crate::atomic::write(
+        cfg.common.out.join("kmedoids_sweep.csv"),
+        sweep_table(cfg.sweep_mesh()).csv(&sweep),
+    )?;
     let series = |x: &dyn Fn(&SweepRow) -> f64, y: &dyn Fn(&Clustering) -> f64| {
         thresholds
             .iter()
@@ -195,10 +285,10 @@ pub fn run(cfg: &Config) -> Result<()> {
             .collect::<Vec<_>>()
     };
     plot::line_chart(
-        &cfg.out.join("kmedoids_sweep_hops.svg"),
+        &cfg.common.out.join("kmedoids_sweep_hops.svg"),
         &format!(
             "k-medoids on {}: clustering time against objective (before fitting)",
-            cfg.sweep_mesh
+            cfg.sweep_mesh()
         ),
         "seconds of the k-medoids loop (log scale)",
         "mean hops to the medoid",
@@ -209,10 +299,10 @@ pub fn run(cfg: &Config) -> Result<()> {
         },
     )?;
     plot::line_chart(
-        &cfg.out.join("kmedoids_sweep_meshlets.svg"),
+        &cfg.common.out.join("kmedoids_sweep_meshlets.svg"),
         &format!(
             "k-medoids on {}: total time against final meshlet count",
-            cfg.sweep_mesh
+            cfg.sweep_mesh()
         ),
         "seconds in total (log scale)",
         "meshlets",
@@ -229,7 +319,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         s,
         "Written by `meshletlab bench kmedoids --limits {} --paper-budget {}` on {}. Do not edit: rerun the command.\n",
         cfg.limits,
-        cfg.paper_budget.as_secs_f64(),
+        cfg.paper_budget().as_secs_f64(),
         today()
     );
     let _ = writeln!(s, "Machine: {}.\n", machine_note());
@@ -239,43 +329,9 @@ pub fn run(cfg: &Config) -> Result<()> {
          split per round, a few iterations after each; `paper`: one cluster added and everything re-run per \
          overflow, as the paper does; when its budget of {} s runs out it finishes the fast way (marked). \
          Every output passed the validator.\n",
-        cfg.paper_budget.as_secs_f64()
+        cfg.paper_budget().as_secs_f64()
     );
-    let mut t = comfy_table::Table::new();
-    t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
-    t.set_header([
-        "mesh",
-        "triangles",
-        "mode",
-        "seconds",
-        "meshlets",
-        "iterations",
-        "splits",
-        "mean hops",
-        "pfill",
-        "note",
-    ]);
-    for r in &runs {
-        t.add_row([
-            r.mesh.clone(),
-            r.triangles.to_string(),
-            format!("{:?}", r.mode).to_lowercase(),
-            format!("{:.2}", r.seconds),
-            r.c.meshlets.len().to_string(),
-            r.c.iterations.to_string(),
-            r.c.splits.to_string(),
-            format!("{:.2}", r.c.mean_distance()),
-            format!("{:.3}", r.metrics.primitive_fill),
-            if r.c.budget_exhausted {
-                "budget ran out: finished fast".into()
-            } else {
-                String::new()
-            },
-        ]);
-    }
-    right_align_numbers(&mut t, 1..2);
-    right_align_numbers(&mut t, 3..9);
-    let _ = writeln!(s, "{t}\n");
+    let _ = writeln!(s, "{}\n", runs_table().markdown(&runs));
     let _ = writeln!(s, "## The paper's k-medoids times (their machine)\n");
     let _ = writeln!(
         s,
@@ -310,7 +366,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     let _ = writeln!(
         s,
         "\n## Run time against error ({}, fast mode)\n",
-        cfg.sweep_mesh
+        cfg.sweep_mesh()
     );
     let _ = writeln!(
         s,
@@ -320,36 +376,7 @@ pub fn run(cfg: &Config) -> Result<()> {
          (2 iterations each) largely even out the final result. Data: kmedoids_sweep.csv.\n\n\
          ![hops](kmedoids_sweep_hops.svg)\n\n![meshlets](kmedoids_sweep_meshlets.svg)\n"
     );
-    let mut t = comfy_table::Table::new();
-    t.load_preset(comfy_table::presets::ASCII_MARKDOWN);
-    t.set_header([
-        "threshold",
-        "max iterations",
-        "clustering iterations",
-        "clustering s",
-        "clustering mean hops",
-        "total s",
-        "final mean hops",
-        "meshlets",
-        "pfill",
-        "vfill",
-    ]);
-    for (th, it, secs, c, met) in &sweep {
-        t.add_row([
-            th.to_string(),
-            it.to_string(),
-            c.initial_iterations.to_string(),
-            format!("{:.3}", c.initial_seconds),
-            format!("{:.3}", c.initial_mean_distance),
-            format!("{secs:.3}"),
-            format!("{:.3}", c.mean_distance()),
-            c.meshlets.len().to_string(),
-            format!("{:.3}", met.primitive_fill),
-            format!("{:.3}", met.vertex_fill),
-        ]);
-    }
-    right_align_numbers(&mut t, 0..10);
-    let _ = writeln!(s, "{t}");
-    crate::atomic::write(cfg.out.join("kmedoids.md"), s)?;
+    let _ = writeln!(s, "{}", sweep_table(cfg.sweep_mesh()).markdown(&sweep));
+    crate::atomic::write(cfg.common.out.join("kmedoids.md"), s)?;
     Ok(())
 }

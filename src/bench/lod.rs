@@ -15,7 +15,11 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{line_chart, Axes, Series};
-use super::{machine_note, median, today};
+use super::table::{
+    Align::{Left, Right},
+    Style, Table,
+};
+use super::{machine_note, median, today, Common};
 use crate::lod::flat::{self, Flat};
 use crate::lod::{self, Grouping, Level, LodInfo, NO_GROUP};
 use crate::mesh::{self, Mesh};
@@ -26,36 +30,77 @@ use crate::strategy::{self, Options};
 use anyhow::{Context as _, Result};
 use indicatif::ProgressBar;
 use std::fmt::Write as _;
-use std::path::PathBuf;
 use std::time::Instant;
 
-/// What to run.
-#[derive(Clone, Debug)]
+/// What to run: the arguments of `meshletlab bench lod`.
+#[derive(clap::Args, Clone, Debug)]
 pub struct Config {
-    /// Folder of meshes.
-    pub meshes: PathBuf,
-    /// Output folder.
-    pub out: PathBuf,
+    /// Mesh folder, output folder, smoke run (one run, two selection views, at most one render
+    /// view, no 14 M dragon), quiet.
+    #[command(flatten)]
+    pub common: Common,
     /// Interleaved build runs per configuration (median reported).
-    pub runs: usize,
-    /// Camera distances in bounding radii.
-    pub distances: Vec<f32>,
-    /// Views per distance for the triangle counts.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+    pub runs: u32,
+    /// Random directions per camera distance for the triangle counts.
+    #[arg(long, default_value_t = 16)]
     pub select_views: usize,
-    /// Views per distance for frame times (0: no rendering).
+    /// Views per camera distance for frame times (0: do not render).
+    #[arg(long, default_value_t = 3)]
     pub render_views: usize,
     /// LOD threshold in pixels.
+    #[arg(long, default_value_t = 1.0)]
     pub threshold: f32,
-    /// Level-0 strategies compared on the meshes below `strategy_max_triangles`.
-    pub strategies: Vec<String>,
-    /// Largest mesh of the strategy comparison.
+    /// Level-0 strategies to compare (comma-separated).
+    #[arg(short, long, value_delimiter = ',', default_values_t = DEFAULT_STRATEGIES.iter().map(|s| s.to_string()))]
+    pub strategy: Vec<String>,
+    /// Largest mesh (triangles) of the level-0 strategy comparison.
+    #[arg(long, default_value_t = 400_000)]
     pub strategy_max_triangles: usize,
     /// Leave out the dragon subdivided to 14 M triangles.
+    #[arg(long)]
     pub quick: bool,
+    /// Our DAG: target meshlets per group.
+    #[arg(long, default_value_t = lod::Config::default().group_size as u32, value_parser = clap::value_parser!(u32).range(2..=64))]
+    pub group_size: u32,
+    /// Our DAG: permissive simplification (as clod).
+    #[arg(long)]
+    pub permissive: bool,
+    /// Camera distances in bounding radii (not an argument: [`DISTANCES`]).
+    #[arg(skip = DISTANCES.to_vec())]
+    pub distances: Vec<f32>,
+}
+
+impl Config {
+    /// Interleaved build runs per configuration: one in a smoke run.
+    pub fn runs(&self) -> usize {
+        self.common.or_smoke(self.runs as usize, 1)
+    }
+
+    /// Views per distance for the triangle counts (at least one; two in a smoke run).
+    pub fn select_views(&self) -> usize {
+        self.common.or_smoke(self.select_views.max(1), 2)
+    }
+
+    /// Views per distance for frame times (0: no rendering; at most one in a smoke run).
+    pub fn render_views(&self) -> usize {
+        self.common
+            .or_smoke(self.render_views, self.render_views.min(1))
+    }
+
+    /// Whether the 14 M-triangle dragon is left out (asked, or a smoke run).
+    pub fn quick(&self) -> bool {
+        self.quick || self.common.smoke
+    }
+
     /// Our DAG's build settings.
-    pub lod: lod::Config,
-    /// No progress output.
-    pub quiet: bool,
+    pub fn lod(&self) -> lod::Config {
+        lod::Config {
+            group_size: self.group_size as usize,
+            permissive: self.permissive,
+            ..Default::default()
+        }
+    }
 }
 
 /// The default camera distances (bounding radii): 1.5 to 48 in steps of sqrt(2).
@@ -281,14 +326,14 @@ fn bench_mesh(
     let confs = configs();
     let mut times: Vec<(Vec<f64>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); confs.len()];
     let mut built: Vec<Option<(Vec<Level>, usize)>> = (0..confs.len()).map(|_| None).collect();
-    for _ in 0..cfg.runs.max(1) {
+    for _ in 0..cfg.runs().max(1) {
         for (k, (label, limits)) in confs.iter().enumerate() {
             pb.set_message(format!("{name}: building {label}"));
             match limits {
                 Some((l, grouping)) => {
                     let lc = lod::Config {
                         grouping: *grouping,
-                        ..cfg.lod
+                        ..cfg.lod()
                     };
                     let (levels, stuck, t2) = ours(m, "meshopt", *l, 2, &lc)?;
                     let (levels1, _, t1) = ours(m, "meshopt", *l, 1, &lc)?;
@@ -335,7 +380,7 @@ fn bench_mesh(
                 .iter()
                 .enumerate()
                 .map(|(k, &d)| {
-                    let cams = Camera::random_views(m, cfg.select_views, 0x10d + k as u64, d);
+                    let cams = Camera::random_views(m, cfg.select_views(), 0x10d + k as u64, d);
                     let sum: usize = cams
                         .iter()
                         .map(|c| selected_triangles(fl, c, cfg.threshold))
@@ -346,7 +391,7 @@ fn bench_mesh(
         })
         .collect();
     let (mut frame_ms, mut full_ms) = (Vec::new(), Vec::new());
-    if let (Some(ctx), true) = (ctx, cfg.render_views > 0) {
+    if let (Some(ctx), true) = (ctx, cfg.render_views() > 0) {
         pb.set_message(format!("{name}: rendering"));
         let passes: Vec<Pass> = flats
             .iter()
@@ -360,7 +405,7 @@ fn bench_mesh(
         };
         frame_ms = vec![Vec::new(); passes.len()];
         for (k, &d) in cfg.distances.iter().enumerate() {
-            let cams = Camera::random_views(m, cfg.render_views + 1, 0x10d + k as u64, d);
+            let cams = Camera::random_views(m, cfg.render_views() + 1, 0x10d + k as u64, d);
             let mut t: Vec<Vec<f64>> = vec![Vec::new(); passes.len()];
             let mut tf = Vec::new();
             // Interleaved per view; the first view warms up and is discarded.
@@ -396,7 +441,7 @@ fn bench_mesh(
 /// Level-0 strategy comparison on one mesh: per strategy, mean selected triangles per distance of
 /// its 64/126 DAG (equal error: the same threshold and views).
 fn strategy_curve(cfg: &Config, m: &Mesh, strategy: &str) -> Result<(Vec<f64>, usize, f64)> {
-    let (levels, _, secs) = ours(m, strategy, Limits::DEFAULT, 2, &cfg.lod)?;
+    let (levels, _, secs) = ours(m, strategy, Limits::DEFAULT, 2, &cfg.lod())?;
     let fl = Flat::from_levels(m, &levels);
     let total: usize = levels.iter().map(lod::level_triangles).sum();
     let curve = cfg
@@ -404,7 +449,7 @@ fn strategy_curve(cfg: &Config, m: &Mesh, strategy: &str) -> Result<(Vec<f64>, u
         .iter()
         .enumerate()
         .map(|(k, &d)| {
-            let cams = Camera::random_views(m, cfg.select_views, 0x10d + k as u64, d);
+            let cams = Camera::random_views(m, cfg.select_views(), 0x10d + k as u64, d);
             cams.iter()
                 .map(|c| selected_triangles(&fl, c, cfg.threshold))
                 .sum::<usize>() as f64
@@ -440,60 +485,109 @@ fn dag_series(cfg: &Config, r: &MeshResult, per_dag: &[Vec<f64>]) -> Vec<Series>
 /// ratio by 0.1 (they are all in lod_levels.csv).
 const RATIO_MIN_TRIANGLES: usize = 512;
 
-/// One DAG's row in the builds table and the CSV.
-fn dag_rows(name: &str, tris: usize, d: &Dag, md: &mut String, csv: &mut String) -> Result<()> {
-    let lt = d.level_triangles();
-    let total: usize = lt.iter().sum();
-    let meshlets: usize = d.levels.iter().map(|l| l.meshlets.len()).sum();
-    let ratios: Vec<f64> = lt
-        .windows(2)
-        .filter(|w| w[0] >= RATIO_MIN_TRIANGLES)
-        .map(|w| w[1] as f64 / w[0].max(1) as f64)
-        .collect();
-    let (rmin, rmax) = ratios
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(a, b), &r| (a.min(r), b.max(r)));
-    let best = d.seconds_2t.unwrap_or(d.seconds_1t).min(d.seconds_1t);
-    let best = if best.is_nan() {
-        d.seconds_2t.unwrap_or(f64::NAN)
-    } else {
-        best
-    };
-    let s2 = d.seconds_2t.map_or("–".into(), |s| format!("{s:.3}"));
-    let s1 = if d.seconds_1t.is_nan() {
-        "–".into()
-    } else {
-        format!("{:.3}", d.seconds_1t)
-    };
-    writeln!(
-        md,
-        "| {name} | {tris} | {} | {s1} | {s2} | {:.2} | {} | {} | {} | {} | {meshlets} | {} | {:.1} | {:.3}–{:.3} |",
-        d.label,
-        tris as f64 / best / 1e6,
-        d.levels.len(),
-        d.roots(),
-        d.stuck,
-        d.monotonic_violations(),
-        fmt_ratio(total, tris),
-        total as f64 / meshlets.max(1) as f64,
-        rmin,
-        rmax
-    )?;
-    writeln!(
-        csv,
-        "{name},{tris},{},{},{},{:.4},{},{},{},{},{meshlets},{total},{:.4},{:.2},{rmin:.4},{rmax:.4}",
-        d.label,
-        d.seconds_1t,
-        d.seconds_2t.unwrap_or(f64::NAN),
-        tris as f64 / best / 1e6,
-        d.levels.len(),
-        d.roots(),
-        d.stuck,
-        d.monotonic_violations(),
-        total as f64 / tris as f64,
-        total as f64 / meshlets.max(1) as f64
-    )?;
-    Ok(())
+/// One DAG on one mesh, with what its table row derives from it.
+struct DagRow<'a> {
+    name: &'a str,
+    tris: usize,
+    d: &'a Dag,
+    /// Triangles over all levels.
+    total: usize,
+    meshlets: usize,
+    roots: usize,
+    violations: usize,
+    /// Smallest and largest level ratio (levels whose lower level has enough triangles).
+    ratios: (f64, f64),
+    /// The faster build's seconds (2 threads where the 1-thread one is missing).
+    best: f64,
+}
+
+impl<'a> DagRow<'a> {
+    fn new(name: &'a str, tris: usize, d: &'a Dag) -> Self {
+        let lt = d.level_triangles();
+        let ratios = lt
+            .windows(2)
+            .filter(|w| w[0] >= RATIO_MIN_TRIANGLES)
+            .map(|w| w[1] as f64 / w[0].max(1) as f64)
+            .fold((f64::INFINITY, 0.0f64), |(a, b), r| (a.min(r), b.max(r)));
+        let best = d.seconds_2t.unwrap_or(d.seconds_1t).min(d.seconds_1t);
+        DagRow {
+            name,
+            tris,
+            d,
+            total: lt.iter().sum(),
+            meshlets: d.levels.iter().map(|l| l.meshlets.len()).sum(),
+            roots: d.roots(),
+            violations: d.monotonic_violations(),
+            ratios,
+            best: if best.is_nan() {
+                d.seconds_2t.unwrap_or(f64::NAN)
+            } else {
+                best
+            },
+        }
+    }
+}
+
+/// The builds: lod.md's first table and lod.csv (more digits, the ratios in two columns).
+fn dag_table<'a, 'r>() -> Table<'a, DagRow<'r>> {
+    Table::new(Style::Compact)
+        .col("mesh", Left, |r: &DagRow| r.name.to_string())
+        .col("triangles", Right, |r| r.tris.to_string())
+        .renamed("DAG", "dag", Left, |r| r.d.label.to_string())
+        .split(
+            "build s (1 thr)",
+            Right,
+            |r| match r.d.seconds_1t.is_nan() {
+                true => "–".into(),
+                false => format!("{:.3}", r.d.seconds_1t),
+            },
+            "build_s_1t",
+            |r| r.d.seconds_1t.to_string(),
+        )
+        .split(
+            "build s (2 thr)",
+            Right,
+            |r| r.d.seconds_2t.map_or("–".into(), |s| format!("{s:.3}")),
+            "build_s_2t",
+            |r| r.d.seconds_2t.unwrap_or(f64::NAN).to_string(),
+        )
+        .split(
+            "M tri/s (best)",
+            Right,
+            |r| format!("{:.2}", r.tris as f64 / r.best / 1e6),
+            "mtri_per_s_2t",
+            |r| format!("{:.4}", r.tris as f64 / r.best / 1e6),
+        )
+        .col("levels", Right, |r| r.d.levels.len().to_string())
+        .col("roots", Right, |r| r.roots.to_string())
+        .col("stuck", Right, |r| r.d.stuck.to_string())
+        .renamed("monotonic violations", "monotonic_violations", Right, |r| {
+            r.violations.to_string()
+        })
+        .col("meshlets", Right, |r| r.meshlets.to_string())
+        .csv_only("total_triangles", |r| r.total.to_string())
+        .split(
+            "all levels / source",
+            Right,
+            |r| fmt_ratio(r.total, r.tris),
+            "total_over_source",
+            |r| format!("{:.4}", r.total as f64 / r.tris as f64),
+        )
+        .split(
+            "tri/meshlet",
+            Right,
+            |r| format!("{:.1}", r.total as f64 / r.meshlets.max(1) as f64),
+            "triangles_per_meshlet",
+            |r| format!("{:.2}", r.total as f64 / r.meshlets.max(1) as f64),
+        )
+        .split(
+            "level ratios",
+            Left,
+            |r| format!("{:.3}–{:.3}", r.ratios.0, r.ratios.1),
+            "min_level_ratio",
+            |r| format!("{:.4}", r.ratios.0),
+        )
+        .csv_only("max_level_ratio", |r| format!("{:.4}", r.ratios.1))
 }
 
 fn fmt_ratio(a: usize, b: usize) -> String {
@@ -502,15 +596,18 @@ fn fmt_ratio(a: usize, b: usize) -> String {
 
 /// Runs the benchmark and writes the results.
 pub fn run(cfg: &Config) -> Result<()> {
-    let files = mesh_files(&cfg.meshes)?;
-    std::fs::create_dir_all(&cfg.out)
-        .with_context(|| format!("{}: cannot create", cfg.out.display()))?;
-    let ctx = if cfg.render_views > 0 {
+    if !(cfg.threshold > 0.0 && cfg.threshold.is_finite()) {
+        anyhow::bail!("--threshold must be a positive number of pixels");
+    }
+    let files = mesh_files(&cfg.common.meshes_dir()?)?;
+    std::fs::create_dir_all(&cfg.common.out)
+        .with_context(|| format!("{}: cannot create", cfg.common.out.display()))?;
+    let ctx = if cfg.render_views() > 0 {
         Some(Context::new(false)?)
     } else {
         None
     };
-    let pb = if cfg.quiet {
+    let pb = if cfg.common.quiet {
         ProgressBar::hidden()
     } else {
         ProgressBar::new(files.len() as u64)
@@ -535,7 +632,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         .iter()
         .filter(|(_, m)| m.triangle_count() <= cfg.strategy_max_triangles)
     {
-        for s in &cfg.strategies {
+        for s in &cfg.strategy {
             pb.set_message(format!("{name}: level-0 strategy {s}"));
             let (c, total, secs) = strategy_curve(cfg, m, s)?;
             strat.push((name.clone(), s.clone(), c, total, secs));
@@ -543,7 +640,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     }
     // The dragon at 14 M triangles: builds only (ours on 2 threads, clod on one).
     let mut big = None;
-    if !cfg.quick {
+    if !cfg.quick() {
         if let Some((_, dragon)) = meshes.iter().find(|(n, _)| n.contains("dragon")) {
             pb.set_message("dragon x16: subdividing");
             let m = mesh::subdivide::subdivide(dragon, 2).map_err(anyhow::Error::msg)?;
@@ -551,7 +648,7 @@ pub fn run(cfg: &Config) -> Result<()> {
                 "dragon x16 ({} triangles): ours",
                 m.triangle_count()
             ));
-            let (levels, stuck, t2) = ours(&m, "meshopt", Limits::DEFAULT, 2, &cfg.lod)?;
+            let (levels, stuck, t2) = ours(&m, "meshopt", Limits::DEFAULT, 2, &cfg.lod())?;
             let d_ours = Dag {
                 label: "ours 64/126".into(),
                 levels,
@@ -589,7 +686,6 @@ fn write_results(
     device: Option<String>,
 ) -> Result<()> {
     let mut md = String::new();
-    let mut csv = String::from("mesh,triangles,dag,build_s_1t,build_s_2t,mtri_per_s_2t,levels,roots,stuck,monotonic_violations,meshlets,total_triangles,total_over_source,triangles_per_meshlet,min_level_ratio,max_level_ratio\n");
     writeln!(
         md,
         "# Cluster LOD: ours beside meshoptimizer's clusterlod\n"
@@ -601,23 +697,19 @@ fn write_results(
         machine_note(),
         device.as_deref().unwrap_or("not rendered")
     )?;
-    writeln!(md, "Ours: `meshletlab::lod::build` with meshoptimizer's splitter (`meshopt` strategy) at 64/126 and at clod's 128/128, groups of 8 (meshoptimizer's partition_clusters; the last row per mesh groups by our k-medoids on the meshlet graph instead, `lod::group`), simplify_with_locks to half. Peer: meshoptimizer 1.3 `clod_build(clod_default_config(128))`, single-threaded by design. Build times: median of {} interleaved runs; ours on 1 and 2 rayon threads (the same DAG on both, checked).\n", cfg.runs)?;
+    writeln!(md, "Ours: `meshletlab::lod::build` with meshoptimizer's splitter (`meshopt` strategy) at 64/126 and at clod's 128/128, groups of 8 (meshoptimizer's partition_clusters; the last row per mesh groups by our k-medoids on the meshlet graph instead, `lod::group`), simplify_with_locks to half. Peer: meshoptimizer 1.3 `clod_build(clod_default_config(128))`, single-threaded by design. Build times: median of {} interleaved runs; ours on 1 and 2 rayon threads (the same DAG on both, checked).\n", cfg.runs())?;
     writeln!(md, "## Builds\n")?;
-    writeln!(md, "| mesh | triangles | DAG | build s (1 thr) | build s (2 thr) | M tri/s (best) | levels | roots | stuck | monotonic violations | meshlets | all levels / source | tri/meshlet | level ratios |")?;
-    writeln!(
-        md,
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
-    )?;
+    let mut dags: Vec<DagRow> = Vec::new();
     for r in results {
-        for d in &r.dags {
-            dag_rows(&r.name, r.triangles, d, &mut md, &mut csv)?;
-        }
+        dags.extend(r.dags.iter().map(|d| DagRow::new(&r.name, r.triangles, d)));
     }
-    if let Some((tris, dags)) = big {
-        for d in dags {
-            dag_rows("dragon x16 (subdivided)", *tris, d, &mut md, &mut csv)?;
-        }
+    if let Some((tris, big)) = big {
+        dags.extend(
+            big.iter()
+                .map(|d| DagRow::new("dragon x16 (subdivided)", *tris, d)),
+        );
     }
+    writeln!(md, "{}", dag_table().markdown(&dags))?;
     writeln!(md, "\nLevel ratios: each level's triangles over the level below, over levels whose lower level has at least {RATIO_MIN_TRIANGLES} triangles (all levels: lod_levels.csv).")?;
     writeln!(md, "\n\"stuck\" for clod: groups it emitted as terminal (simplification above its threshold) before the last level. Monotonic violations: meshlets whose parent error is below their own or whose parent sphere does not enclose their own (f64, 1e-6 slack); clod's cluster bounds follow its own documented rule (it warns that cluster `bounds.error` is not monotonic), and both DAGs are selected here with the group bounds.\n")?;
     // Triangles per level, one table per mesh would be long: the dragon's, and the CSV has all.
@@ -679,7 +771,7 @@ fn write_results(
         "\n## Triangles selected against camera distance ({} px threshold)\n",
         cfg.threshold
     )?;
-    writeln!(md, "Mean over {} random directions per distance (1280x720, 60 degree field of view), LOD rule only (no culling), the same selection code for every DAG. Ratio = ours 128/128 over clod 128 (same limits); below 1 means fewer triangles at the same error bound.\n", cfg.select_views)?;
+    writeln!(md, "Mean over {} random directions per distance (1280x720, 60 degree field of view), LOD rule only (no culling), the same selection code for every DAG. Ratio = ours 128/128 over clod 128 (same limits); below 1 means fewer triangles at the same error bound.\n", cfg.select_views())?;
     let dist_head: Vec<String> = cfg.distances.iter().map(|d| format!("{d} r")).collect();
     writeln!(md, "| mesh | DAG | {} |", dist_head.join(" | "))?;
     writeln!(md, "|---|---|{}", "---:|".repeat(cfg.distances.len()))?;
@@ -735,7 +827,7 @@ fn write_results(
     )?;
     writeln!(md, "![ours / clod](lod_ratio.svg)\n")?;
     line_chart(
-        &cfg.out.join("lod_ratio.svg"),
+        &cfg.common.out.join("lod_ratio.svg"),
         "Triangles selected at 1 px: ours 128/128 / clod 128",
         "camera distance (bounding radii)",
         "ours / clod",
@@ -748,7 +840,7 @@ fn write_results(
     if let Some(r) = results.iter().find(|r| r.name.contains("dragon")) {
         let series = dag_series(cfg, r, &r.curve);
         line_chart(
-            &cfg.out.join("lod_dragon_triangles.svg"),
+            &cfg.common.out.join("lod_dragon_triangles.svg"),
             &format!("{}: triangles selected at {} px", r.name, cfg.threshold),
             "camera distance (bounding radii)",
             "triangles",
@@ -763,7 +855,7 @@ fn write_results(
     // Frame times.
     if results.iter().any(|r| !r.frame_ms.is_empty()) {
         writeln!(md, "## Frame time against camera distance ({} px, task-shader LOD with frustum and cone culling)\n", cfg.threshold)?;
-        writeln!(md, "Median GPU ms per frame over {} views per distance (one discarded first), on {}; \"full\" draws the source's 64/126 meshlets with culling. On lavapipe the GPU is the CPU: compare ratios, not absolute numbers.\n", cfg.render_views, device.as_deref().unwrap_or("?"))?;
+        writeln!(md, "Median GPU ms per frame over {} views per distance (one discarded first), on {}; \"full\" draws the source's 64/126 meshlets with culling. On lavapipe the GPU is the CPU: compare ratios, not absolute numbers.\n", cfg.render_views(), device.as_deref().unwrap_or("?"))?;
         writeln!(md, "| mesh | DAG | {} |", dist_head.join(" | "))?;
         writeln!(md, "|---|---|{}", "---:|".repeat(cfg.distances.len()))?;
         for r in results.iter().filter(|r| !r.frame_ms.is_empty()) {
@@ -784,7 +876,7 @@ fn write_results(
                 points: along(&cfg.distances, &r.full_ms),
             });
             line_chart(
-                &cfg.out.join("lod_dragon_frame_time.svg"),
+                &cfg.common.out.join("lod_dragon_frame_time.svg"),
                 &format!("{}: frame time at {} px", r.name, cfg.threshold),
                 "camera distance (bounding radii)",
                 "GPU ms per frame",
@@ -838,9 +930,9 @@ fn write_results(
                 .join(", ")
         )?;
     }
-    crate::atomic::write(cfg.out.join("lod.md"), md)?;
-    crate::atomic::write(cfg.out.join("lod.csv"), csv)?;
-    crate::atomic::write(cfg.out.join("lod_levels.csv"), level_csv)?;
-    crate::atomic::write(cfg.out.join("lod_curve.csv"), curve_csv)?;
+    crate::atomic::write(cfg.common.out.join("lod.md"), md)?;
+    crate::atomic::write(cfg.common.out.join("lod.csv"), dag_table().csv(&dags))?;
+    crate::atomic::write(cfg.common.out.join("lod_levels.csv"), level_csv)?;
+    crate::atomic::write(cfg.common.out.join("lod_curve.csv"), curve_csv)?;
     Ok(())
 }

@@ -1,5 +1,9 @@
 //! Measurement: one evaluation path (build, validate, bounds, metrics) shared by `stats`, `demo` and
 //! the `bench` commands, plus machine notes and tables for results/.
+//!
+//! Each bench's configuration is its command line: it derives [`clap::Args`] (the doc comments are
+//! the `--help` text) and flattens [`Common`], so `meshletlab bench` only dispatches and a setting
+//! that depends on another (a smoke run's single view, say) is a method of the configuration.
 
 pub mod build;
 pub mod compress;
@@ -14,12 +18,73 @@ pub mod render;
 pub mod robustness;
 pub mod smoke;
 pub mod stability;
+pub mod table;
 
 use crate::mesh::Mesh;
 use crate::meshlet::{bounds, validate, Limits, Meshlets, Metrics};
 use crate::strategy::Strategy;
+use anyhow::Result;
 use serde::Serialize;
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
+
+/// Help of every bench's `--smoke`.
+pub const SMOKE_HELP: &str =
+    "Smoke run: tiny generated meshes, one run, tables into --out (not results/) \
+    - checks that the bench runs and writes its files; no number in them is a measurement";
+
+/// The arguments of every bench that reads the mesh folder.
+#[derive(clap::Args, Clone, Debug)]
+pub struct Common {
+    /// Folder of meshes (default: $MESHLETLAB_MESHES or ../shared/meshes).
+    // First in `--help` wherever the flatten stands; a bench that lists an argument between it and
+    // --out declares that argument before the flatten with `display_order` 1 (or 2), so the help
+    // reads as it did when each bench spelled its arguments out.
+    #[arg(long, display_order = 0)]
+    pub meshes: Option<PathBuf>,
+    /// Output folder.
+    #[arg(long, default_value = "results")]
+    pub out: PathBuf,
+    /// A smoke run ([`SMOKE_HELP`] is its help).
+    #[arg(long, help = SMOKE_HELP)]
+    pub smoke: bool,
+    /// No progress output: the command's global `--quiet`, not an argument of the bench.
+    #[arg(skip)]
+    pub quiet: bool,
+}
+
+impl Common {
+    /// The folder of meshes to run on: for a smoke run the smoke meshes, written into `out` now
+    /// ([`smoke::prepare`]), else `meshes` (the command fills in its default).
+    pub fn meshes_dir(&self) -> Result<PathBuf> {
+        match (self.smoke, &self.meshes) {
+            (true, _) => smoke::prepare(&self.out),
+            (false, Some(dir)) => Ok(dir.clone()),
+            (false, None) => anyhow::bail!("no mesh folder given (--meshes)"),
+        }
+    }
+
+    /// The name and file of a bench's single mesh, `stem` in the mesh folder (`stem.ply.zst`), or
+    /// for a smoke run the first smoke mesh (written into `out` now).
+    pub fn mesh_file(&self, stem: &str) -> Result<(String, PathBuf)> {
+        match self.smoke {
+            true => Ok(smoke::first(&smoke::prepare(&self.out)?)),
+            false => Ok((
+                stem.to_string(),
+                self.meshes_dir()?.join(format!("{stem}.ply.zst")),
+            )),
+        }
+    }
+
+    /// `n` for a full run, `smoke` for a smoke run.
+    pub fn or_smoke<T>(&self, n: T, smoke: T) -> T {
+        if self.smoke {
+            smoke
+        } else {
+            n
+        }
+    }
+}
 
 /// One strategy's result on one mesh.
 #[derive(Clone, Debug, Serialize)]

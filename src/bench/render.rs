@@ -8,7 +8,11 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{bar_chart, line_chart, Axes, Bars, Series};
-use super::{machine_note, median, p95, today};
+use super::table::{
+    Align::{Left, Right},
+    Style, Table,
+};
+use super::{machine_note, median, p95, today, Common};
 use crate::mesh::{self, Mesh};
 use crate::meshlet::descriptor::Format;
 use crate::meshlet::order::{
@@ -20,35 +24,55 @@ use crate::strategy::{self, Options};
 use anyhow::{Context as _, Result};
 use indicatif::ProgressBar;
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 /// The paper's Table 6: ns per triangle of its linear regressions on an RTX 2080 Ti (range over its
 /// strategies).
 pub const PAPER_NS_PER_TRIANGLE: (f64, f64) = (0.0899, 0.0974);
 
-/// What to run.
-#[derive(Clone, Debug)]
+/// What to run: the arguments of `meshletlab bench render`.
+#[derive(clap::Args, Clone, Debug)]
 pub struct Config {
-    /// Folder of meshes.
-    pub meshes: PathBuf,
-    /// Output folder.
-    pub out: PathBuf,
+    /// Mesh folder, output folder, smoke run (one view per mesh), quiet.
+    #[command(flatten)]
+    pub common: Common,
     /// Meshlet limits.
+    #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
     pub limits: Limits,
-    /// Strategies (names).
-    pub strategies: Vec<String>,
-    /// Strategies of the layout and ordering experiments (Figures 10 and 12, triangle order).
-    pub experiment_strategies: Vec<String>,
-    /// Views per mesh (one more is rendered first and discarded).
+    /// Strategies (comma-separated).
+    #[arg(short, long, value_delimiter = ',', default_values_t = DEFAULT_STRATEGIES.iter().map(|s| s.to_string()))]
+    pub strategy: Vec<String>,
+    /// Strategies of the experiments: the four descriptor layouts, meshlets ordered by
+    /// primitive count, triangle order inside meshlets (comma-separated; empty: none).
+    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_EXPERIMENT_STRATEGIES.iter().map(|s| s.to_string()))]
+    pub experiment_strategy: Vec<String>,
+    /// Views per mesh (sized for lavapipe; the paper used 100,000 frames on a GPU).
+    #[arg(long, default_value_t = 10)]
     pub views: usize,
     /// Seed of the view sequence.
+    #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Camera distance in bounding radii (every view sees the whole mesh).
+    /// Camera distance from the mesh centre in bounding radii (every view sees the whole mesh).
+    #[arg(long, default_value_t = 2.5)]
     pub distance: f32,
-    /// Distance of the close views, inside the bounding sphere (the frustum culls).
+    /// Distance of the close views for the culling shares (inside the bounding sphere, so the
+    /// frustum culls).
+    #[arg(long, default_value_t = 0.9)]
     pub near_distance: f32,
-    /// No progress output.
-    pub quiet: bool,
+}
+
+impl Config {
+    /// Views per mesh (one more is rendered first and discarded): one in a smoke run.
+    pub fn views(&self) -> usize {
+        self.common.or_smoke(self.views, 1)
+    }
+
+    /// Strategies of the layout and ordering experiments (Figures 10 and 12, triangle order), the
+    /// empty names of `--experiment-strategy ''` left out.
+    pub fn experiment_strategies(&self) -> Vec<String> {
+        let mut v = self.experiment_strategy.clone();
+        v.retain(|s| !s.is_empty());
+        v
+    }
 }
 
 /// The default strategies: the paper's, the peer, and ours.
@@ -180,11 +204,12 @@ fn build(m: &Mesh, s: &str, limits: Limits, name: &str) -> Result<Meshlets> {
 
 /// Runs the benchmark and writes the results.
 pub fn run(cfg: &Config) -> Result<()> {
+    let meshes = cfg.common.meshes_dir()?;
     let ctx = Context::new(false)?;
-    let files = mesh_files(&cfg.meshes)?;
-    std::fs::create_dir_all(&cfg.out)?;
-    let per_mesh = cfg.strategies.len() + cfg.experiment_strategies.len();
-    let pb = if cfg.quiet {
+    let files = mesh_files(&meshes)?;
+    std::fs::create_dir_all(&cfg.common.out)?;
+    let per_mesh = cfg.strategy.len() + cfg.experiment_strategies().len();
+    let pb = if cfg.common.quiet {
         ProgressBar::hidden()
     } else {
         ProgressBar::new((files.len() * per_mesh) as u64)
@@ -194,15 +219,15 @@ pub fn run(cfg: &Config) -> Result<()> {
     for path in &files {
         let name = mesh_name(path);
         let m = load(path)?;
-        let views = Camera::random_views(&m, cfg.views.max(1), cfg.seed, cfg.distance);
-        let near = Camera::random_views(&m, cfg.views.max(1), cfg.seed, cfg.near_distance);
-        for s in &cfg.strategies {
+        let views = Camera::random_views(&m, cfg.views().max(1), cfg.seed, cfg.distance);
+        let near = Camera::random_views(&m, cfg.views().max(1), cfg.seed, cfg.near_distance);
+        for s in &cfg.strategy {
             pb.set_message(format!("{name}: {s}"));
             let ml = build(&m, s, cfg.limits, &name)?;
             rows.push(strategy_row(cfg, &ctx, &m, &name, s, &ml, &views, &near)?);
             pb.inc(1);
         }
-        for s in &cfg.experiment_strategies {
+        for s in &cfg.experiment_strategies() {
             pb.set_message(format!("{name}: {s}, layouts and orders"));
             variants.extend(experiments(cfg, &ctx, &m, &name, s, &views)?);
             pb.inc(1);
@@ -247,7 +272,8 @@ fn strategy_row(
             &pass,
             &fig,
             true,
-            &cfg.out
+            &cfg.common
+                .out
                 .join(format!("render_bunny_{}.png", s.replace('+', "_"))),
         )?;
     }
@@ -396,60 +422,17 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
         today(),
         machine_note()
     )?;
-    writeln!(md, "Device: **{}** (Vulkan, VK_EXT_mesh_shader). {}×{}, 4× MSAA resolved, D32 depth, back faces culled by the rasteriser in both pipelines. {} seeded random views per mesh at {} bounding radii (seed {}; every view sees the whole mesh), the first frame discarded; GPU time from timestamps around the draw. Close views for the culling shares: the same directions at {} radii. Limits {}/{}. Meshlets in the split layout unless a table says otherwise.\n", ctx.name, WIDTH, HEIGHT, cfg.views, cfg.distance, cfg.seed, cfg.near_distance, cfg.limits.max_vertices, cfg.limits.max_triangles)?;
+    writeln!(md, "Device: **{}** (Vulkan, VK_EXT_mesh_shader). {}×{}, 4× MSAA resolved, D32 depth, back faces culled by the rasteriser in both pipelines. {} seeded random views per mesh at {} bounding radii (seed {}; every view sees the whole mesh), the first frame discarded; GPU time from timestamps around the draw. Close views for the culling shares: the same directions at {} radii. Limits {}/{}. Meshlets in the split layout unless a table says otherwise.\n", ctx.name, WIDTH, HEIGHT, cfg.views(), cfg.distance, cfg.seed, cfg.near_distance, cfg.limits.max_vertices, cfg.limits.max_triangles)?;
     writeln!(md, "On lavapipe the \"GPU\" is this machine's CPU cores running LLVM-compiled shaders: the ratios say how the two pipelines map onto a software rasteriser, not onto a GPU.\n")?;
     writeln!(md, "## ms per frame\n")?;
-    writeln!(md, "| mesh | triangles | strategy | meshlets | mesh, culling: median (p95) | mesh, no culling: median (p95) | vertex pipeline: median (p95) | mesh culling / vertex |")?;
-    writeln!(md, "|---|---:|---|---:|---:|---:|---:|---:|")?;
-    let mut csv = String::from("mesh,triangles,strategy,meshlets,frustum_culled_pct,backface_culled_pct,triangles_skipped_pct,near_frustum_culled_pct,near_backface_culled_pct,near_triangles_skipped_pct,task_invocations,mesh_invocations,primitives,mesh_cull_ms_median,mesh_cull_ms_p95,mesh_nocull_ms_median,mesh_nocull_ms_p95,vertex_ms_median,vertex_ms_p95\n");
-    for r in rows {
-        let (a, b, c) = (median(&r.cull), median(&r.no_cull), median(&r.vertex));
-        writeln!(
-            md,
-            "| {} | {} | {} | {} | {:.2} ({:.2}) | {:.2} ({:.2}) | {:.2} ({:.2}) | {:.2}x |",
-            r.mesh,
-            r.triangles,
-            r.strategy,
-            r.meshlets,
-            a,
-            p95(&r.cull),
-            b,
-            p95(&r.no_cull),
-            c,
-            p95(&r.vertex),
-            a / c
-        )?;
-        writeln!(
-            csv,
-            "{},{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.1},{:.1},{:.1},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
-            r.mesh,
-            r.triangles,
-            r.strategy,
-            r.meshlets,
-            r.far[0],
-            r.far[1],
-            r.far[2],
-            r.near[0],
-            r.near[1],
-            r.near[2],
-            r.invocations[0],
-            r.invocations[1],
-            r.invocations[2],
-            a,
-            p95(&r.cull),
-            b,
-            p95(&r.no_cull),
-            c,
-            p95(&r.vertex)
-        )?;
-    }
+    writeln!(md, "{}", frame_table().markdown(rows))?;
     write_culling(cfg, &mut md, rows)?;
     writeln!(md, "\n## Cost per triangle (paper Table 6)\n")?;
     writeln!(md, "Slope of a least-squares line through (triangles, median ms per frame) over the shared meshes, without culling so that every triangle is drawn. Paper (RTX 2080 Ti): {:.4}–{:.4} ns per triangle.\n", PAPER_NS_PER_TRIANGLE.0, PAPER_NS_PER_TRIANGLE.1)?;
     writeln!(md, "| pipeline | ns per triangle | intercept ms |")?;
     writeln!(md, "|---|---:|---:|")?;
     let mut series = Vec::new();
-    let mut names: Vec<&str> = cfg.strategies.iter().map(String::as_str).collect();
+    let mut names: Vec<&str> = cfg.strategy.iter().map(String::as_str).collect();
     names.push("vertex pipeline");
     for s in names {
         let pts: Vec<(f64, f64)> = if s == "vertex pipeline" {
@@ -487,7 +470,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
         "## The bunny coloured by meshlet (paper Figure 1)\n\nThe first view's direction, the camera moved in until the bunny fills {:.0} % of the frame's height or width; task-shader culling on, so culled meshlets are absent.\n",
         100.0 * crate::render::FRAME_FILL
     )?;
-    for s in &cfg.strategies {
+    for s in &cfg.strategy {
         writeln!(
             md,
             "{s}:\n\n![{s}](render_bunny_{}.png)\n",
@@ -495,10 +478,10 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
         )?;
     }
     write_experiments(cfg, &mut md, variants)?;
-    crate::atomic::write(cfg.out.join("render.md"), md)?;
-    crate::atomic::write(cfg.out.join("render.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("render.md"), md)?;
+    crate::atomic::write(cfg.common.out.join("render.csv"), frame_table().csv(rows))?;
     line_chart(
-        &cfg.out.join("render_per_triangle.svg"),
+        &cfg.common.out.join("render_per_triangle.svg"),
         "median ms per frame against triangles (no culling)",
         "triangles",
         "ms per frame",
@@ -509,6 +492,58 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
         },
     )?;
     Ok(())
+}
+
+/// ms per frame per mesh and strategy: render.md's first table, and render.csv with the culling
+/// shares and pipeline statistics too (render.md shows those in its second table).
+fn frame_table<'a>() -> Table<'a, Row> {
+    let ms = |times: fn(&Row) -> &Vec<f64>| {
+        move |r: &Row| format!("{:.2} ({:.2})", median(times(r)), p95(times(r)))
+    };
+    let ms4 = |x: fn(&Row) -> f64| move |r: &Row| format!("{:.4}", x(r));
+    let mut t = Table::new(Style::Compact)
+        .col("mesh", Left, |r: &Row| r.mesh.clone())
+        .col("triangles", Right, |r| r.triangles.to_string())
+        .col("strategy", Left, |r| r.strategy.clone())
+        .col("meshlets", Right, |r| r.meshlets.to_string());
+    for (k, name) in [
+        "frustum_culled_pct",
+        "backface_culled_pct",
+        "triangles_skipped_pct",
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        t = t.csv_only(name, move |r| format!("{:.3}", r.far[k]));
+    }
+    for (k, name) in [
+        "near_frustum_culled_pct",
+        "near_backface_culled_pct",
+        "near_triangles_skipped_pct",
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        t = t.csv_only(name, move |r| format!("{:.3}", r.near[k]));
+    }
+    for (k, name) in ["task_invocations", "mesh_invocations", "primitives"]
+        .into_iter()
+        .enumerate()
+    {
+        t = t.csv_only(name, move |r| format!("{:.1}", r.invocations[k]));
+    }
+    t.md("mesh, culling: median (p95)", Right, ms(|r| &r.cull))
+        .csv_only("mesh_cull_ms_median", ms4(|r| median(&r.cull)))
+        .csv_only("mesh_cull_ms_p95", ms4(|r| p95(&r.cull)))
+        .md("mesh, no culling: median (p95)", Right, ms(|r| &r.no_cull))
+        .csv_only("mesh_nocull_ms_median", ms4(|r| median(&r.no_cull)))
+        .csv_only("mesh_nocull_ms_p95", ms4(|r| p95(&r.no_cull)))
+        .md("vertex pipeline: median (p95)", Right, ms(|r| &r.vertex))
+        .csv_only("vertex_ms_median", ms4(|r| median(&r.vertex)))
+        .csv_only("vertex_ms_p95", ms4(|r| p95(&r.vertex)))
+        .md("mesh culling / vertex", Right, |r| {
+            format!("{:.2}x", median(&r.cull) / median(&r.vertex))
+        })
 }
 
 /// What the task shader skipped (the paper's Figure 7), far and close, with the pipeline
@@ -544,7 +579,7 @@ fn write_culling(cfg: &Config, md: &mut String, rows: &[Row]) -> Result<()> {
         let v: Vec<f64> = rows.iter().filter(|r| r.strategy == s).map(f).collect();
         v.iter().sum::<f64>() / v.len().max(1) as f64
     };
-    let cats: Vec<String> = cfg.strategies.clone();
+    let cats: Vec<String> = cfg.strategy.clone();
     let series = |label: &str, stack: usize, f: &dyn Fn(&Row) -> f64| Bars {
         label: label.to_string(),
         values: cats.iter().map(|s| mean(s, f)).collect(),
@@ -558,7 +593,7 @@ fn write_culling(cfg: &Config, md: &mut String, rows: &[Row]) -> Result<()> {
     ];
     writeln!(md, "\nMean over the meshes (left bar of each pair: far views; right: close views):\n\n![culled meshlets](render_culling.svg)\n")?;
     bar_chart(
-        &cfg.out.join("render_culling.svg"),
+        &cfg.common.out.join("render_culling.svg"),
         "meshlets culled by the task shader, % (mean over the meshes)",
         "% of meshlets",
         &cats,
@@ -600,9 +635,9 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
             p95(&v.no_cull)
         )?;
     }
-    crate::atomic::write(cfg.out.join("render_experiments.csv"), csv)?;
+    crate::atomic::write(cfg.common.out.join("render_experiments.csv"), csv)?;
     writeln!(md, "\n## Experiments\n")?;
-    writeln!(md, "Each experiment renders its variants of the same meshlets over the same far views in interleaved order (view 0 for every variant, then view 1, ...), so machine noise hits them alike; ratios are of medians against the first variant (< 1: faster). Strategies: {}.\n", cfg.experiment_strategies.join(", "))?;
+    writeln!(md, "Each experiment renders its variants of the same meshlets over the same far views in interleaved order (view 0 for every variant, then view 1, ...), so machine noise hits them alike; ratios are of medians against the first variant (< 1: faster). Strategies: {}.\n", cfg.experiment_strategies().join(", "))?;
 
     writeln!(
         md,
@@ -656,7 +691,7 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
         Format::ALL.map(|f| f.name()).join(" | ")
     )?;
     writeln!(md, "|---|{}", "---:|".repeat(Format::ALL.len()))?;
-    for s in &cfg.experiment_strategies {
+    for s in &cfg.experiment_strategies() {
         let cells: Vec<String> = Format::ALL
             .iter()
             .map(|f| {
@@ -673,7 +708,7 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
         .map(|(i, f)| Bars {
             label: f.name().to_string(),
             values: cfg
-                .experiment_strategies
+                .experiment_strategies()
                 .iter()
                 .map(|s| {
                     ratios
@@ -685,10 +720,10 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
         })
         .collect();
     bar_chart(
-        &cfg.out.join("render_descriptors.svg"),
+        &cfg.common.out.join("render_descriptors.svg"),
         "ms per frame with culling relative to split (geometric mean over the meshes)",
         "ratio to split",
-        &cfg.experiment_strategies,
+        &cfg.experiment_strategies(),
         &bars,
     )?;
     writeln!(md, "\n![descriptor layouts](render_descriptors.svg)\n")?;
@@ -741,7 +776,7 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
                 n1 / n0
             )?;
         }
-        for s in &cfg.experiment_strategies {
+        for s in &cfg.experiment_strategies() {
             let (c, n): (Vec<f64>, Vec<f64>) = all
                 .iter()
                 .filter(|a| &a.0 == s)

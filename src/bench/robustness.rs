@@ -9,27 +9,63 @@ use anyhow::{Context, Result};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-/// What to run.
+/// What to run: the arguments of `meshletlab bench robustness` (it reads no meshes, so it takes
+/// the output half of [`super::Common`] only).
+#[derive(clap::Args, Clone, Debug)]
 pub struct Config {
     /// Output folder.
+    #[arg(long, default_value = "results")]
     pub out: PathBuf,
+    /// A smoke run ([`super::SMOKE_HELP`] is its help).
+    #[arg(long, help = super::SMOKE_HELP)]
+    pub smoke: bool,
     /// Number of cases.
+    #[arg(long, default_value_t = 1_000_000)]
     pub cases: u64,
-    /// Run seed.
+    /// Run seed (case k of seed s is always the same file).
+    #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Worker processes.
-    pub workers: usize,
-    /// No progress bar.
+    /// Worker processes (default: one per core).
+    #[arg(long)]
+    pub workers: Option<usize>,
+    /// Write case K's file to -o instead of running (to reproduce a reported case).
+    #[arg(long, value_name = "K")]
+    pub dump: Option<u64>,
+    /// Folder for --dump.
+    #[arg(short, long, default_value = ".")]
+    pub output: PathBuf,
+    /// No progress bar: the command's global `--quiet`, not an argument of the bench.
+    #[arg(skip)]
     pub quiet: bool,
+}
+
+impl Config {
+    /// Number of cases: 2,000 in a smoke run.
+    pub fn cases(&self) -> u64 {
+        if self.smoke {
+            2000
+        } else {
+            self.cases
+        }
+    }
+
+    /// Worker processes (default: rayon's thread count).
+    pub fn workers(&self) -> usize {
+        self.workers.unwrap_or_else(rayon::current_num_threads)
+    }
 }
 
 /// Runs the cases and writes robustness.md and robustness.csv.
 pub fn run(cfg: &Config) -> Result<Report> {
+    if cfg.smoke {
+        // Refuses results/ as --out, like every smoke run.
+        super::smoke::prepare(&cfg.out)?;
+    }
     let exe = std::env::current_exe().context("cannot find the meshletlab binary")?;
     let pb = if cfg.quiet {
         indicatif::ProgressBar::hidden()
     } else {
-        indicatif::ProgressBar::new(cfg.cases)
+        indicatif::ProgressBar::new(cfg.cases())
     };
     pb.set_style(
         indicatif::ProgressStyle::with_template(
@@ -50,8 +86,8 @@ pub fn run(cfg: &Config) -> Result<Report> {
     let report = harness::run(&harness::Config {
         exe,
         seed: cfg.seed,
-        cases: cfg.cases,
-        workers: cfg.workers,
+        cases: cfg.cases(),
+        workers: cfg.workers(),
         scratch: scratch.clone(),
         selftest: None,
         stall: harness::STALL,
@@ -84,7 +120,7 @@ fn markdown(cfg: &Config, r: &Report) -> Result<String> {
     writeln!(
         md,
         "Written by `meshletlab bench robustness --cases {} --seed {}` on {} ({}; {}); {} worker processes, {:.0} s ({:.0} cases/s).\n",
-        cfg.cases,
+        cfg.cases(),
         r.seed,
         today(),
         machine_note(),
@@ -93,7 +129,7 @@ fn markdown(cfg: &Config, r: &Report) -> Result<String> {
         } else {
             "**built without overflow checks: an arithmetic overflow would wrap unseen; use `make bench-robustness` (profile fuzz)**"
         },
-        cfg.workers,
+        cfg.workers(),
         r.seconds,
         r.cases as f64 / r.seconds.max(1e-9)
     )?;

@@ -7,11 +7,14 @@ use crate::mesh::{generate, save_ply, Mesh};
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 
+/// The first smoke mesh's file stem: the mesh of a bench that takes a single one.
+pub const FIRST: &str = "sphere";
+
 /// The smoke meshes, by file stem: a closed noisy sphere, a torus-knot tube and an open terrain,
 /// each under 1,300 triangles. The first is the one a bench that takes a single mesh uses.
 pub fn meshes() -> Vec<(&'static str, Mesh)> {
     vec![
-        ("sphere", generate::noisy_sphere(3, 0.2, 1)),
+        (FIRST, generate::noisy_sphere(3, 0.2, 1)),
         ("knot", generate::knot_tube(48, 10, 2)),
         ("terrain", generate::terrain(20, 3)),
     ]
@@ -36,6 +39,5 @@ pub fn prepare(out: &Path) -> Result<PathBuf> {
 
 /// The single mesh of a smoke run (the first of [`meshes`]) in a folder made by [`prepare`].
 pub fn first(dir: &Path) -> (String, PathBuf) {
-    let name = meshes()[0].0;
-    (name.to_string(), dir.join(format!("{name}.ply")))
+    (FIRST.to_string(), dir.join(format!("{FIRST}.ply")))
 }

@@ -10,13 +10,27 @@
 //! (adjacency, k-medoids) never look at coordinates, and k-medoids' seeding quantises centroids
 //! relative to the bounding box, so they are unaffected by translation and scale.
 
-use super::{machine_note, today};
+use super::{machine_note, today, Common};
 use crate::gpu::{self, Gpu, GpuError};
 use crate::mesh::Mesh;
 use crate::meshlet::bounds::compute_bounds;
 use crate::meshlet::Limits;
 use glam::DVec3;
 use std::fmt::Write as _;
+
+/// What to run: the arguments of `meshletlab bench stability`.
+#[derive(clap::Args, Clone, Debug)]
+pub struct Config {
+    /// Base mesh (file stem in the folder).
+    #[arg(long, default_value = "stanford_bunny", display_order = 1)]
+    pub mesh: String,
+    /// Mesh folder, output folder, smoke run (the first smoke mesh as the base), quiet.
+    #[command(flatten)]
+    pub common: Common,
+    /// Meshlet limits.
+    #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
+    pub limits: Limits,
+}
 
 /// The stressed variants of `base`: (name, mesh).
 pub fn cases(base: &Mesh) -> Vec<(&'static str, Mesh)> {
