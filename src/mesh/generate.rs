@@ -2,7 +2,9 @@
 //!
 //! They stand in for real inputs of three kinds: a rough closed scan (noisy sphere), thin tubes like
 //! 3D-printed or vessel meshes (a knotted tube with ridged "print layers"), and a height-field
-//! terrain with a boundary.
+//! terrain with a boundary. The stress set ([`stress_set`]) adds what scans never have and CAD
+//! exports and print supports always do: fans of long thin triangles around hubs of valence
+//! 100-400 ([`cad_part`]) and thin struts that touch only at shared vertices ([`strut_lattice`]).
 
 use super::{subdivide, Mesh};
 use glam::Vec3;
@@ -31,6 +33,158 @@ pub fn demo_set(seed: u64) -> Vec<Generated> {
             mesh: terrain(160, seed),
         },
     ]
+}
+
+/// The stress meshes every strategy is tested on beside the shared real meshes: two CAD-like
+/// parts (caps of 128 and 400 segments) and a strut lattice.
+pub fn stress_set(seed: u64) -> Vec<Generated> {
+    vec![
+        Generated {
+            name: "cad-part-128",
+            mesh: cad_part(128, seed),
+        },
+        Generated {
+            name: "cad-part-400",
+            mesh: cad_part(400, seed),
+        },
+        Generated {
+            name: "strut-lattice",
+            mesh: strut_lattice(5, 6, seed),
+        },
+    ]
+}
+
+/// Revolves `profile` ((radius, height) points, bottom to top) around the z axis in `segments`
+/// steps. A point of radius 0 becomes one hub vertex whose triangles fan around it; the others
+/// become rings joined by quads. Faces point away from the axis (counter-clockwise outside).
+fn revolve(
+    profile: &[(f32, f32)],
+    segments: usize,
+    positions: &mut Vec<[f32; 3]>,
+    indices: &mut Vec<u32>,
+) {
+    let base = positions.len() as u32;
+    // First vertex of each profile point's ring (one vertex for a hub).
+    let mut starts = Vec::with_capacity(profile.len());
+    for &(r, z) in profile {
+        starts.push(positions.len() as u32 - base);
+        if r == 0.0 {
+            positions.push([0.0, 0.0, z]);
+        } else {
+            for j in 0..segments {
+                let a = std::f32::consts::TAU * j as f32 / segments as f32;
+                positions.push([r * a.cos(), r * a.sin(), z]);
+            }
+        }
+    }
+    let at = |i: usize, j: usize| {
+        base + starts[i]
+            + if profile[i].0 == 0.0 {
+                0
+            } else {
+                (j % segments) as u32
+            }
+    };
+    for i in 0..profile.len() - 1 {
+        let (hub_low, hub_high) = (profile[i].0 == 0.0, profile[i + 1].0 == 0.0);
+        for j in 0..segments {
+            let (a, b, c, d) = (at(i, j), at(i, j + 1), at(i + 1, j + 1), at(i + 1, j));
+            if !hub_low {
+                indices.extend_from_slice(&[a, b, c]);
+            }
+            if !hub_high {
+                indices.extend_from_slice(&[a, c, d]);
+            }
+        }
+    }
+}
+
+/// A CAD-like part as a tessellator exports it: a closed cylinder of `segments` sides whose flat
+/// caps are single fans (a hub of valence `segments` and `segments` long thin triangles), rounded
+/// into the side by three-step fillets, with a narrower boss on top (its own fan cap). The side
+/// quads are tall and narrow (height over width grows with `segments`): long thin triangles
+/// everywhere. Sizes vary a little with `seed`.
+pub fn cad_part(segments: usize, seed: u64) -> Mesh {
+    let segments = segments.max(3);
+    let jitter = |k: u64| 1.0 + 0.2 * ((splitmix64(seed ^ k) >> 11) as f32 / (1u64 << 53) as f32);
+    let (r, h, f) = (1.0 * jitter(1), 2.5 * jitter(2), 0.15);
+    let (rb, hb) = (0.45 * jitter(3), 0.6 * jitter(4));
+    let fillet = |c: (f32, f32), from: f32| {
+        (1..=3).map(move |k| {
+            let a = from + std::f32::consts::FRAC_PI_2 * k as f32 / 4.0;
+            (c.0 + f * a.cos(), c.1 + f * a.sin())
+        })
+    };
+    let mut profile = vec![(0.0, 0.0), (r - f, 0.0)];
+    // Bottom fillet: centre (r - f, f), from straight down to straight out.
+    profile.extend(fillet((r - f, f), -std::f32::consts::FRAC_PI_2));
+    profile.extend([(r, f), (r, h - f)]);
+    // Top fillet: centre (r - f, h - f), from straight out to straight up.
+    profile.extend(fillet((r - f, h - f), 0.0));
+    // The shoulder up to the boss, its side, and its fan cap.
+    profile.extend([(r - f, h), (rb, h), (rb, h + hb), (0.0, h + hb)]);
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    revolve(&profile, segments, &mut positions, &mut indices);
+    Mesh { positions, indices }
+}
+
+/// A lattice of thin struts along the edges of a `cells`^3 cubic grid, as a 3D-print support or
+/// a lightweighting infill: each strut is a `sides`-sided prism as long as a cell and a tenth as
+/// wide, closed at both ends by a fan around the grid node, and the struts meeting at a node
+/// share its hub vertex, so the lattice is one piece connected only through vertices (no edge is
+/// shared between struts). Node positions are jittered by `seed`.
+pub fn strut_lattice(cells: usize, sides: usize, seed: u64) -> Mesh {
+    let (cells, sides) = (cells.max(1), sides.max(3));
+    let n = cells + 1;
+    let node = |x: usize, y: usize, z: usize| -> Vec3 {
+        let k = ((x * n + y) * n + z) as u64;
+        let j = |a: u64| {
+            0.08 * ((splitmix64(seed ^ (3 * k + a)) >> 11) as f32 / (1u64 << 53) as f32 - 0.5)
+        };
+        Vec3::new(x as f32 + j(0), y as f32 + j(1), z as f32 + j(2))
+    };
+    let mut positions: Vec<[f32; 3]> = (0..n * n * n)
+        .map(|i| node(i / (n * n), i / n % n, i % n).to_array())
+        .collect();
+    let mut indices = Vec::new();
+    let radius = 0.05;
+    for i in 0..n * n * n {
+        let (x, y, z) = (i / (n * n), i / n % n, i % n);
+        for (dx, dy, dz) in [(1, 0, 0), (0, 1, 0), (0, 0, 1)] {
+            let (x2, y2, z2) = (x + dx, y + dy, z + dz);
+            if x2 >= n || y2 >= n || z2 >= n {
+                continue;
+            }
+            let j = (x2 * n + y2) * n + z2;
+            let (a, b) = (
+                Vec3::from_array(positions[i]),
+                Vec3::from_array(positions[j]),
+            );
+            let axis = (b - a).normalize();
+            let u = axis.any_orthonormal_vector();
+            let v = axis.cross(u);
+            // Two rings a tenth of the strut's length in from each node.
+            let ring = |p: Vec3, positions: &mut Vec<[f32; 3]>| {
+                let first = positions.len() as u32;
+                for s in 0..sides {
+                    let t = std::f32::consts::TAU * s as f32 / sides as f32;
+                    positions.push((p + radius * (t.cos() * u + t.sin() * v)).to_array());
+                }
+                first
+            };
+            let r0 = ring(a + 0.1 * (b - a), &mut positions);
+            let r1 = ring(b - 0.1 * (b - a), &mut positions);
+            for s in 0..sides as u32 {
+                let t = (s + 1) % sides as u32;
+                // Side quads (outward: u, v, axis is right-handed), then the two end fans.
+                indices.extend_from_slice(&[r0 + s, r0 + t, r1 + t, r0 + s, r1 + t, r1 + s]);
+                indices.extend_from_slice(&[i as u32, r0 + t, r0 + s]);
+                indices.extend_from_slice(&[j as u32, r1 + s, r1 + t]);
+            }
+        }
+    }
+    Mesh { positions, indices }
 }
 
 /// SplitMix64: a tiny, well-mixed hash for seeded noise.
@@ -210,6 +364,42 @@ mod tests {
         assert_eq!(MeshStats::of(&noisy_sphere(3, 0.1, 1)).boundary_edges, 0);
         assert_eq!(MeshStats::of(&knot_tube(50, 8, 1)).boundary_edges, 0);
         assert_eq!(MeshStats::of(&terrain(10, 1)).boundary_edges, 36);
+    }
+
+    /// Six times the enclosed volume (positive when every face points outward).
+    fn volume6(m: &Mesh) -> f32 {
+        (0..m.triangle_count())
+            .map(|t| {
+                let [a, b, c] = m.triangle(t).map(|v| m.position(v));
+                a.dot(b.cross(c))
+            })
+            .sum()
+    }
+
+    #[test]
+    fn stress_meshes_are_closed_outward_and_deterministic() {
+        for g in stress_set(5) {
+            g.mesh.validate().unwrap();
+            let again = stress_set(5)
+                .into_iter()
+                .find(|h| h.name == g.name)
+                .unwrap();
+            assert_eq!(g.mesh, again.mesh, "{}", g.name);
+            let s = MeshStats::of(&g.mesh);
+            assert_eq!(s.boundary_edges, 0, "{}", g.name);
+            assert_eq!(s.non_manifold_edges, 0, "{}", g.name);
+            assert!(volume6(&g.mesh) > 0.0, "{} faces inward", g.name);
+        }
+        // The caps are fans: the hub has one triangle per segment.
+        let m = cad_part(400, 1);
+        let hub_triangles = m.indices.iter().filter(|&&v| v == 0).count();
+        assert_eq!(hub_triangles, 400);
+        // Struts are closed prisms whose fans share the grid nodes: a node inside the lattice
+        // carries six struts' fans.
+        let l = strut_lattice(2, 5, 1);
+        let centre = (9 + 3 + 1) as u32; // node (1, 1, 1) of a 3^3 grid
+        assert_eq!(l.indices.iter().filter(|&&v| v == centre).count(), 6 * 5);
+        assert_eq!(l.triangle_count(), 3 * 2 * 9 * 4 * 5);
     }
 
     #[test]

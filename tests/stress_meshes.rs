@@ -1,0 +1,57 @@
+//! Every strategy on the generated stress meshes (CAD-like parts with 128- and 400-segment fan
+//! caps, a thin-strut lattice joined only through vertices) x the three limit presets: each output
+//! validated, never below the triangle bound, and identical on 1 and 4 threads. The shared real
+//! meshes have neither hubs of valence 400 nor vertex-only joints; claims must hold on both.
+
+mod common;
+
+use meshletlab::mesh::generate::stress_set;
+use meshletlab::meshlet::{validate, Limits};
+use meshletlab::strategy::{self, Options};
+
+#[test]
+fn every_strategy_validates_on_every_stress_mesh_and_preset() {
+    let mut opts = Options::default();
+    // Paper-mode k-medoids finishes the fast way after a short budget: this test is about validity.
+    opts.kmedoids.paper_budget = std::time::Duration::from_millis(200);
+    let names: Vec<String> = strategy::NAMES
+        .iter()
+        .map(|n| n.to_string())
+        .chain([
+            "meshopt+refine-fast".to_string(),
+            "kmedoids+refine-fast".to_string(),
+        ])
+        .collect();
+    for g in stress_set(3) {
+        for limits in Limits::PRESETS {
+            for name in &names {
+                let s = strategy::by_name(name, &opts).unwrap();
+                let ml = s.build(&g.mesh, limits);
+                validate(&g.mesh, &ml, limits)
+                    .unwrap_or_else(|e| panic!("{} {name} {limits}: {e}", g.name));
+                assert!(
+                    ml.len() * limits.max_triangles as usize >= g.mesh.triangle_count(),
+                    "{} {name} {limits}: below the triangle bound",
+                    g.name
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn stress_meshes_give_the_same_meshlets_on_any_thread_count() {
+    let opts = Options::default();
+    let (one, many) = (common::pool(1), common::pool(common::MANY_THREADS));
+    for g in stress_set(3) {
+        for name in strategy::NAMES
+            .iter()
+            .filter(|n| !strategy::SLOW.contains(n))
+        {
+            let s = strategy::by_name(name, &opts).unwrap();
+            let a = one.install(|| s.build(&g.mesh, Limits::DEFAULT));
+            let b = many.install(|| s.build(&g.mesh, Limits::DEFAULT));
+            assert_eq!(a, b, "{} {name}", g.name);
+        }
+    }
+}
