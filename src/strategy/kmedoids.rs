@@ -40,6 +40,9 @@ pub enum Mode {
     Paper,
     /// Split every overflowing cluster at once, then a few iterations.
     Fast,
+    /// Split every overflowing cluster inside itself, with no global re-run
+    /// ([`super::kmedoids_local`]).
+    Local,
 }
 
 /// k-medoids settings.
@@ -86,6 +89,7 @@ impl Strategy for KMedoids {
         match self.config.mode {
             Mode::Fast => "kmedoids",
             Mode::Paper => "kmedoids-paper",
+            Mode::Local => "kmedoids-local",
         }
     }
 
@@ -93,6 +97,7 @@ impl Strategy for KMedoids {
         match self.config.mode {
             Mode::Fast => "k-medoids on the triangle dual graph (hop distance), all overflowing clusters split at once",
             Mode::Paper => "k-medoids as the paper runs it: one cluster added and everything re-run per overflow",
+            Mode::Local => "k-medoids whose overflowing clusters are bisected inside themselves, no global re-run",
         }
     }
 
@@ -153,7 +158,7 @@ pub fn cluster_size(limits: Limits, mode: Mode) -> usize {
         Mode::Paper => limits.max_triangles as usize,
         // A closed 64-vertex patch holds about 1.5 x 64 triangles (Euler: T ~ 2V minus the
         // boundary), so starting at that size leaves far fewer clusters to split.
-        Mode::Fast => (limits.max_triangles as usize)
+        Mode::Fast | Mode::Local => (limits.max_triangles as usize)
             .min(3 * limits.max_vertices as usize / 2)
             .max(1),
     }
@@ -198,6 +203,31 @@ pub fn cluster(mesh: &Mesh, limits: Limits, cfg: &Config) -> Clustering {
     let initial_seconds = t0.elapsed().as_secs_f64();
     let initial_mean_distance = mean(&distances);
 
+    if cfg.mode == Mode::Local {
+        let splits = super::kmedoids_local::split_until_fit(
+            mesh,
+            &dual,
+            limits,
+            cfg.split_iterations,
+            &mut medoids,
+            &mut labels,
+            &mut distances,
+        );
+        let meshlets = pack(mesh, &labels, &distances, medoids.len(), limits);
+        return Clustering {
+            medoids,
+            labels,
+            distances,
+            iterations,
+            splits,
+            budget_exhausted: false,
+            initial_mean_distance,
+            initial_iterations,
+            initial_seconds,
+            skipped_updates,
+            meshlets,
+        };
+    }
     let start = Instant::now();
     let mut splits = 0;
     let mut budget_exhausted = false;

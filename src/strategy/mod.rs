@@ -8,6 +8,7 @@ mod bsphere;
 mod compact;
 mod greedy;
 pub mod kmedoids;
+pub mod kmedoids_local;
 mod meshopt;
 mod nvidia;
 pub mod parallel;
@@ -106,6 +107,7 @@ pub const NAMES: &[&str] = &[
     "bsphere-parallel",
     "kmedoids",
     "kmedoids-paper",
+    "kmedoids-local",
     "compact",
     "meshopt",
     "meshopt-scan",
@@ -236,6 +238,8 @@ pub enum Kind {
     Kmedoids,
     /// [`KMedoids`] as the paper runs it (slow by design): `kmedoids-paper`.
     KmedoidsPaper,
+    /// [`KMedoids`] with local splits (no global re-run): `kmedoids-local`.
+    KmedoidsLocal,
     /// [`Compact`]: `compact`.
     Compact,
     /// [`Meshopt`] (meshoptimizer's `build_meshlets`): `meshopt`.
@@ -250,7 +254,7 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in [`NAMES`] (table) order.
-    pub const ALL: [Kind; 15] = [
+    pub const ALL: [Kind; 16] = [
         Kind::Nvidia,
         Kind::NvidiaTipsify,
         Kind::Greedy,
@@ -261,6 +265,7 @@ impl Kind {
         Kind::BsphereParallel,
         Kind::Kmedoids,
         Kind::KmedoidsPaper,
+        Kind::KmedoidsLocal,
         Kind::Compact,
         Kind::Meshopt,
         Kind::MeshoptScan,
@@ -306,6 +311,7 @@ impl Kind {
             }),
             Kind::Kmedoids => Box::new(kmedoids(kmedoids::Mode::Fast)),
             Kind::KmedoidsPaper => Box::new(kmedoids(kmedoids::Mode::Paper)),
+            Kind::KmedoidsLocal => Box::new(kmedoids(kmedoids::Mode::Local)),
             Kind::Compact => Box::new(Compact),
             Kind::Meshopt => Box::new(Meshopt {
                 cone_weight: opts.cone_weight,
