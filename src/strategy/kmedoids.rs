@@ -203,8 +203,12 @@ pub fn cluster(mesh: &Mesh, limits: Limits, cfg: &Config) -> Clustering {
     let initial_seconds = t0.elapsed().as_secs_f64();
     let initial_mean_distance = mean(&distances);
 
+    let start = Instant::now();
+    let mut splits = 0;
+    let mut budget_exhausted = false;
     if cfg.mode == Mode::Local {
-        let splits = super::kmedoids_local::split_until_fit(
+        // Overflowing clusters are bisected inside themselves: no global re-run.
+        splits = super::kmedoids_local::split_until_fit(
             mesh,
             &dual,
             limits,
@@ -213,57 +217,41 @@ pub fn cluster(mesh: &Mesh, limits: Limits, cfg: &Config) -> Clustering {
             &mut labels,
             &mut distances,
         );
-        let meshlets = pack(mesh, &labels, &distances, medoids.len(), limits);
-        return Clustering {
-            medoids,
-            labels,
-            distances,
-            iterations,
-            splits,
-            budget_exhausted: false,
-            initial_mean_distance,
-            initial_iterations,
-            initial_seconds,
-            skipped_updates,
-            meshlets,
-        };
-    }
-    let start = Instant::now();
-    let mut splits = 0;
-    let mut budget_exhausted = false;
-    let mut paper = cfg.mode == Mode::Paper;
-    for _round in 0..10_000 {
-        let over = overflowing(mesh, &labels, medoids.len(), limits);
-        if over.is_empty() {
-            break;
+    } else {
+        let mut paper = cfg.mode == Mode::Paper;
+        for _round in 0..10_000 {
+            let over = overflowing(mesh, &labels, medoids.len(), limits);
+            if over.is_empty() {
+                break;
+            }
+            if paper && start.elapsed() > cfg.paper_budget {
+                paper = false;
+                budget_exhausted = true;
+            }
+            let far = farthest_members(&labels, &distances, medoids.len());
+            if paper {
+                // The paper: one more cluster (at the farthest member of the largest overflow), then
+                // everything again.
+                let worst = *over
+                    .iter()
+                    .max_by_key(|&&(c, size)| (size, std::cmp::Reverse(c)))
+                    .expect("non-empty");
+                medoids.push(far[worst.0 as usize]);
+                medoids = sorted(medoids);
+                (labels, distances) = converge(&mut medoids, cfg.max_iterations, &mut iterations);
+            } else {
+                // The largest overflows first, a fraction per round: neighbours re-balance between
+                // rounds, so fewer clusters end up split than when all are split at once.
+                medoids.extend(
+                    split_choice(over, cfg.split_fraction)
+                        .into_iter()
+                        .map(|c| far[c as usize]),
+                );
+                medoids = sorted(medoids);
+                (labels, distances) = converge(&mut medoids, cfg.split_iterations, &mut iterations);
+            }
+            splits += 1;
         }
-        if paper && start.elapsed() > cfg.paper_budget {
-            paper = false;
-            budget_exhausted = true;
-        }
-        let far = farthest_members(&labels, &distances, medoids.len());
-        if paper {
-            // The paper: one more cluster (at the farthest member of the largest overflow), then
-            // everything again.
-            let worst = *over
-                .iter()
-                .max_by_key(|&&(c, size)| (size, std::cmp::Reverse(c)))
-                .expect("non-empty");
-            medoids.push(far[worst.0 as usize]);
-            medoids = sorted(medoids);
-            (labels, distances) = converge(&mut medoids, cfg.max_iterations, &mut iterations);
-        } else {
-            // The largest overflows first, a fraction per round: neighbours re-balance between
-            // rounds, so fewer clusters end up split than when all are split at once.
-            medoids.extend(
-                split_choice(over, cfg.split_fraction)
-                    .into_iter()
-                    .map(|c| far[c as usize]),
-            );
-            medoids = sorted(medoids);
-            (labels, distances) = converge(&mut medoids, cfg.split_iterations, &mut iterations);
-        }
-        splits += 1;
     }
     let meshlets = pack(mesh, &labels, &distances, medoids.len(), limits);
     Clustering {
@@ -497,14 +485,16 @@ pub fn update_cached(
     }
 }
 
-/// A cluster's induced subgraph with local indices.
-struct LocalGraph {
+/// A cluster's induced subgraph with local indices (member `i` of the ascending member list is
+/// node `i`).
+pub(crate) struct LocalGraph {
     offsets: Vec<u32>,
     items: Vec<u32>,
 }
 
 impl LocalGraph {
-    fn new(dual: &Csr, labels: &[u32], c: u32, m: &[u32]) -> Self {
+    /// The subgraph of cluster `c`, whose members `m` are ascending.
+    pub(crate) fn new(dual: &Csr, labels: &[u32], c: u32, m: &[u32]) -> Self {
         let mut offsets = Vec::with_capacity(m.len() + 1);
         let mut items = Vec::with_capacity(m.len() * 3);
         offsets.push(0);
@@ -517,6 +507,16 @@ impl LocalGraph {
             offsets.push(items.len() as u32);
         }
         Self { offsets, items }
+    }
+
+    /// Nodes.
+    pub(crate) fn len(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// Neighbours of node `u` inside the cluster.
+    pub(crate) fn row(&self, u: usize) -> &[u32] {
+        &self.items[self.offsets[u] as usize..self.offsets[u + 1] as usize]
     }
 
     /// BFS from local node `s`; returns the sum of distances (unreachable members count as the

@@ -19,44 +19,25 @@
 //! member through a path of its own part. Determinism: each split is a pure function of the
 //! cluster; they run in parallel and are applied in cluster order.
 
-use super::kmedoids::{members, overflowing, UNREACHED};
+use super::kmedoids::{members, overflowing, LocalGraph, UNREACHED};
 use crate::adjacency::Csr;
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
 use rayon::prelude::*;
 
-/// A cluster's induced subgraph over its members (ascending triangle ids), in local indices.
-struct Sub {
-    offsets: Vec<u32>,
-    items: Vec<u32>,
+/// Searches inside one cluster's induced subgraph.
+trait Sub {
+    fn flood(&self, seeds: &[usize], part: Option<(&[u32], u32)>) -> (Vec<u32>, Vec<u32>);
+    fn medoid(&self, part: &[u32], k: u32) -> usize;
 }
 
-impl Sub {
-    fn new(dual: &Csr, labels: &[u32], c: u32, m: &[u32]) -> Self {
-        let mut offsets = Vec::with_capacity(m.len() + 1);
-        let mut items = Vec::with_capacity(3 * m.len());
-        offsets.push(0);
-        for &t in m {
-            for &n in dual.row(t as usize) {
-                if labels[n as usize] == c {
-                    items.push(m.binary_search(&n).expect("same label means member") as u32);
-                }
-            }
-            offsets.push(items.len() as u32);
-        }
-        Self { offsets, items }
-    }
-
-    fn row(&self, u: usize) -> &[u32] {
-        &self.items[self.offsets[u] as usize..self.offsets[u + 1] as usize]
-    }
-
+impl Sub for LocalGraph {
     /// BFS from the local `seeds` over the nodes whose `part` is `keep` (all nodes for `None`),
     /// each node taking the lowest seed index among those at its distance (a level-synchronous
     /// sweep in ascending node order, so the result is the same on every run). Returns per node
     /// (seed index, distance), `u32::MAX` where unreached.
     fn flood(&self, seeds: &[usize], part: Option<(&[u32], u32)>) -> (Vec<u32>, Vec<u32>) {
-        let n = self.offsets.len() - 1;
+        let n = self.len();
         let (mut owner, mut dist) = (vec![u32::MAX; n], vec![u32::MAX; n]);
         let allowed = |u: usize| part.is_none_or(|(p, k)| p[u] == k);
         let mut frontier: Vec<usize> = Vec::new();
@@ -125,7 +106,7 @@ fn farthest(dist: &[u32]) -> usize {
 }
 
 /// One bisection: (medoids of the two parts as local indices, part of each member).
-fn bisect(sub: &Sub, medoid: usize, iterations: u32) -> ([usize; 2], Vec<u32>) {
+fn bisect(sub: &LocalGraph, medoid: usize, iterations: u32) -> ([usize; 2], Vec<u32>) {
     let (_, from_medoid) = sub.flood(&[medoid], None);
     let a = farthest(&from_medoid);
     let (_, from_a) = sub.flood(&[a], None);
@@ -167,7 +148,7 @@ pub fn split_until_fit(
             .par_iter()
             .map(|&(c, _)| {
                 let m = mem.row(c as usize);
-                let sub = Sub::new(dual, labels, c, m);
+                let sub = LocalGraph::new(dual, labels, c, m);
                 let at = m
                     .binary_search(&medoids[c as usize])
                     .expect("a medoid belongs to its cluster");
@@ -212,7 +193,7 @@ fn refresh_distances(dual: &Csr, medoids: &[u32], labels: &[u32], distances: &mu
         .into_par_iter()
         .map(|c| {
             let m = mem.row(c as usize);
-            let sub = Sub::new(dual, labels, c, m);
+            let sub = LocalGraph::new(dual, labels, c, m);
             let at = m.binary_search(&medoids[c as usize]).expect("member");
             (c, sub.flood(&[at], None).1)
         })
@@ -227,6 +208,7 @@ fn refresh_distances(dual: &Csr, medoids: &[u32], labels: &[u32], distances: &mu
 #[cfg(test)]
 mod tests {
     use super::super::kmedoids::{cluster, Config, Mode};
+    use super::Sub;
     use crate::adjacency::{dual_graph, vertex_triangles};
     use crate::mesh::generate;
     use crate::meshlet::{validate, Limits};
@@ -236,7 +218,7 @@ mod tests {
         let mem = super::members(labels, k);
         (0..k).all(|c| {
             let m = mem.row(c);
-            let sub = super::Sub::new(dual, labels, c as u32, m);
+            let sub = super::LocalGraph::new(dual, labels, c as u32, m);
             m.is_empty() || sub.flood(&[0], None).1.iter().all(|&d| d != u32::MAX)
         })
     }
