@@ -211,6 +211,7 @@ pub fn cluster(mesh: &Mesh, limits: Limits, cfg: &Config) -> Clustering {
         splits = super::kmedoids_local::split_until_fit(
             mesh,
             &dual,
+            &vt,
             limits,
             cfg.split_iterations,
             &mut medoids,

@@ -125,12 +125,16 @@ fn bisect(sub: &LocalGraph, medoid: usize, iterations: u32) -> ([usize; 2], Vec<
     (seeds, part)
 }
 
-/// Splits every overflowing cluster inside itself until none overflows, then renumbers clusters by
+/// Splits every overflowing cluster inside itself until none overflows, merges neighbours whose
+/// union fits (`merge_neighbours`), then renumbers clusters by
 /// ascending medoid and measures each member's hop distance from its medoid. Returns the number
 /// of rounds.
+// The flat arrays the CPU steps and the GPU kernels share, passed as they are.
+#[allow(clippy::too_many_arguments)]
 pub fn split_until_fit(
     mesh: &Mesh,
     dual: &Csr,
+    vt: &Csr,
     limits: Limits,
     iterations: u32,
     medoids: &mut Vec<u32>,
@@ -167,9 +171,153 @@ pub fn split_until_fit(
         }
         rounds += 1;
     }
+    merge_neighbours(mesh, dual, vt, limits, medoids, labels);
     renumber(medoids, labels);
     refresh_distances(dual, medoids, labels, distances);
     rounds
+}
+
+/// Edge-connected piece of the mesh each triangle lies in (ids in order of first triangle).
+fn pieces(dual: &Csr) -> Vec<u32> {
+    let mut piece = vec![u32::MAX; dual.rows()];
+    let mut queue = Vec::new();
+    let mut next = 0;
+    for s in 0..dual.rows() {
+        if piece[s] != u32::MAX {
+            continue;
+        }
+        piece[s] = next;
+        queue.clear();
+        queue.push(s as u32);
+        while let Some(u) = queue.pop() {
+            for &v in dual.row(u as usize) {
+                if piece[v as usize] == u32::MAX {
+                    piece[v as usize] = next;
+                    queue.push(v);
+                }
+            }
+        }
+        next += 1;
+    }
+    piece
+}
+
+/// Merges neighbouring clusters whose union fits the limits, smallest first (ties to the lower
+/// id; among neighbours, the one sharing most vertices, then the lower id). Bisection leaves
+/// half-full parts, and a mesh whose pieces touch only at vertices (a strut lattice) leaves one
+/// cluster per piece; both are what this recovers. Two clusters may merge when they share an
+/// edge (the union stays edge-connected) or when no edge-connected piece of the mesh holds
+/// members of both (the union is then connected wherever the mesh is). Sequential and in a fixed
+/// order, so deterministic. Merged clusters get the paper's medoid of their union.
+fn merge_neighbours(
+    mesh: &Mesh,
+    dual: &Csr,
+    vt: &Csr,
+    limits: Limits,
+    medoids: &mut Vec<u32>,
+    labels: &mut [u32],
+) {
+    let piece = pieces(dual);
+    let k = medoids.len();
+    let mem = members(labels, k);
+    let mut tris: Vec<Vec<u32>> = (0..k).map(|c| mem.row(c).to_vec()).collect();
+    let sorted = |mut v: Vec<u32>| {
+        v.sort_unstable();
+        v.dedup();
+        v
+    };
+    let mut verts: Vec<Vec<u32>> = tris
+        .iter()
+        .map(|m| sorted(m.iter().flat_map(|&t| mesh.triangle(t as usize)).collect()))
+        .collect();
+    let mut parts: Vec<Vec<u32>> = tris
+        .iter()
+        .map(|m| sorted(m.iter().map(|&t| piece[t as usize]).collect()))
+        .collect();
+    // Current cluster of a triangle: follow `into` from its label.
+    let mut into: Vec<u32> = (0..k as u32).collect();
+    let find = |into: &[u32], mut c: u32| {
+        while into[c as usize] != c {
+            c = into[c as usize];
+        }
+        c
+    };
+    let mut order: Vec<u32> = (0..k as u32).collect();
+    order.sort_unstable_by_key(|&c| (tris[c as usize].len(), c));
+    let mut merged = vec![false; k];
+    for a in order {
+        if into[a as usize] != a {
+            continue;
+        }
+        // (shared vertices, edge-adjacent) per neighbouring cluster.
+        let mut near: std::collections::BTreeMap<u32, (u32, bool)> = Default::default();
+        for &v in &verts[a as usize] {
+            let mut seen_here: Vec<u32> = Vec::new();
+            for &u in vt.row(v as usize) {
+                let b = find(&into, labels[u as usize]);
+                if b != a && !seen_here.contains(&b) {
+                    seen_here.push(b);
+                    near.entry(b).or_default().0 += 1;
+                }
+            }
+        }
+        for &t in &tris[a as usize] {
+            for &u in dual.row(t as usize) {
+                let b = find(&into, labels[u as usize]);
+                if b != a {
+                    near.entry(b).or_default().1 = true;
+                }
+            }
+        }
+        let disjoint = |x: &[u32], y: &[u32]| x.iter().all(|p| y.binary_search(p).is_err());
+        let mut best: Option<(u32, u32)> = None;
+        for (&b, &(shared, edge)) in &near {
+            let (ia, ib) = (a as usize, b as usize);
+            if tris[ia].len() + tris[ib].len() > limits.max_triangles as usize
+                || verts[ia].len() + verts[ib].len() - shared as usize
+                    > limits.max_vertices as usize
+                || !(edge || disjoint(&parts[ia], &parts[ib]))
+            {
+                continue;
+            }
+            if best.is_none_or(|(s, c)| (shared, std::cmp::Reverse(b)) > (s, std::cmp::Reverse(c)))
+            {
+                best = Some((shared, b));
+            }
+        }
+        let Some((_, b)) = best else { continue };
+        let (keep, gone) = (a.min(b) as usize, a.max(b) as usize);
+        into[gone] = keep as u32;
+        merged[keep] = true;
+        let moved = std::mem::take(&mut tris[gone]);
+        tris[keep] = sorted([tris[keep].clone(), moved].concat());
+        let moved = std::mem::take(&mut verts[gone]);
+        verts[keep] = sorted([verts[keep].clone(), moved].concat());
+        let moved = std::mem::take(&mut parts[gone]);
+        parts[keep] = sorted([parts[keep].clone(), moved].concat());
+    }
+    // Relabel to the survivors, compact the ids, and give merged clusters their union's medoid.
+    let survivors: Vec<u32> = (0..k as u32).filter(|&c| into[c as usize] == c).collect();
+    let mut new_id = vec![u32::MAX; k];
+    for (i, &c) in survivors.iter().enumerate() {
+        new_id[c as usize] = i as u32;
+    }
+    for l in labels.iter_mut().filter(|l| **l != UNREACHED) {
+        *l = new_id[find(&into, *l) as usize];
+    }
+    let fresh: Vec<u32> = survivors
+        .par_iter()
+        .enumerate()
+        .map(|(i, &c)| {
+            if !merged[c as usize] {
+                return medoids[c as usize];
+            }
+            let m = &tris[c as usize];
+            let sub = LocalGraph::new(dual, labels, i as u32, m);
+            m[sub.medoid(&vec![0; m.len()], 0)]
+        })
+        .collect();
+    *medoids = fresh;
 }
 
 /// Renumbers clusters by ascending medoid (the order `assign` numbers them in).
@@ -195,7 +343,23 @@ fn refresh_distances(dual: &Csr, medoids: &[u32], labels: &[u32], distances: &mu
             let m = mem.row(c as usize);
             let sub = LocalGraph::new(dual, labels, c, m);
             let at = m.binary_search(&medoids[c as usize]).expect("member");
-            (c, sub.flood(&[at], None).1)
+            let mut d = sub.flood(&[at], None).1;
+            // A cluster joined through a vertex has pieces the medoid does not reach: each is
+            // numbered on after the previous one, from its lowest member.
+            while let Some(u) = d.iter().position(|&x| x == u32::MAX) {
+                let base = d
+                    .iter()
+                    .filter(|&&x| x != u32::MAX)
+                    .max()
+                    .map_or(0, |&x| x + 1);
+                let more = sub.flood(&[u], None).1;
+                for (x, &y) in d.iter_mut().zip(&more) {
+                    if *x == u32::MAX && y != u32::MAX {
+                        *x = base + y;
+                    }
+                }
+            }
+            (c, d)
         })
         .collect();
     for (c, d) in rows {
@@ -213,13 +377,26 @@ mod tests {
     use crate::mesh::generate;
     use crate::meshlet::{validate, Limits};
 
-    /// Every cluster is one edge-connected piece of the dual graph.
+    /// Every cluster is edge-connected wherever the mesh is: it has as many edge-connected
+    /// pieces as the mesh pieces its members lie in.
     fn connected(dual: &crate::adjacency::Csr, labels: &[u32], k: usize) -> bool {
         let mem = super::members(labels, k);
+        let piece = super::pieces(dual);
         (0..k).all(|c| {
             let m = mem.row(c);
             let sub = super::LocalGraph::new(dual, labels, c as u32, m);
-            m.is_empty() || sub.flood(&[0], None).1.iter().all(|&d| d != u32::MAX)
+            let mut own = vec![false; m.len()];
+            let mut count = 0;
+            while let Some(u) = own.iter().position(|&x| !x) {
+                for (o, d) in own.iter_mut().zip(sub.flood(&[u], None).1) {
+                    *o |= d != u32::MAX;
+                }
+                count += 1;
+            }
+            let mut p: Vec<u32> = m.iter().map(|&t| piece[t as usize]).collect();
+            p.sort_unstable();
+            p.dedup();
+            count == p.len()
         })
     }
 
