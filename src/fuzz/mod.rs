@@ -285,6 +285,7 @@ pub fn kind_name(k: &MeshErrorKind) -> &'static str {
     match k {
         MeshErrorKind::Io(_) => "io",
         MeshErrorKind::UnknownFormat => "unknown-format",
+        MeshErrorKind::UnknownGenerated(_) => "unknown-generated",
         MeshErrorKind::Decompress(_) => "decompress",
         MeshErrorKind::Parse { .. } => "parse",
         MeshErrorKind::Truncated(_) => "truncated",

@@ -22,6 +22,9 @@ pub enum MeshErrorKind {
     /// The file extension names no supported format.
     #[error("unknown mesh format (expected .ply, .obj, .gltf or .glb, optionally with .zst)")]
     UnknownFormat,
+    /// A `gen:NAME` path whose name is not a generated mesh; holds the names there are.
+    #[error("no generated mesh of that name (there are: {0})")]
+    UnknownGenerated(String),
     /// The zstd stream is corrupt or truncated.
     #[error("zstd decompression failed: {0}")]
     Decompress(String),

@@ -54,6 +54,35 @@ pub fn stress_set(seed: u64) -> Vec<Generated> {
     ]
 }
 
+/// Seed of the generated meshes a `gen:NAME` path names (so every bench and command sees the same
+/// mesh under one name).
+pub const NAMED_SEED: u64 = 1;
+
+/// The names `gen:NAME` accepts: the stress set, then the demo set.
+pub const NAMES: &[&str] = &[
+    "cad-part-128",
+    "cad-part-400",
+    "strut-lattice",
+    "noisy-sphere",
+    "knot-tube",
+    "terrain",
+];
+
+/// The generated mesh called `name` (one of [`NAMES`], seeded with [`NAMED_SEED`]); `None` for an
+/// unknown name. Only the one mesh is generated.
+pub fn named(name: &str) -> Option<Mesh> {
+    let s = NAMED_SEED;
+    Some(match name {
+        "cad-part-128" => cad_part(128, s),
+        "cad-part-400" => cad_part(400, s),
+        "strut-lattice" => strut_lattice(5, 6, s),
+        "noisy-sphere" => noisy_sphere(5, 0.15, s),
+        "knot-tube" => knot_tube(640, 40, s),
+        "terrain" => terrain(160, s),
+        _ => return None,
+    })
+}
+
 /// Revolves `profile` ((radius, height) points, bottom to top) around the z axis in `segments`
 /// steps. A point of radius 0 becomes one hub vertex whose triangles fan around it; the others
 /// become rings joined by quads. Faces point away from the axis (counter-clockwise outside).
@@ -378,6 +407,15 @@ mod tests {
 
     #[test]
     fn stress_meshes_are_closed_outward_and_deterministic() {
+        for g in stress_set(NAMED_SEED)
+            .into_iter()
+            .chain(demo_set(NAMED_SEED))
+        {
+            assert!(NAMES.contains(&g.name));
+            assert_eq!(named(g.name).unwrap(), g.mesh, "{}", g.name);
+        }
+        assert_eq!(NAMES.len(), 6);
+        assert!(named("no-such-mesh").is_none());
         for g in stress_set(5) {
             g.mesh.validate().unwrap();
             let again = stress_set(5)

@@ -38,8 +38,21 @@ impl Format {
     }
 }
 
-/// Loads and validates a mesh from a file. Errors name the file.
+/// Prefix of a path that names a generated mesh instead of a file: `gen:cad-part-400` is
+/// [`super::generate::named`]`("cad-part-400")`, so every command and bench takes the in-tree stress
+/// meshes where it takes a file.
+pub const GENERATED_PREFIX: &str = "gen:";
+
+/// Loads and validates a mesh from a file, or generates one named `gen:NAME`. Errors name the file.
 pub fn load(path: &Path) -> Result<Mesh, MeshError> {
+    if let Some(name) = path.to_str().and_then(|p| p.strip_prefix(GENERATED_PREFIX)) {
+        return super::generate::named(name).ok_or_else(|| {
+            MeshError::new(
+                path,
+                MeshErrorKind::UnknownGenerated(super::generate::NAMES.join(", ")),
+            )
+        });
+    }
     if Format::of(path).is_none() {
         return Err(MeshError::new(path, MeshErrorKind::UnknownFormat));
     }

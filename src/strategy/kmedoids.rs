@@ -43,6 +43,9 @@ pub enum Mode {
     /// Split every overflowing cluster inside itself, with no global re-run
     /// ([`super::kmedoids_local`]).
     Local,
+    /// Grow clusters to the limits and assign with capacity, so nothing is split
+    /// ([`super::kmedoids_capacity`]).
+    Capacity,
 }
 
 /// k-medoids settings.
@@ -90,6 +93,7 @@ impl Strategy for KMedoids {
             Mode::Fast => "kmedoids",
             Mode::Paper => "kmedoids-paper",
             Mode::Local => "kmedoids-local",
+            Mode::Capacity => "kmedoids-cap",
         }
     }
 
@@ -98,6 +102,7 @@ impl Strategy for KMedoids {
             Mode::Fast => "k-medoids on the triangle dual graph (hop distance), all overflowing clusters split at once",
             Mode::Paper => "k-medoids as the paper runs it: one cluster added and everything re-run per overflow",
             Mode::Local => "k-medoids whose overflowing clusters are bisected inside themselves, no global re-run",
+            Mode::Capacity => "k-medoids whose clusters grow to the limits and take triangles only while they have room",
         }
     }
 
@@ -158,7 +163,7 @@ pub fn cluster_size(limits: Limits, mode: Mode) -> usize {
         Mode::Paper => limits.max_triangles as usize,
         // A closed 64-vertex patch holds about 1.5 x 64 triangles (Euler: T ~ 2V minus the
         // boundary), so starting at that size leaves far fewer clusters to split.
-        Mode::Fast | Mode::Local => (limits.max_triangles as usize)
+        Mode::Fast | Mode::Local | Mode::Capacity => (limits.max_triangles as usize)
             .min(3 * limits.max_vertices as usize / 2)
             .max(1),
     }
@@ -177,6 +182,24 @@ pub fn cluster(mesh: &Mesh, limits: Limits, cfg: &Config) -> Clustering {
     let t0 = Instant::now();
     let vt = vertex_triangles(mesh);
     let dual = dual_graph(mesh, &vt);
+    if cfg.mode == Mode::Capacity {
+        let g = super::kmedoids_capacity::cluster(mesh, &dual, &vt, limits, cfg.max_iterations);
+        let meshlets = pack(mesh, &g.labels, &g.distances, g.medoids.len(), limits);
+        let mean_distance = mean(&g.distances);
+        return Clustering {
+            medoids: g.medoids,
+            labels: g.labels,
+            distances: g.distances,
+            iterations: g.iterations,
+            splits: 0,
+            budget_exhausted: false,
+            initial_mean_distance: mean_distance,
+            initial_iterations: 0,
+            initial_seconds: t0.elapsed().as_secs_f64(),
+            skipped_updates: 0,
+            meshlets,
+        };
+    }
     let per_cluster = cluster_size(limits, cfg.mode);
     let mut medoids = initial_medoids(mesh, per_cluster);
     let mut iterations = 0;
@@ -303,7 +326,7 @@ pub fn initial_medoids(mesh: &Mesh, per_cluster: usize) -> Vec<u32> {
     sorted((0..k).map(|j| keyed[(j * t + t / 2) / k].1).collect())
 }
 
-fn morton3(x: u32, y: u32, z: u32) -> u64 {
+pub(crate) fn morton3(x: u32, y: u32, z: u32) -> u64 {
     let spread = |v: u32| {
         let mut v = v as u64 & 0x3ff;
         v = (v | (v << 16)) & 0x0300_00ff;
@@ -457,20 +480,10 @@ pub fn update_cached(
             let old = m
                 .binary_search(&medoids[c])
                 .expect("a medoid belongs to its own cluster");
-            // The old medoid first: its sum is usually near the best, so most other BFS stop
-            // early. The minimum (sum, member) does not depend on the order.
-            let first = local.bfs(old, &mut dist, &mut queue, None);
-            let mut best = (first.expect("no bound, no early stop"), old);
-            for s in (0..m.len()).filter(|&s| s != old) {
-                if let Some(sum) = local.bfs(s, &mut dist, &mut queue, Some(best)) {
-                    if (sum, s) < best {
-                        best = (sum, s);
-                    }
-                }
-            }
+            let best = local.medoid_index();
             // Shift: hops from the new medoid to the old one, inside the cluster.
-            local.bfs(best.1, &mut dist, &mut queue, None);
-            (m[best.1], dist[old], false)
+            local.bfs(best, &mut dist, &mut queue);
+            (m[best], dist[old], false)
         })
         .collect();
     let skipped = results.iter().filter(|r| r.2).count() as u32;
@@ -510,6 +523,72 @@ impl LocalGraph {
         Self { offsets, items }
     }
 
+    /// Sum of hop distances from every node to all others (an unreachable node counts as the
+    /// node count, as in [`Self::bfs`]), all sources at once: `reach_k(x)`, the nodes within k
+    /// hops of x, is x's bitset OR its neighbours' `reach_{k-1}`, and sum(x) adds
+    /// `n - |reach_k(x)|` per level until no set grows. O(n * degree * n/64 * levels) word
+    /// operations without a branch per edge, where n BFS cost O(n * edges) with one; for the
+    /// medoid update's clusters (up to a few hundred members) that is several times less work.
+    pub(crate) fn distance_sums(&self) -> Vec<u64> {
+        let n = self.len();
+        let w = n.div_ceil(64);
+        let mut cur = vec![0u64; n * w];
+        for x in 0..n {
+            cur[x * w + x / 64] |= 1 << (x % 64);
+        }
+        let mut next = cur.clone();
+        let mut count = vec![1u64; n];
+        let mut acc = vec![0u64; n];
+        let mut levels = 0u64;
+        loop {
+            for x in 0..n {
+                acc[x] += n as u64 - count[x];
+            }
+            levels += 1;
+            let mut grew = false;
+            for x in 0..n {
+                let dst = &mut next[x * w..(x + 1) * w];
+                if count[x] == n as u64 {
+                    // Full: nothing to add.
+                    dst.copy_from_slice(&cur[x * w..(x + 1) * w]);
+                    continue;
+                }
+                dst.copy_from_slice(&cur[x * w..(x + 1) * w]);
+                for &y in self.row(x) {
+                    let src = &cur[y as usize * w..(y as usize + 1) * w];
+                    for (d, s) in dst.iter_mut().zip(src) {
+                        *d |= s;
+                    }
+                }
+                let c: u64 = dst.iter().map(|b| b.count_ones() as u64).sum();
+                if c != count[x] {
+                    grew = true;
+                    count[x] = c;
+                }
+            }
+            std::mem::swap(&mut cur, &mut next);
+            if !grew {
+                break;
+            }
+        }
+        // An unreachable node was counted once per level; it counts n instead.
+        (0..n)
+            .map(|x| {
+                let missing = n as u64 - count[x];
+                acc[x] - missing * levels + missing * n as u64
+            })
+            .collect()
+    }
+
+    /// The node with the smallest [`Self::distance_sums`] (lowest index on ties): the paper's
+    /// medoid.
+    pub(crate) fn medoid_index(&self) -> usize {
+        let sums = self.distance_sums();
+        (0..self.len())
+            .min_by_key(|&x| (sums[x], x))
+            .expect("a cluster has members")
+    }
+
     /// Nodes.
     pub(crate) fn len(&self) -> usize {
         self.offsets.len() - 1
@@ -521,16 +600,9 @@ impl LocalGraph {
     }
 
     /// BFS from local node `s`; returns the sum of distances (unreachable members count as the
-    /// member count, so a disconnected cluster is never preferred). With `beat = (sum, node)`
-    /// it stops early, returning `None`, once `(sum, s)` cannot come below `beat`: the members
-    /// not yet queued are at least one hop beyond the node being expanded.
-    fn bfs(
-        &self,
-        s: usize,
-        dist: &mut [u32],
-        queue: &mut Vec<u32>,
-        beat: Option<(u64, usize)>,
-    ) -> Option<u64> {
+    /// member count, so a disconnected cluster is never preferred), and leaves the distances in
+    /// `dist` (`u32::MAX` where unreached).
+    fn bfs(&self, s: usize, dist: &mut [u32], queue: &mut Vec<u32>) -> u64 {
         let m = dist.len() as u64;
         dist.fill(u32::MAX);
         queue.clear();
@@ -543,12 +615,6 @@ impl LocalGraph {
             let u = queue[head] as usize;
             head += 1;
             let next = dist[u] + 1;
-            if let Some(b) = beat {
-                let bound = sum + next as u64 * (m - queue.len() as u64);
-                if (bound, s) > b {
-                    return None;
-                }
-            }
             for &n in &self.items[self.offsets[u] as usize..self.offsets[u + 1] as usize] {
                 if dist[n as usize] == u32::MAX {
                     dist[n as usize] = next;
@@ -557,7 +623,7 @@ impl LocalGraph {
                 }
             }
         }
-        Some(sum + (m - queue.len() as u64) * m)
+        sum + (m - queue.len() as u64) * m
     }
 }
 
@@ -658,6 +724,34 @@ mod tests {
         let up = update(&dual, &labels, &[0, 4]);
         assert_eq!(up.medoids, vec![1, 3]);
         assert_eq!(up.mean_shift, 1.0);
+    }
+
+    #[test]
+    fn distance_sums_equal_one_bfs_per_member() {
+        // A tube (cycles, several paths between members) and a cluster in two pieces (the
+        // unreachable members count as the member count).
+        let m = generate::knot_tube(40, 8, 1);
+        let vt = vertex_triangles(&m);
+        let dual = dual_graph(&m, &vt);
+        for pick in [0..150u32, 0..70u32] {
+            let mut labels = vec![1u32; m.triangle_count()];
+            for t in pick.clone() {
+                labels[t as usize] = 0;
+            }
+            // Drop a band to split the second cluster in two.
+            if pick.end == 70 {
+                labels[30..40].fill(1);
+            }
+            let members: Vec<u32> = (0..m.triangle_count() as u32)
+                .filter(|&t| labels[t as usize] == 0)
+                .collect();
+            let g = LocalGraph::new(&dual, &labels, 0, &members);
+            let sums = g.distance_sums();
+            let (mut dist, mut queue) = (vec![0; members.len()], Vec::new());
+            for (s, &sum) in sums.iter().enumerate() {
+                assert_eq!(sum, g.bfs(s, &mut dist, &mut queue), "member {s}");
+            }
+        }
     }
 
     #[test]

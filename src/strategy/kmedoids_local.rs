@@ -209,7 +209,7 @@ fn pieces(dual: &Csr) -> Vec<u32> {
 /// edge (the union stays edge-connected) or when no edge-connected piece of the mesh holds
 /// members of both (the union is then connected wherever the mesh is). Sequential and in a fixed
 /// order, so deterministic. Merged clusters get the paper's medoid of their union.
-fn merge_neighbours(
+pub(crate) fn merge_neighbours(
     mesh: &Mesh,
     dual: &Csr,
     vt: &Csr,
@@ -321,7 +321,7 @@ fn merge_neighbours(
 }
 
 /// Renumbers clusters by ascending medoid (the order `assign` numbers them in).
-fn renumber(medoids: &mut Vec<u32>, labels: &mut [u32]) {
+pub(crate) fn renumber(medoids: &mut Vec<u32>, labels: &mut [u32]) {
     let mut order: Vec<u32> = (0..medoids.len() as u32).collect();
     order.sort_unstable_by_key(|&c| medoids[c as usize]);
     let mut new_id = vec![0u32; medoids.len()];
@@ -335,7 +335,12 @@ fn renumber(medoids: &mut Vec<u32>, labels: &mut [u32]) {
 }
 
 /// Hop distances from each cluster's medoid inside the cluster (what `pack` orders by).
-fn refresh_distances(dual: &Csr, medoids: &[u32], labels: &[u32], distances: &mut [u32]) {
+pub(crate) fn refresh_distances(
+    dual: &Csr,
+    medoids: &[u32],
+    labels: &[u32],
+    distances: &mut [u32],
+) {
     let mem = members(labels, medoids.len());
     let rows: Vec<(u32, Vec<u32>)> = (0..medoids.len() as u32)
         .into_par_iter()

@@ -8,6 +8,7 @@ mod bsphere;
 mod compact;
 mod greedy;
 pub mod kmedoids;
+pub mod kmedoids_capacity;
 pub mod kmedoids_local;
 mod meshopt;
 mod nvidia;
@@ -108,6 +109,7 @@ pub const NAMES: &[&str] = &[
     "kmedoids",
     "kmedoids-paper",
     "kmedoids-local",
+    "kmedoids-cap",
     "compact",
     "meshopt",
     "meshopt-scan",
@@ -240,6 +242,8 @@ pub enum Kind {
     KmedoidsPaper,
     /// [`KMedoids`] with local splits (no global re-run): `kmedoids-local`.
     KmedoidsLocal,
+    /// [`KMedoids`], capacity-aware: `kmedoids-cap`.
+    KmedoidsCap,
     /// [`Compact`]: `compact`.
     Compact,
     /// [`Meshopt`] (meshoptimizer's `build_meshlets`): `meshopt`.
@@ -254,7 +258,7 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in [`NAMES`] (table) order.
-    pub const ALL: [Kind; 16] = [
+    pub const ALL: [Kind; 17] = [
         Kind::Nvidia,
         Kind::NvidiaTipsify,
         Kind::Greedy,
@@ -266,6 +270,7 @@ impl Kind {
         Kind::Kmedoids,
         Kind::KmedoidsPaper,
         Kind::KmedoidsLocal,
+        Kind::KmedoidsCap,
         Kind::Compact,
         Kind::Meshopt,
         Kind::MeshoptScan,
@@ -312,6 +317,7 @@ impl Kind {
             Kind::Kmedoids => Box::new(kmedoids(kmedoids::Mode::Fast)),
             Kind::KmedoidsPaper => Box::new(kmedoids(kmedoids::Mode::Paper)),
             Kind::KmedoidsLocal => Box::new(kmedoids(kmedoids::Mode::Local)),
+            Kind::KmedoidsCap => Box::new(kmedoids(kmedoids::Mode::Capacity)),
             Kind::Compact => Box::new(Compact),
             Kind::Meshopt => Box::new(Meshopt {
                 cone_weight: opts.cone_weight,
