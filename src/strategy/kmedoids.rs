@@ -1,5 +1,9 @@
 //! k-medoids on the triangle dual graph (the JCGT paper's §3; CPU reference for the GPU kernels).
 //!
+//! This file is the flat method (`kmedoids-flat`, and `kmedoids-paper`) and the steps every variant
+//! shares; the default `kmedoids` grows clusters to the limits instead ([`super::kmedoids_capacity`],
+//! [`Mode::Capacity`]) and `kmedoids-local` splits inside clusters ([`super::kmedoids_local`]).
+//!
 //! Triangles are nodes, edge-adjacent triangles are neighbours, distance is hop count. The steps are
 //! separate pure functions over flat arrays (CSR adjacency, u32 labels and distances), so a compute
 //! kernel can mirror each one and be compared exactly:
@@ -38,7 +42,8 @@ pub const UNREACHED: u32 = u32::MAX;
 pub enum Mode {
     /// Add one cluster at a time and re-run everything (the paper's method; slow, kept for comparison).
     Paper,
-    /// Split every overflowing cluster at once, then a few iterations.
+    /// Split the largest overflowing clusters at once, then a few global iterations
+    /// (`kmedoids-flat`; what the GPU kernels run).
     Fast,
     /// Split every overflowing cluster inside itself, with no global re-run
     /// ([`super::kmedoids_local`]).
@@ -90,10 +95,10 @@ pub struct KMedoids {
 impl Strategy for KMedoids {
     fn name(&self) -> &'static str {
         match self.config.mode {
-            Mode::Fast => "kmedoids",
+            Mode::Fast => "kmedoids-flat",
             Mode::Paper => "kmedoids-paper",
             Mode::Local => "kmedoids-local",
-            Mode::Capacity => "kmedoids-cap",
+            Mode::Capacity => "kmedoids",
         }
     }
 

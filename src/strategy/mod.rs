@@ -107,9 +107,9 @@ pub const NAMES: &[&str] = &[
     "bsphere-coherent",
     "bsphere-parallel",
     "kmedoids",
+    "kmedoids-flat",
     "kmedoids-paper",
     "kmedoids-local",
-    "kmedoids-cap",
     "compact",
     "meshopt",
     "meshopt-scan",
@@ -236,14 +236,15 @@ pub enum Kind {
     BsphereCoherent,
     /// [`ParallelGrower`]: `bsphere-parallel`.
     BsphereParallel,
-    /// [`KMedoids`], fast mode: `kmedoids`.
+    /// [`KMedoids`], capacity-aware (clusters grown to the limits, nothing split): `kmedoids`.
     Kmedoids,
+    /// [`KMedoids`], flat: nearest-medoid assignment, overflowing clusters split and the mesh
+    /// re-clustered (the default before issue 32; what the GPU kernels run): `kmedoids-flat`.
+    KmedoidsFlat,
     /// [`KMedoids`] as the paper runs it (slow by design): `kmedoids-paper`.
     KmedoidsPaper,
     /// [`KMedoids`] with local splits (no global re-run): `kmedoids-local`.
     KmedoidsLocal,
-    /// [`KMedoids`], capacity-aware: `kmedoids-cap`.
-    KmedoidsCap,
     /// [`Compact`]: `compact`.
     Compact,
     /// [`Meshopt`] (meshoptimizer's `build_meshlets`): `meshopt`.
@@ -268,9 +269,9 @@ impl Kind {
         Kind::BsphereCoherent,
         Kind::BsphereParallel,
         Kind::Kmedoids,
+        Kind::KmedoidsFlat,
         Kind::KmedoidsPaper,
         Kind::KmedoidsLocal,
-        Kind::KmedoidsCap,
         Kind::Compact,
         Kind::Meshopt,
         Kind::MeshoptScan,
@@ -314,10 +315,10 @@ impl Kind {
             Kind::BsphereParallel => Box::new(ParallelGrower {
                 spacing: parallel::DEFAULT_SPACING,
             }),
-            Kind::Kmedoids => Box::new(kmedoids(kmedoids::Mode::Fast)),
+            Kind::Kmedoids => Box::new(kmedoids(kmedoids::Mode::Capacity)),
+            Kind::KmedoidsFlat => Box::new(kmedoids(kmedoids::Mode::Fast)),
             Kind::KmedoidsPaper => Box::new(kmedoids(kmedoids::Mode::Paper)),
             Kind::KmedoidsLocal => Box::new(kmedoids(kmedoids::Mode::Local)),
-            Kind::KmedoidsCap => Box::new(kmedoids(kmedoids::Mode::Capacity)),
             Kind::Compact => Box::new(Compact),
             Kind::Meshopt => Box::new(Meshopt {
                 cone_weight: opts.cone_weight,
@@ -397,7 +398,7 @@ mod tests {
             meshlet_order: MeshletOrder::Triangles,
             ..Options::default()
         };
-        for k in [Kind::Greedy, Kind::Meshopt, Kind::Kmedoids] {
+        for k in [Kind::Greedy, Kind::Meshopt, Kind::Kmedoids, Kind::KmedoidsFlat] {
             let typed = with_order(k.strategy(&opts), &opts).build(&mesh, limits);
             let named = by_name(k.name(), &opts).unwrap().build(&mesh, limits);
             assert_eq!(typed, named, "{}", k.name());
