@@ -16,7 +16,9 @@ mod stats;
 pub mod subdivide;
 
 pub use error::{MeshError, MeshErrorKind};
-pub use load::{decompress, load, load_bytes, save_ply, Format, MAX_ZSTD_RATIO, ZSTD_SLACK};
+pub use load::{
+    decompress, load, load_bytes, save_ply, Format, GENERATED_PREFIX, MAX_ZSTD_RATIO, ZSTD_SLACK,
+};
 pub use stats::MeshStats;
 
 use glam::Vec3;

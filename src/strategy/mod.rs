@@ -398,7 +398,12 @@ mod tests {
             meshlet_order: MeshletOrder::Triangles,
             ..Options::default()
         };
-        for k in [Kind::Greedy, Kind::Meshopt, Kind::Kmedoids, Kind::KmedoidsFlat] {
+        for k in [
+            Kind::Greedy,
+            Kind::Meshopt,
+            Kind::Kmedoids,
+            Kind::KmedoidsFlat,
+        ] {
             let typed = with_order(k.strategy(&opts), &opts).build(&mesh, limits);
             let named = by_name(k.name(), &opts).unwrap().build(&mesh, limits);
             assert_eq!(typed, named, "{}", k.name());
