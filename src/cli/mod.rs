@@ -71,6 +71,10 @@ pub struct StrategyArgs {
     /// k-medoids: stop when the mean medoid shift (in hops) is at most this.
     #[arg(long, default_value_t = 0.0)]
     pub kmedoids_threshold: f64,
+    /// kmedoids: what a growing cluster prefers among equally cheap triangles: `centre` (nearest its
+    /// centroid: smaller spheres) or `hops` (fewest hops from its seed: fewer meshlets).
+    #[arg(long, default_value = "centre", value_parser = clap::value_parser!(strategy::kmedoids_capacity::Grow))]
+    pub kmedoids_grow: strategy::kmedoids_capacity::Grow,
     /// kmedoids-paper: seconds before the remaining splits are done the fast way.
     #[arg(long, default_value_t = 300.0)]
     pub paper_budget: f64,
@@ -91,6 +95,7 @@ impl StrategyArgs {
             kmedoids: strategy::kmedoids::Config {
                 max_iterations: self.kmedoids_iterations,
                 shift_threshold: self.kmedoids_threshold,
+                grow: self.kmedoids_grow,
                 paper_budget: Duration::from_secs_f64(self.paper_budget),
                 ..Default::default()
             },

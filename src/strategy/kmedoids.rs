@@ -70,6 +70,8 @@ pub struct Config {
     pub paper_budget: Duration,
     /// Run on the global rayon pool (true) or on one thread (false); results are identical.
     pub parallel: bool,
+    /// Capacity mode: what a growing cluster prefers ([`super::kmedoids_capacity::Grow`]).
+    pub grow: super::kmedoids_capacity::Grow,
 }
 
 impl Default for Config {
@@ -82,6 +84,7 @@ impl Default for Config {
             split_fraction: 0.25,
             paper_budget: Duration::from_secs(300),
             parallel: true,
+            grow: Default::default(),
         }
     }
 }
@@ -188,7 +191,14 @@ pub fn cluster(mesh: &Mesh, limits: Limits, cfg: &Config) -> Clustering {
     let vt = vertex_triangles(mesh);
     let dual = dual_graph(mesh, &vt);
     if cfg.mode == Mode::Capacity {
-        let g = super::kmedoids_capacity::cluster(mesh, &dual, &vt, limits, cfg.max_iterations);
+        let g = super::kmedoids_capacity::cluster(
+            mesh,
+            &dual,
+            &vt,
+            limits,
+            cfg.grow,
+            cfg.max_iterations,
+        );
         let meshlets = pack(mesh, &g.labels, &g.distances, g.medoids.len(), limits);
         let mean_distance = mean(&g.distances);
         return Clustering {

@@ -178,7 +178,7 @@ pub fn split_until_fit(
 }
 
 /// Edge-connected piece of the mesh each triangle lies in (ids in order of first triangle).
-fn pieces(dual: &Csr) -> Vec<u32> {
+pub(crate) fn pieces(dual: &Csr) -> Vec<u32> {
     let mut piece = vec![u32::MAX; dual.rows()];
     let mut queue = Vec::new();
     let mut next = 0;
