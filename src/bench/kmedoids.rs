@@ -14,6 +14,7 @@ use super::{machine_note, plot, today, Common};
 use crate::mesh;
 use crate::meshlet::{bounds, validate, Limits, Metrics};
 use crate::strategy::kmedoids::{cluster, Clustering, Config as KConfig, Mode};
+use crate::strategy::kmedoids_capacity::Grow;
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt::Write as _;
@@ -71,7 +72,7 @@ impl Config {
 
 /// One sweep point.
 struct SweepRow {
-    mode: Mode,
+    mode: Method,
     threshold: f64,
     max_iterations: u32,
     seconds: f64,
@@ -85,7 +86,7 @@ struct SweepRow {
 struct Run {
     mesh: String,
     triangles: usize,
-    mode: Mode,
+    mode: Method,
     /// Median wall time on the rayon pool.
     seconds: f64,
     /// Wall time on one thread (None above `--one-thread-max`, and for paper mode).
@@ -146,13 +147,41 @@ fn connected_where_mesh_is(m: &mesh::Mesh, labels: &[u32], k: usize) -> f64 {
     ok as f64 / k.max(1) as f64
 }
 
-/// The strategy name of a mode.
-fn method(mode: Mode) -> &'static str {
-    match mode {
-        Mode::Capacity => "kmedoids",
-        Mode::Fast => "kmedoids-flat",
-        Mode::Paper => "kmedoids-paper",
-        Mode::Local => "kmedoids-local",
+/// What one row ran: the default, its count-first growth, and the two older methods.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Method {
+    /// `kmedoids` (capacity-aware, growth by centroid distance).
+    Default,
+    /// `kmedoids --kmedoids-grow hops`.
+    Hops,
+    /// `kmedoids-flat`.
+    Flat,
+    /// `kmedoids-paper`.
+    Paper,
+}
+
+impl Method {
+    fn name(self) -> &'static str {
+        match self {
+            Method::Default => "kmedoids",
+            Method::Hops => "kmedoids, grow hops",
+            Method::Flat => "kmedoids-flat",
+            Method::Paper => "kmedoids-paper",
+        }
+    }
+
+    fn config(self) -> KConfig {
+        let (mode, grow) = match self {
+            Method::Default => (Mode::Capacity, Grow::Centre),
+            Method::Hops => (Mode::Capacity, Grow::Hops),
+            Method::Flat => (Mode::Fast, Grow::Centre),
+            Method::Paper => (Mode::Paper, Grow::Centre),
+        };
+        KConfig {
+            mode,
+            grow,
+            ..KConfig::default()
+        }
     }
 }
 
@@ -184,7 +213,7 @@ fn runs_table<'a>() -> Table<'a, Run> {
     Table::new(Style::Padded)
         .col("mesh", Left, |r: &Run| r.mesh.clone())
         .col("triangles", Right, |r| r.triangles.to_string())
-        .col("method", Left, |r| method(r.mode).to_string())
+        .col("method", Left, |r| r.mode.name().to_string())
         .split(
             "seconds",
             Right,
@@ -295,11 +324,11 @@ struct Verdict {
 
 fn verdicts(runs: &[Run]) -> Vec<Verdict> {
     runs.iter()
-        .filter(|r| r.mode == Mode::Capacity)
+        .filter(|r| r.mode == Method::Default)
         .map(|r| {
             let flat = runs
                 .iter()
-                .find(|f| f.mesh == r.mesh && f.mode == Mode::Fast);
+                .find(|f| f.mesh == r.mesh && f.mode == Method::Flat);
             Verdict {
                 mesh: r.mesh.clone(),
                 triangles: r.triangles,
@@ -343,9 +372,9 @@ fn verdict_table<'a>() -> Table<'a, Verdict> {
 fn sweep_table(mesh: &str) -> Table<'_, SweepRow> {
     Table::new(Style::Padded)
         .csv_only("mesh", move |_: &SweepRow| mesh.to_string())
-        .col("method", Left, |r| method(r.mode).to_string())
+        .col("method", Left, |r| r.mode.name().to_string())
         .col("threshold", Right, |r| match r.mode {
-            Mode::Fast => r.threshold.to_string(),
+            Method::Flat => r.threshold.to_string(),
             _ => "-".into(),
         })
         .renamed("max iterations", "max_iterations", Right, |r| {
@@ -375,6 +404,13 @@ fn sweep_table(mesh: &str) -> Table<'_, SweepRow> {
             |r| format!("{:.3}", r.metrics.vertex_fill),
             "vertex_fill",
             |r| format!("{:.5}", r.metrics.vertex_fill),
+        )
+        .split(
+            "radius / diagonal",
+            Right,
+            |r| format!("{:.4}", r.metrics.mean_radius_rel),
+            "mean_radius_rel",
+            |r| format!("{:.6}", r.metrics.mean_radius_rel),
         )
         .renamed("Pareto front", "pareto", Left, |r| {
             if r.pareto { "yes" } else { "" }.to_string()
@@ -445,9 +481,9 @@ fn one_thread<T: Send>(f: impl FnOnce() -> T + Send) -> T {
 pub fn run(cfg: &Config) -> Result<()> {
     let meshes = cfg.common.meshes_dir()?;
     let inputs = corpus(cfg, &meshes)?;
-    let mut modes = vec![Mode::Capacity, Mode::Fast];
+    let mut modes = vec![Method::Default, Method::Hops, Method::Flat];
     if !cfg.skip_paper {
-        modes.push(Mode::Paper);
+        modes.push(Method::Paper);
     }
     let pb = if cfg.common.quiet {
         ProgressBar::hidden()
@@ -473,10 +509,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             let (s, out) = timed(1, || meshopt.build(m, cfg.limits));
             mo_times.push(s);
             mo_out = Some(out);
-            let kc = KConfig {
-                mode: Mode::Capacity,
-                ..KConfig::default()
-            };
+            let kc = Method::Default.config();
             let (s, c) = timed(1, || cluster(m, cfg.limits, &kc));
             km_times.push(s);
             km_out = Some(c);
@@ -487,30 +520,29 @@ pub fn run(cfg: &Config) -> Result<()> {
         let mo_metrics = Metrics::compute(m, &mo, cfg.limits, &mo_bounds, None);
         let meshopt_seconds = super::median(&mo_times);
         for &mode in &modes {
-            if mode == Mode::Paper && scaled {
+            if mode == Method::Paper && scaled {
                 continue;
             }
-            pb.set_message(format!("{name} / {}", method(mode)));
+            pb.set_message(format!("{name} / {}", mode.name()));
             let kc = KConfig {
-                mode,
                 paper_budget: cfg.paper_budget(),
-                ..KConfig::default()
+                ..mode.config()
             };
             let (seconds, c) = match (mode, km_out.take()) {
-                (Mode::Capacity, Some(c)) => (super::median(&km_times), c),
+                (Method::Default, Some(c)) => (super::median(&km_times), c),
                 _ => timed(1, || cluster(m, cfg.limits, &kc)),
             };
-            let seconds_1t = (mode != Mode::Paper && t <= cfg.one_thread_max)
+            let seconds_1t = (mode != Method::Paper && t <= cfg.one_thread_max)
                 .then(|| {
                     let (s, one) = timed(1, || one_thread(|| cluster(m, cfg.limits, &kc)));
                     // Determinism, checked where it is cheap to: one thread = the pool.
                     (one.labels == c.labels && one.medoids == c.medoids)
                         .then_some(s)
-                        .with_context(|| format!("{name}: {} differs on one thread", method(mode)))
+                        .with_context(|| format!("{name}: {} differs on one thread", mode.name()))
                 })
                 .transpose()?;
             validate(m, &c.meshlets, cfg.limits)
-                .with_context(|| format!("{name}: {} produced invalid meshlets", method(mode)))?;
+                .with_context(|| format!("{name}: {} produced invalid meshlets", mode.name()))?;
             let b = bounds::compute_bounds(m, &c.meshlets);
             let metrics = Metrics::compute(
                 m,
@@ -536,7 +568,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         }
     }
     pb.finish_and_clear();
-    let order = |m: Mode| modes.iter().position(|&x| x == m);
+    let order = |m: Method| modes.iter().position(|&x| x == m);
     runs.sort_by_key(|r| (r.triangles, r.mesh.clone(), order(r.mode)));
     let loaded = inputs;
 
@@ -551,33 +583,34 @@ pub fn run(cfg: &Config) -> Result<()> {
     let iterations = [0u32, 1, 2, 4, 8, 16, 32];
     let thresholds = [0.0f64, 0.25, 1.0];
     let mut sweep = Vec::new();
-    for &it in &iterations {
-        let kc = KConfig {
-            mode: Mode::Capacity,
-            max_iterations: it,
-            ..KConfig::default()
-        };
-        let (seconds, c, metrics) = run_one(sm, cfg.limits, kc, cfg.sweep_mesh())?;
-        sweep.push(SweepRow {
-            mode: Mode::Capacity,
-            threshold: 0.0,
-            max_iterations: it,
-            seconds,
-            c,
-            metrics,
-            pareto: false,
-        });
+    for method in [Method::Default, Method::Hops] {
+        for &it in &iterations {
+            let kc = KConfig {
+                max_iterations: it,
+                ..method.config()
+            };
+            let (seconds, c, metrics) = run_one(sm, cfg.limits, kc, cfg.sweep_mesh())?;
+            sweep.push(SweepRow {
+                mode: method,
+                threshold: 0.0,
+                max_iterations: it,
+                seconds,
+                c,
+                metrics,
+                pareto: false,
+            });
+        }
     }
     for &th in &thresholds {
         for &it in &iterations {
             let kc = KConfig {
                 max_iterations: it,
                 shift_threshold: th,
-                ..KConfig::default()
+                ..Method::Flat.config()
             };
             let (seconds, c, metrics) = run_one(sm, cfg.limits, kc, cfg.sweep_mesh())?;
             sweep.push(SweepRow {
-                mode: Mode::Fast,
+                mode: Method::Flat,
                 threshold: th,
                 max_iterations: it,
                 seconds,
@@ -596,20 +629,23 @@ pub fn run(cfg: &Config) -> Result<()> {
         sweep_table(cfg.sweep_mesh()).csv(&sweep),
     )?;
     let series = |y: &dyn Fn(&SweepRow) -> f64| {
-        let mut out = vec![plot::Series {
-            label: "kmedoids (max iterations 0..32)".into(),
-            points: sweep
-                .iter()
-                .filter(|r| r.mode == Mode::Capacity)
-                .map(|r| (r.seconds, y(r)))
-                .collect(),
-        }];
+        let mut out: Vec<plot::Series> = [Method::Default, Method::Hops]
+            .iter()
+            .map(|&m| plot::Series {
+                label: format!("{} (max iterations 0..32)", m.name()),
+                points: sweep
+                    .iter()
+                    .filter(|r| r.mode == m)
+                    .map(|r| (r.seconds, y(r)))
+                    .collect(),
+            })
+            .collect();
         out.extend(thresholds.iter().map(|&th| {
             plot::Series {
                 label: format!("kmedoids-flat, shift threshold {th}"),
                 points: sweep
                     .iter()
-                    .filter(|r| r.mode == Mode::Fast && r.threshold == th)
+                    .filter(|r| r.mode == Method::Flat && r.threshold == th)
                     .map(|r| (r.seconds, y(r)))
                     .collect(),
             }
@@ -667,8 +703,11 @@ pub fn run(cfg: &Config) -> Result<()> {
     let _ = writeln!(s, "Machine: {}.\n", machine_note());
     let _ = writeln!(
         s,
-        "`kmedoids` (the default): clusters grown to the limits one at a time, neighbours merged, capacity-aware \
+        "`kmedoids` (the default): clusters grown to the limits one at a time (among equally cheap triangles the \
+         one nearest the cluster's centroid), neighbours merged, whole small pieces packed, capacity-aware \
          re-assignment from the paper's medoids kept while it helps (src/strategy/kmedoids_capacity.rs). \
+         `kmedoids, grow hops`: the same with `--kmedoids-grow hops` (fewest hops from the seed first: fewer \
+         meshlets, larger spheres). \
          `kmedoids-flat`: nearest-medoid assignment, the largest quarter of overflowing clusters split per \
          round and the mesh re-clustered (the default before; what the GPU kernels run). `kmedoids-paper`: one \
          cluster added and everything re-run per overflow, as the paper does; when its budget of {} s runs out \
@@ -700,12 +739,12 @@ pub fn run(cfg: &Config) -> Result<()> {
     for &(model, tris, secs) in PAPER_TIMES {
         let near = runs
             .iter()
-            .filter(|r| r.mode == Mode::Capacity)
+            .filter(|r| r.mode == Method::Default)
             .min_by_key(|r| (r.triangles as i64 - tris as i64).unsigned_abs())
             .map(|r| {
                 let flat = runs
                     .iter()
-                    .find(|f| f.mesh == r.mesh && f.mode == Mode::Fast)
+                    .find(|f| f.mesh == r.mesh && f.mode == Method::Flat)
                     .map_or(String::new(), |f| {
                         format!(", kmedoids-flat {:.2} s", f.seconds)
                     });
@@ -717,7 +756,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             .unwrap_or_default();
         let paper_run = runs
             .iter()
-            .filter(|r| r.mode == Mode::Paper && model == "Bunny" && r.mesh == "stanford_bunny")
+            .filter(|r| r.mode == Method::Paper && model == "Bunny" && r.mesh == "stanford_bunny")
             .map(|r| {
                 format!(
                     "; paper mode {:.2} s, {} meshlets (paper: 921)",
@@ -736,7 +775,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     );
     let _ = writeln!(
         s,
-        "`kmedoids`: its most capacity-aware re-assignment rounds; `kmedoids-flat`: the iteration limit and \
+        "`kmedoids` and its `hops` growth: their most capacity-aware re-assignment rounds; `kmedoids-flat`: the iteration limit and \
          convergence threshold (mean medoid shift in hops) of its clustering. One run per point. Error: mean \
          hops to the medoid, and the meshlet count. The Pareto front is taken over time and meshlets. Data: \
          kmedoids_sweep.csv.\n\n\
