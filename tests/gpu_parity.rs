@@ -34,6 +34,16 @@ fn every_shared_mesh_gives_identical_results() {
 }
 
 #[test]
+fn stress_meshes_give_identical_results() {
+    let gpu = gpu();
+    for g in generate::stress_set(3) {
+        for limits in [Limits::DEFAULT, Limits::new(64, 84).unwrap()] {
+            assert_parity(&gpu, g.name, &g.mesh, limits);
+        }
+    }
+}
+
+#[test]
 fn randomised_generated_meshes_and_limits() {
     let gpu = gpu();
     // Fixed seeds: generated shapes (open, closed, non-manifold knots) at all presets and a tiny

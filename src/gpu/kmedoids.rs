@@ -223,6 +223,137 @@ const UPDATE_ENTRIES: &[&str] = &[
     "dist_partial",
 ];
 
+/// The kernel modules of the k-medoids family.
+struct Modules {
+    update: Kernels<Params>,
+    assign: Kernels<Params>,
+    split: Kernels<Params>,
+    scan: Scan,
+}
+
+impl Modules {
+    fn new(gpu: &Gpu) -> Self {
+        // One SIMD row per update workgroup on lavapipe (see `UW` in the WGSL).
+        let uw = if gpu.is_cpu() { 8.0 } else { 64.0 };
+        Self {
+            update: Kernels::with_constants::<UpdateBuffers>(
+                gpu,
+                "kmedoids",
+                wgsl!("kmedoids.wgsl"),
+                UPDATE_ENTRIES,
+                &[("UW", uw)],
+            ),
+            assign: Kernels::new::<AssignBuffers>(
+                gpu,
+                "assign",
+                wgsl!("assign.wgsl"),
+                &["clear", "seed", "push"],
+            ),
+            split: Kernels::new::<SplitBuffers>(gpu, "split", wgsl!("split.wgsl"), &["stats"]),
+            scan: Scan::new(gpu),
+        }
+    }
+
+    fn family(&self) -> (Family<'_>, &Scan) {
+        (
+            Family {
+                update: &self.update,
+                assign: &self.assign,
+                split: &self.split,
+            },
+            &self.scan,
+        )
+    }
+}
+
+/// Capacity-aware k-medoids (the default `kmedoids`, [`crate::strategy::kmedoids_capacity`])
+/// with the GPU running its parallel steps: the adjacency, and every medoid update (one workgroup
+/// per cluster: the `update` kernel of `wgsl/kmedoids.wgsl` with every cluster marked changed).
+/// The growth, the merges and the capacity-aware assignment are sequential by nature and run on
+/// the host between the updates, over the adjacency read back from the GPU. The output equals
+/// the CPU's (medoids, labels, distances, iterations, meshlets).
+pub fn cluster_capacity(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    limits: Limits,
+    cfg: &Config,
+) -> Result<GpuClustering, GpuError> {
+    if cfg.mode != Mode::Capacity {
+        return Err(GpuError::Unsupported(
+            "cluster_capacity runs capacity mode (kmedoids); kmedoids-flat is gpu::kmedoids::cluster",
+        ));
+    }
+    let start = Instant::now();
+    let t = mesh.triangle_count();
+    if 2 * t > PART {
+        return Err(GpuError::TooLarge {
+            what: "k-medoids triangles",
+            len: t,
+            max: PART / 2,
+        });
+    }
+    let ak = AdjacencyKernels::new(gpu);
+    let (adj, adj_timing) = ak.build(gpu, mesh)?;
+    let (host, read_s) = timed(|| adj.read(gpu));
+    let host = host?;
+    let modules = Modules::new(gpu);
+    let (family, scan) = modules.family();
+    let mut run = Run::new(gpu, family, scan, &adj, limits)?;
+    run.timing.upload += adj_timing.upload;
+    run.timing.kernel += adj_timing.kernel;
+    run.timing.readback += adj_timing.readback + read_s;
+    let mut failed = None;
+    let g = crate::strategy::kmedoids_capacity::cluster_with(
+        mesh,
+        &host.dual,
+        &host.vertex_triangles,
+        limits,
+        cfg.grow,
+        cfg.max_iterations,
+        &mut |labels, medoids| {
+            if failed.is_some() {
+                return medoids.to_vec();
+            }
+            run.medoids_of(labels, medoids).unwrap_or_else(|e| {
+                failed = Some(e);
+                medoids.to_vec()
+            })
+        },
+    );
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    let meshlets = pack(mesh, &g.labels, &g.distances, g.medoids.len(), limits);
+    let mean_distance =
+        g.distances.iter().map(|&d| d as f64).sum::<f64>() / g.distances.len().max(1) as f64;
+    Ok(GpuClustering {
+        clustering: Clustering {
+            medoids: g.medoids,
+            labels: g.labels,
+            distances: g.distances,
+            iterations: g.iterations,
+            splits: 0,
+            budget_exhausted: false,
+            initial_mean_distance: mean_distance,
+            initial_iterations: 0,
+            initial_seconds: start.elapsed().as_secs_f64(),
+            skipped_updates: 0,
+            meshlets,
+        },
+        timing: Timing {
+            readback: run.timing.readback + run.readback.get(),
+            kernel: run.timing.kernel + run.kernel.get(),
+            ..run.timing
+        },
+        adjacency_kernel: adj_timing.kernel,
+        large_updates: run.large,
+        bfs_rounds: 0,
+        deep_submissions: 0,
+        updates: run.updates,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
 /// Runs fast-mode k-medoids on the GPU.
 pub fn cluster(
     gpu: &Gpu,
@@ -246,29 +377,9 @@ pub fn cluster(
     }
     let ak = AdjacencyKernels::new(gpu);
     let (adj, adj_timing) = ak.build(gpu, mesh)?;
-    // One SIMD row per update workgroup on lavapipe (see `UW` in the WGSL).
-    let uw = if gpu.is_cpu() { 8.0 } else { 64.0 };
-    let kernels = Kernels::with_constants::<UpdateBuffers>(
-        gpu,
-        "kmedoids",
-        wgsl!("kmedoids.wgsl"),
-        UPDATE_ENTRIES,
-        &[("UW", uw)],
-    );
-    let assign_kernels = Kernels::new::<AssignBuffers>(
-        gpu,
-        "assign",
-        wgsl!("assign.wgsl"),
-        &["clear", "seed", "push"],
-    );
-    let split_kernels = Kernels::new::<SplitBuffers>(gpu, "split", wgsl!("split.wgsl"), &["stats"]);
-    let scan = Scan::new(gpu);
-    let family = Family {
-        update: &kernels,
-        assign: &assign_kernels,
-        split: &split_kernels,
-    };
-    let mut run = Run::new(gpu, family, &scan, &adj, limits)?;
+    let modules = Modules::new(gpu);
+    let (family, scan) = modules.family();
+    let mut run = Run::new(gpu, family, scan, &adj, limits)?;
     run.timing.upload += adj_timing.upload;
     run.timing.kernel += adj_timing.kernel;
     run.timing.readback += adj_timing.readback;
@@ -634,6 +745,35 @@ impl<'a> Run<'a> {
             return Ok(medoids);
         }
         self.read(&self.medoids, 0, k)
+    }
+
+    /// The paper's medoid of every cluster of `labels` (`medoids[c]`: any member of cluster c): the
+    /// update kernel with every cluster marked changed (nothing ever calls `remember` in this
+    /// use, so no triangle remembers a medoid and `dirty_mark` marks every cluster).
+    fn medoids_of(&mut self, labels: &[u32], medoids: &[u32]) -> Result<Vec<u32>, GpuError> {
+        let k = medoids.len();
+        self.upload_medoids(medoids)?;
+        let (_, s) = timed(|| {
+            self.gpu
+                .queue
+                .write_buffer(&self.labels, 0, bytemuck::cast_slice(labels))
+        });
+        self.timing.upload += s;
+        self.bind_mem_scan(k);
+        let (kern, bind, t) = (self.family.update, &self.bind, self.t);
+        let mem_scan = &self.mem_scan.as_ref().expect("bound").1;
+        let p = self.params(k, 0, 0);
+        let mut b = Batch::new(self.gpu);
+        b.threads(kern, "clear_counters", bind, p, COUNTERS);
+        b.threads(kern, "dirty_clear", bind, p, k);
+        b.threads(kern, "medoid_index", bind, p, k);
+        b.threads(kern, "dirty_mark", bind, p, t);
+        self.record_members(&mut b, k, mem_scan);
+        b.groups(kern, "update", bind, p, k as u32);
+        let mut out = self.run(b, &[(&self.result, 0, k), (&self.counters, 0, COUNTERS)])?;
+        self.large += out[1][LARGE];
+        self.updates += k as u64;
+        Ok(out.swap_remove(0))
     }
 
     /// Sum of hop distances (the k-medoids objective times T).

@@ -162,6 +162,38 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
         ))
         .collect(),
     ));
+    // Capacity-aware k-medoids (the default): host growth, GPU adjacency and medoid updates.
+    let cap = Config {
+        mode: kmedoids::Mode::Capacity,
+        ..Config::default()
+    };
+    let (c_cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, &cap));
+    let (c_gpu, gpu_s) = timed(|| super::kmedoids::cluster_capacity(gpu, mesh, limits, &cap));
+    let c_gpu = c_gpu?.clustering;
+    out.push(check(
+        "k-medoids (capacity-aware, the default): medoids, labels, distances, iterations, meshlets",
+        cpu_s,
+        gpu_s,
+        vec![
+            first_difference("medoids", &c_gpu.medoids, &c_cpu.medoids),
+            first_difference("labels", &c_gpu.labels, &c_cpu.labels),
+            first_difference("distances", &c_gpu.distances, &c_cpu.distances),
+            (c_gpu.iterations != c_cpu.iterations).then(|| {
+                format!(
+                    "iterations: GPU {}, CPU {}",
+                    c_gpu.iterations, c_cpu.iterations
+                )
+            }),
+        ]
+        .into_iter()
+        .chain(meshlet_differences(
+            mesh,
+            limits,
+            &c_gpu.meshlets,
+            &c_cpu.meshlets,
+        ))
+        .collect(),
+    ));
     // Bounding spheres of the k-medoids meshlets.
     let ml = &cpu.meshlets;
     let (cpu_spheres, cpu_s) = timed(|| {

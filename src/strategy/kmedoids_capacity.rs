@@ -66,6 +66,32 @@ pub fn cluster(
     grow: Grow,
     max_iterations: u32,
 ) -> Grown {
+    cluster_with(
+        mesh,
+        dual,
+        vt,
+        limits,
+        grow,
+        max_iterations,
+        &mut |labels, medoids| update(dual, labels, medoids).medoids,
+    )
+}
+
+/// The paper's medoid of every cluster: `(labels, any member of each cluster) -> medoids`, same
+/// cluster order. [`update`] on the CPU; the GPU's `update` kernel in
+/// `gpu::kmedoids::cluster_capacity`. Both are exact, so the results are identical.
+pub type MedoidUpdate<'a> = dyn FnMut(&[u32], &[u32]) -> Vec<u32> + 'a;
+
+/// [`cluster`] with the medoid update supplied (the one step that is parallel per cluster).
+pub fn cluster_with(
+    mesh: &Mesh,
+    dual: &Csr,
+    vt: &Csr,
+    limits: Limits,
+    grow: Grow,
+    max_iterations: u32,
+    medoids_of: &mut MedoidUpdate<'_>,
+) -> Grown {
     let order = morton_order(mesh);
     let mut labels = vec![FREE; mesh.triangle_count()];
     let mut seeds = Vec::new();
@@ -74,7 +100,7 @@ pub fn cluster(
     let mut medoids = seeds;
     merge_neighbours(mesh, dual, vt, limits, &mut medoids, &mut labels);
     pack_pieces(mesh, vt, limits, &mut medoids, &mut labels);
-    let mut best = finish(dual, medoids, labels);
+    let mut best = finish(dual, medoids, labels, medoids_of);
     let mut iterations = 0;
     for _ in 0..max_iterations {
         iterations += 1;
@@ -90,9 +116,8 @@ pub fn cluster(
             // More clusters: rejected before the exact medoids are paid for.
             break;
         }
-        let next = finish(dual, medoids, labels);
+        let next = finish(dual, medoids, labels, medoids_of);
         let better = (next.0.len(), objective(&next.2)) < (best.0.len(), objective(&best.2));
-
         if !better {
             break;
         }
@@ -235,8 +260,9 @@ fn finish(
     dual: &Csr,
     mut medoids: Vec<u32>,
     mut labels: Vec<u32>,
+    medoids_of: &mut MedoidUpdate<'_>,
 ) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
-    medoids = update(dual, &labels, &medoids).medoids;
+    medoids = medoids_of(&labels, &medoids);
     renumber(&mut medoids, &mut labels);
     let mut distances = vec![0; labels.len()];
     refresh_distances(dual, &medoids, &labels, &mut distances);
@@ -279,6 +305,10 @@ pub fn seed_clusters(
     seeds: &mut Vec<u32>,
 ) {
     let (max_v, max_t) = (limits.max_vertices as usize, limits.max_triangles as usize);
+    // Keys read a triangle's centroid every time they are (re)computed: compute each once.
+    let centroids: Vec<glam::Vec3> = (0..labels.len() as u32)
+        .map(|t| centroid(mesh, t))
+        .collect();
     // Stamps: the cluster that last marked a vertex / queued a triangle (no clearing per cluster).
     let mut vmark = vec![FREE; mesh.vertex_count()];
     let mut queued = vec![FREE; labels.len()];
@@ -308,7 +338,7 @@ pub fn seed_clusters(
         queued[seed as usize] = c;
         level[seed as usize] = 0;
         let mut sum = glam::Vec3::ZERO;
-        let centre = centroid(mesh, seed);
+        let centre = centroids[seed as usize];
         let key =
             |t: u32, vmark: &[u32], labels: &[u32], level: &[u32], centre: glam::Vec3| -> Key {
                 (
@@ -325,7 +355,7 @@ pub fn seed_clusters(
                         Grow::Hops => level[t as usize],
                     },
                     // Non-negative floats order as their bits.
-                    (centroid(mesh, t) - centre).length_squared().to_bits(),
+                    (centroids[t as usize] - centre).length_squared().to_bits(),
                     t,
                 )
             };
@@ -360,7 +390,7 @@ pub fn seed_clusters(
             }
             labels[t as usize] = c;
             nt += 1;
-            sum += centroid(mesh, t);
+            sum += centroids[t as usize];
             for v in mesh.triangle(t as usize) {
                 if vmark[v as usize] != c {
                     vmark[v as usize] = c;

@@ -245,9 +245,25 @@ pub(crate) fn merge_neighbours(
     let mut order: Vec<u32> = (0..k as u32).collect();
     order.sort_unstable_by_key(|&c| (tris[c as usize].len(), c));
     let mut merged = vec![false; k];
+    // On a mesh of one edge-connected piece every merge goes across an edge.
+    let one_piece = piece.iter().all(|&p| p == 0);
     for a in order {
         if into[a as usize] != a {
             continue;
+        }
+        if one_piece {
+            // Cheap test first (most clusters are near full): an edge-neighbour small enough
+            // for the triangle limit, else no neighbour can fit and the count below is skipped.
+            let room = (limits.max_triangles as usize).saturating_sub(tris[a as usize].len());
+            let any = tris[a as usize].iter().any(|&t| {
+                dual.row(t as usize).iter().any(|&u| {
+                    let b = find(&into, labels[u as usize]);
+                    b != a && tris[b as usize].len() <= room
+                })
+            });
+            if !any {
+                continue;
+            }
         }
         // (shared vertices, edge-adjacent) per neighbouring cluster.
         let mut near: std::collections::BTreeMap<u32, (u32, bool)> = Default::default();
