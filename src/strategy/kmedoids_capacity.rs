@@ -29,6 +29,10 @@
 //! cluster is edge-connected (it grows across edges) and the merge keeps it so wherever the mesh
 //! is. Determinism: the growth and the merge are sequential in a fixed order; the medoid update is a
 //! parallel map. The same input gives the same output for any thread count.
+//!
+//! On the GPU (`gpu::kmedoids::cluster_capacity`) the adjacency and the medoid updates (step 2,
+//! the one step that is parallel per cluster) run as kernels and the rest on the host between
+//! them, through [`cluster_with`]; the output is identical.
 
 use super::kmedoids::update;
 #[cfg(test)]
