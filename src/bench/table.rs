@@ -174,12 +174,22 @@ impl<'a, R> Table<'a, R> {
         for r in rows {
             let fields: Vec<String> = cols
                 .iter()
-                .map(|c| c.csv_cell.as_ref().unwrap_or(&c.cell)(r))
+                .map(|c| quoted(c.csv_cell.as_ref().unwrap_or(&c.cell)(r)))
                 .collect();
             s.push_str(&fields.join(","));
             s.push('\n');
         }
         s
+    }
+}
+
+/// A CSV field as RFC 4180 writes it: in double quotes (inner quotes doubled) when it holds a
+/// comma, a quote or a line break, else as it is.
+fn quoted(field: String) -> String {
+    if field.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", field.replace('"', "\"\""))
+    } else {
+        field
     }
 }
 
@@ -215,6 +225,11 @@ mod tests {
         assert_eq!(
             table(Style::Padded).csv(&rows),
             "name,time_ms,valid\na,1.250,true\nbunny,12.500,true\n"
+        );
+        // A field with a comma or a quote is quoted, so the row keeps its columns.
+        assert_eq!(
+            table(Style::Compact).csv(&[("kmedoids, \"hops\"", 1.0)]),
+            "name,time_ms,valid\n\"kmedoids, \"\"hops\"\"\",1.000,true\n"
         );
     }
 }
