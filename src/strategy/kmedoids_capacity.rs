@@ -7,17 +7,20 @@
 //! meshoptimizer's count) and two thirds of the iterations are global re-runs
 //! (../shared/notes/kmedoids-scale.md). Here the limits are part of the assignment:
 //!
-//! 1. [`seed_clusters`]: one cluster at a time grows from a seed, taking the frontier triangle
-//!    that adds the fewest vertices, then the most enclosed one, then the one nearest the seed in
-//!    hops ([`Key`]), while the cluster stays within both limits. The next seed is the rejected
-//!    frontier triangle with the most taken neighbours (a corner: starting there leaves no sliver
-//!    behind), else the next free triangle in Morton order of centroids.
+//! 1. [`seed_clusters`]: one cluster at a time grows from a seed while both limits hold, taking
+//!    the frontier triangle that adds the fewest vertices, then the most enclosed one, then
+//!    ([`Grow`]) the one nearest the cluster's running centroid, or the one fewest hops from the
+//!    seed. The next seed is the rejected frontier triangle with the most taken neighbours (a
+//!    corner: starting there leaves no sliver behind), else the next free triangle in Morton order
+//!    of centroids.
 //! 2. [`update`]: the paper's medoid of each cluster (smallest sum of in-cluster hop distances,
 //!    ties to the lowest id), all members' sums at once by bitset reachability.
 //! 3. [`assign_capacity`]: a level-synchronous multi-source BFS from all medoids at once in which
 //!    a triangle joins the nearest medoid *whose cluster still has room* (ties to the lower
 //!    cluster). Triangles no cluster has room for are grown into new clusters as in step 1.
-//! 4. [`merge_neighbours`]: neighbouring clusters whose union fits are merged, smallest first.
+//! 4. `merge_neighbours` (shared with `kmedoids-local`): neighbouring clusters whose union fits
+//!    are merged, smallest first; then clusters that share no vertex with any other (whole small
+//!    pieces of the mesh) join the nearest cluster whose union fits.
 //! 5. Steps 2-4 repeat while the cluster count does not grow and the objective (mean hop distance
 //!    to the medoid) falls; the best clustering seen is kept. On most meshes the first round
 //!    already adds clusters (regions grown all at once leave gaps no cluster has room for) and is
