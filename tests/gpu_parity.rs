@@ -161,3 +161,13 @@ fn paper_mode_is_refused_with_a_clear_error() {
             .expect("paper mode is CPU-only");
     assert!(e.to_string().contains("paper mode"), "{e}");
 }
+
+#[test]
+fn copy_kernel_copies_and_measures_a_bandwidth() {
+    let gpu = gpu();
+    // 1 MiB + 20 bytes: rounded down to whole 16-byte elements; the kernel's output is checked
+    // inside (a wrong copy is an error).
+    let b = meshletlab::gpu::copy::bandwidth(&gpu, (1 << 20) + 20, 3).unwrap();
+    assert_eq!(b.bytes, 2 << 20);
+    assert!(b.seconds > 0.0 && b.per_second().is_finite());
+}

@@ -12,7 +12,7 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{machine_note, today, Common};
+use super::{floor, machine_note, today, Common};
 use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::gpu::{self, timed as secs, Gpu, Profile};
 use crate::mesh::{self, subdivide::subdivide, Mesh};
@@ -36,6 +36,10 @@ pub struct Config {
     /// Above this many triangles, skip the GPU k-medoids (rayon still runs).
     #[arg(long, default_value_t = 16_000_000)]
     pub kmedoids_gpu_max: usize,
+    /// Above this many triangles, skip the flat method's GPU run (7.7 min on lavapipe for the
+    /// 14 M-triangle dragon; its rayon run stays).
+    #[arg(long, default_value_t = 4_000_000)]
+    pub flat_gpu_max: usize,
     /// Above this many triangles, skip the one-thread CPU runs and the GPU grower.
     #[arg(long, default_value_t = 4_000_000)]
     pub one_thread_max: usize,
@@ -54,6 +58,9 @@ impl Config {
 struct Row {
     mesh: String,
     triangles: usize,
+    vertices: usize,
+    /// Dual-graph items (edge-adjacent pairs, both ways).
+    dual_items: usize,
     adj_cpu: f64,
     adj_gpu: gpu::adjacency::Timing,
     km_cpu1: Option<f64>,
@@ -61,6 +68,8 @@ struct Row {
     km_gpu: Option<KGpu>,
     /// Per-kernel profile of a second GPU k-medoids run (bunny and the dragon).
     profile: Option<Profile>,
+    /// The same for the capacity-aware method.
+    cap_profile: Option<Profile>,
     meshlets: usize,
     iterations: u32,
     grow: Vec<GrowRow>,
@@ -171,6 +180,11 @@ pub fn run(cfg: &Config) -> Result<()> {
     gpu::adjacency::adjacency(&g, &warm)?;
     gpu::kmedoids::cluster(&g, &warm, cfg.limits, &KConfig::default())?;
     gpu::grow::grow(&g, &warm, cfg.limits, parallel::DEFAULT_SPACING)?;
+    // The bandwidths the physical limits are taken at (64 MiB copied on the GPU, 256 MiB on the
+    // host; medians).
+    say("measuring memory bandwidth".into());
+    let copy = gpu::copy::bandwidth(&g, 64 << 20, 7)?;
+    let host_copy = floor::memcpy(256 << 20, 5);
     let load = |stem: &str| -> Result<Mesh> {
         let p = meshes.join(format!("{stem}.ply.zst"));
         mesh::load(&p).with_context(|| format!("bench gpu needs {}", p.display()))
@@ -215,6 +229,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         if host.vertex_triangles != vt || host.dual != dual {
             bail!("{name}: GPU adjacency differs from the CPU's");
         }
+        let dual_items = dual.items.len();
         drop((vt, host));
         pb.set_message(format!("{name} ({t} triangles): growers"));
         let grow = growers(&g, m, &dual, cfg.limits, t <= cfg.one_thread_max, &one)
@@ -228,7 +243,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         } else {
             None
         };
-        let km_gpu = if t <= cfg.kmedoids_gpu_max {
+        let km_gpu = if t <= cfg.kmedoids_gpu_max.min(cfg.flat_gpu_max) {
             pb.set_message(format!("{name} ({t} triangles): k-medoids, GPU"));
             let before = g.profile();
             let r = gpu::kmedoids::cluster(&g, m, cfg.limits, &kc)?;
@@ -279,6 +294,19 @@ pub fn run(cfg: &Config) -> Result<()> {
         } else {
             None
         };
+        let cap_profile = if cap_gpu.is_some() && profiled {
+            pb.set_message(format!("{name} ({t} triangles): kmedoids, GPU profile"));
+            g.time_each_kernel(true);
+            let before = g.profile();
+            let r = gpu::kmedoids::cluster_capacity(&g, m, cfg.limits, &capc);
+            g.time_each_kernel(false);
+            if r?.clustering.labels != cap_r.labels {
+                bail!("{name}: profiled GPU capacity-aware k-medoids differs from the CPU's");
+            }
+            Some(g.profile().since(&before))
+        } else {
+            None
+        };
         let cap = Cap {
             meshlets: cap_r.meshlets.len(),
             cpu1: cap_cpu1,
@@ -290,12 +318,15 @@ pub fn run(cfg: &Config) -> Result<()> {
         rows.push(Row {
             mesh: name.clone(),
             triangles: t,
+            vertices: m.vertex_count(),
+            dual_items,
             adj_cpu,
             adj_gpu,
             km_cpu1,
             km_rayon,
             km_gpu,
             profile,
+            cap_profile,
             meshlets: cr.meshlets.len(),
             iterations: cr.iterations,
             grow,
@@ -341,7 +372,16 @@ pub fn run(cfg: &Config) -> Result<()> {
             gr.seconds,
         ));
     }
-    write(cfg, &g, &rows, &curve, &sweep)
+    let floors = Floors { copy, host_copy };
+    write(cfg, &g, &rows, &curve, &sweep, &floors)
+}
+
+/// The measured bandwidths the physical limits are taken at.
+struct Floors {
+    /// The copy kernel on the adapter.
+    copy: gpu::copy::Bandwidth,
+    /// Host memcpy, bytes per second: one thread, every rayon thread.
+    host_copy: (f64, f64),
 }
 
 /// The serial growers, meshoptimizer and the parallel grower (CPU one thread, rayon, GPU; the
@@ -482,6 +522,63 @@ Kernel time per entry point (GPU timestamps around each dispatch, in a second ru
     Ok(())
 }
 
+/// The physical limit per kernel on the largest profiled mesh (both methods' profiled runs):
+/// writes the section, returns its rows for gpu_floor.csv.
+fn write_floors(md: &mut String, rows: &[Row], f: &Floors) -> Result<Vec<floor::Row>> {
+    let gb = |x: f64| x / 1e9;
+    writeln!(
+        md,
+        "## The physical limit per kernel
+"
+    )?;
+    writeln!(md, "Measured bandwidth (bytes read plus bytes written per second, medians): the copy kernel (`wgsl/copy.wgsl`, {:.0} MiB) on the adapter **{:.1} GB/s**; host `memcpy` of 256 MiB on one thread {:.1} GB/s, on {} threads at once {:.1} GB/s.\n",
+        f.copy.bytes as f64 / 2.0 / (1u64 << 20) as f64,
+        gb(f.copy.per_second()),
+        gb(f.host_copy.0),
+        rayon::current_num_threads(),
+        gb(f.host_copy.1))?;
+    let Some(r) = rows
+        .iter()
+        .rev()
+        .find(|r| r.profile.is_some() || r.cap_profile.is_some())
+    else {
+        writeln!(md, "No run was profiled.\n")?;
+        return Ok(Vec::new());
+    };
+    let sizes = |share: f64| floor::Sizes {
+        t: r.triangles as u64,
+        v: r.vertices as u64,
+        e: r.dual_items as u64,
+        update_share: share,
+    };
+    let flat_share = r.km_gpu.as_ref().map_or(1.0, |k| {
+        (k.updates - k.skipped) as f64 / k.updates.max(1) as f64
+    });
+    let mut out = Vec::new();
+    if let Some(p) = &r.profile {
+        out.extend(floor::rows("kmedoids-flat", p, &sizes(flat_share), &f.copy));
+    }
+    if let Some(p) = &r.cap_profile {
+        out.extend(floor::rows("kmedoids", p, &sizes(1.0), &f.copy));
+    }
+    writeln!(md, "{} ({} triangles, {} vertices, {} dual items; T, V, E below), the profiled runs above. *Must move*: every array the kernel touches, once, in 32-bit words: the least its job allows. The floor is that traffic at the copy kernel's bandwidth; measured / floor says how far a kernel is from being bandwidth-bound (far above 1: bound by dispatches, dependent loads or divergence instead). The flat method's `update` skips unchanged clusters: its share is the {:.2} of cluster updates that ran. The last column is the same traffic at an H100's 3.35 TB/s: **a projection, not a measurement** (no GPU was lent to this run). Kernels left out (prefix sums over arrays of several lengths, per-cluster bookkeeping) are a few percent of the time. Data: gpu_floor.csv.\n",
+        r.mesh, r.triangles, r.vertices, r.dual_items, flat_share)?;
+    writeln!(md, "{}", floor::table().markdown(&out))?;
+    for run in ["kmedoids-flat", "kmedoids"] {
+        let (m, fl, b): (f64, f64, f64) = out
+            .iter()
+            .filter(|x| x.run == run)
+            .fold((0.0, 0.0, 0.0), |a, x| {
+                (a.0 + x.seconds, a.1 + x.floor(), a.2 + x.bytes)
+            });
+        if m > 0.0 {
+            writeln!(md, "{run}: these kernels take {:.1} ms against a floor of {:.1} ms ({:.1}x); at an H100's bandwidth the floor would be {:.1} µs (projection).\n",
+                m * 1e3, fl * 1e3, m / fl.max(f64::MIN_POSITIVE), b / floor::H100_BYTES_PER_S * 1e6)?;
+        }
+    }
+    Ok(out)
+}
+
 /// Adjacency per mesh: gpu.md's first table, and gpu.csv with more digits and the k-medoids
 /// times too (gpu.md shows those in its second table).
 fn adjacency_table<'a>() -> Table<'a, Row> {
@@ -542,7 +639,14 @@ fn adjacency_table<'a>() -> Table<'a, Row> {
         .csv_only("capacity_gpu_kernel_s", move |r| s4(r.cap.gpu.map(|g| g.1)))
 }
 
-fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) -> Result<()> {
+fn write(
+    cfg: &Config,
+    g: &Gpu,
+    rows: &[Row],
+    curve: &[Curve],
+    sweep: &Sweep,
+    floors: &Floors,
+) -> Result<()> {
     std::fs::create_dir_all(&cfg.common.out)?;
     let opt =
         |x: Option<f64>, f: &dyn Fn(f64) -> String| x.map(f).unwrap_or_else(|| "skipped".into());
@@ -615,6 +719,7 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
     }
     writeln!(md)?;
     write_profile(&mut md, rows)?;
+    let floor_rows = write_floors(&mut md, rows, floors)?;
     writeln!(
         md,
         "### Beside the paper's Table 4 (their k-medoids, their machine)\n"
@@ -694,6 +799,10 @@ fn write(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) ->
     )?;
     crate::atomic::write(cfg.common.out.join("gpu.md"), md)?;
     crate::atomic::write(cfg.common.out.join("gpu.csv"), adjacency_table().csv(rows))?;
+    crate::atomic::write(
+        cfg.common.out.join("gpu_floor.csv"),
+        floor::table().csv(&floor_rows),
+    )?;
     let pts = |f: &dyn Fn(&Row) -> Option<f64>| {
         rows.iter()
             .filter_map(|r| f(r).map(|y| (r.triangles as f64, y)))

@@ -9,6 +9,7 @@ pub mod build;
 pub mod compress;
 pub mod compress_render;
 pub mod fidelity;
+pub mod floor;
 pub mod gpu;
 pub mod kmedoids;
 pub mod lod;

@@ -284,24 +284,13 @@ pub fn cluster_capacity(
         ));
     }
     let start = Instant::now();
-    let t = mesh.triangle_count();
-    if 2 * t > PART {
-        return Err(GpuError::TooLarge {
-            what: "k-medoids triangles",
-            len: t,
-            max: PART / 2,
-        });
-    }
-    let ak = AdjacencyKernels::new(gpu);
-    let (adj, adj_timing) = ak.build(gpu, mesh)?;
+    let (adj, adj_timing) = adjacency(gpu, mesh)?;
     let (host, read_s) = timed(|| adj.read(gpu));
     let host = host?;
     let modules = Modules::new(gpu);
     let (family, scan) = modules.family();
-    let mut run = Run::new(gpu, family, scan, &adj, limits)?;
-    run.timing.upload += adj_timing.upload;
-    run.timing.kernel += adj_timing.kernel;
-    run.timing.readback += adj_timing.readback + read_s;
+    let mut run = Run::new(gpu, family, scan, &adj, limits, adj_timing)?;
+    run.timing.readback += read_s;
     let mut failed = None;
     let g = crate::strategy::kmedoids_capacity::cluster_with(
         mesh,
@@ -312,34 +301,20 @@ pub fn cluster_capacity(
         cfg.max_iterations,
         &mut |labels, medoids| {
             if failed.is_some() {
-                return medoids.to_vec();
+                return (medoids.to_vec(), None);
             }
-            run.medoids_of(labels, medoids).unwrap_or_else(|e| {
+            let m = run.medoids_of(labels, medoids).unwrap_or_else(|e| {
                 failed = Some(e);
                 medoids.to_vec()
-            })
+            });
+            (m, None)
         },
     );
     if let Some(e) = failed {
         return Err(e);
     }
-    let meshlets = pack(mesh, &g.labels, &g.distances, g.medoids.len(), limits);
-    let mean_distance =
-        g.distances.iter().map(|&d| d as f64).sum::<f64>() / g.distances.len().max(1) as f64;
     Ok(GpuClustering {
-        clustering: Clustering {
-            medoids: g.medoids,
-            labels: g.labels,
-            distances: g.distances,
-            iterations: g.iterations,
-            splits: 0,
-            budget_exhausted: false,
-            initial_mean_distance: mean_distance,
-            initial_iterations: 0,
-            initial_seconds: start.elapsed().as_secs_f64(),
-            skipped_updates: 0,
-            meshlets,
-        },
+        clustering: Clustering::from_grown(mesh, limits, g, start.elapsed().as_secs_f64()),
         timing: Timing {
             readback: run.timing.readback + run.readback.get(),
             kernel: run.timing.kernel + run.kernel.get(),
@@ -352,6 +327,20 @@ pub fn cluster_capacity(
         updates: run.updates,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// Checks the mesh fits the k-medoids buffers (two words per triangle in one binding), then builds
+/// its adjacency on the GPU.
+fn adjacency(gpu: &Gpu, mesh: &Mesh) -> Result<(DeviceAdjacency, Timing), GpuError> {
+    let t = mesh.triangle_count();
+    if 2 * t > PART {
+        return Err(GpuError::TooLarge {
+            what: "k-medoids triangles",
+            len: t,
+            max: PART / 2,
+        });
+    }
+    AdjacencyKernels::new(gpu).build(gpu, mesh)
 }
 
 /// Runs fast-mode k-medoids on the GPU.
@@ -368,21 +357,10 @@ pub fn cluster(
     }
     let start = Instant::now();
     let t = mesh.triangle_count();
-    if 2 * t > PART {
-        return Err(GpuError::TooLarge {
-            what: "k-medoids triangles",
-            len: t,
-            max: PART / 2,
-        });
-    }
-    let ak = AdjacencyKernels::new(gpu);
-    let (adj, adj_timing) = ak.build(gpu, mesh)?;
+    let (adj, adj_timing) = adjacency(gpu, mesh)?;
     let modules = Modules::new(gpu);
     let (family, scan) = modules.family();
-    let mut run = Run::new(gpu, family, scan, &adj, limits)?;
-    run.timing.upload += adj_timing.upload;
-    run.timing.kernel += adj_timing.kernel;
-    run.timing.readback += adj_timing.readback;
+    let mut run = Run::new(gpu, family, scan, &adj, limits, adj_timing)?;
 
     let mut medoids = initial_medoids(mesh, cluster_size(limits, Mode::Fast));
     let mut host_dual: Option<Csr> = None;
@@ -472,6 +450,7 @@ impl<'a> Run<'a> {
         scan: &'a Scan,
         adj: &DeviceAdjacency,
         limits: Limits,
+        adj_timing: Timing,
     ) -> Result<Self, GpuError> {
         let t = adj.triangles;
         // Cluster capacity: every triangle could be a cluster, but the result buffer holds 4 words
@@ -561,9 +540,10 @@ impl<'a> Run<'a> {
             t,
             k_cap,
             limits,
+            // The run's times start with the adjacency's.
             timing: Timing {
-                upload: up,
-                ..Timing::default()
+                upload: adj_timing.upload + up,
+                ..adj_timing
             },
             readback: std::cell::Cell::new(0.0),
             flag_scan,

@@ -13,6 +13,7 @@
 
 pub mod adjacency;
 pub mod bounds;
+pub mod copy;
 pub mod grow;
 pub mod kmedoids;
 pub mod parity;
@@ -60,6 +61,9 @@ pub enum GpuError {
     /// A readback failed.
     #[error("GPU readback failed: {0}")]
     Readback(String),
+    /// A kernel's output is not what it must be (a driver fault).
+    #[error("GPU kernel output is wrong: {0}")]
+    Wrong(String),
 }
 
 /// Elements per part of a [`Split`] array: 2^25 u32 = 128 MiB, lavapipe's storage-binding limit.

@@ -158,6 +158,30 @@ pub struct Clustering {
 }
 
 impl Clustering {
+    /// A capacity-aware run's clusters (CPU or GPU), packed into meshlets; `seconds` is its wall
+    /// time. It has no initial clustering and no splits: its objective is that of the result.
+    pub fn from_grown(
+        mesh: &Mesh,
+        limits: Limits,
+        g: super::kmedoids_capacity::Grown,
+        seconds: f64,
+    ) -> Self {
+        let meshlets = pack(mesh, &g.labels, &g.distances, g.medoids.len(), limits);
+        Clustering {
+            initial_mean_distance: mean(&g.distances),
+            medoids: g.medoids,
+            labels: g.labels,
+            distances: g.distances,
+            iterations: g.iterations,
+            splits: 0,
+            budget_exhausted: false,
+            initial_iterations: 0,
+            initial_seconds: seconds,
+            skipped_updates: 0,
+            meshlets,
+        }
+    }
+
     /// Mean hop distance of a triangle to its medoid (the k-medoids objective per triangle).
     pub fn mean_distance(&self) -> f64 {
         mean(&self.distances)
@@ -199,21 +223,7 @@ pub fn cluster(mesh: &Mesh, limits: Limits, cfg: &Config) -> Clustering {
             cfg.grow,
             cfg.max_iterations,
         );
-        let meshlets = pack(mesh, &g.labels, &g.distances, g.medoids.len(), limits);
-        let mean_distance = mean(&g.distances);
-        return Clustering {
-            medoids: g.medoids,
-            labels: g.labels,
-            distances: g.distances,
-            iterations: g.iterations,
-            splits: 0,
-            budget_exhausted: false,
-            initial_mean_distance: mean_distance,
-            initial_iterations: 0,
-            initial_seconds: t0.elapsed().as_secs_f64(),
-            skipped_updates: 0,
-            meshlets,
-        };
+        return Clustering::from_grown(mesh, limits, g, t0.elapsed().as_secs_f64());
     }
     let per_cluster = cluster_size(limits, cfg.mode);
     let mut medoids = initial_medoids(mesh, per_cluster);

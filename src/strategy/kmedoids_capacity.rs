@@ -13,8 +13,9 @@
 //!    seed. The next seed is the rejected frontier triangle with the most taken neighbours (a
 //!    corner: starting there leaves no sliver behind), else the next free triangle in Morton order
 //!    of centroids.
-//! 2. [`update`]: the paper's medoid of each cluster (smallest sum of in-cluster hop distances,
-//!    ties to the lowest id), all members' sums at once by bitset reachability.
+//! 2. [`medoids_and_distances`]: the paper's medoid of each cluster (smallest sum of in-cluster
+//!    hop distances, ties to the lowest id), all members' sums at once by bitset reachability,
+//!    and every member's distance to it from the same local graph.
 //! 3. [`assign_capacity`]: a level-synchronous multi-source BFS from all medoids at once in which
 //!    a triangle joins the nearest medoid *whose cluster still has room* (ties to the lower
 //!    cluster). Triangles no cluster has room for are grown into new clusters as in step 1.
@@ -37,13 +38,16 @@
 //! the one step that is parallel per cluster) run as kernels and the rest on the host between
 //! them, through [`cluster_with`]; the output is identical.
 
-use super::kmedoids::update;
 #[cfg(test)]
-use super::kmedoids::{members, LocalGraph, UNREACHED};
-use super::kmedoids_local::{merge_neighbours, refresh_distances, renumber};
+use super::kmedoids::UNREACHED;
+use super::kmedoids::{members, LocalGraph};
+use super::kmedoids_local::{
+    member_distances, merge_neighbours, refresh_distances, renumber, Pieces,
+};
 use crate::adjacency::Csr;
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
+use rayon::prelude::*;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
@@ -60,8 +64,6 @@ pub struct Grown {
     pub distances: Vec<u32>,
     /// Medoid updates run (capacity-aware assignments tried).
     pub iterations: u32,
-    /// Clusters after the seeding growth (before any merge).
-    pub seeded: u32,
 }
 
 /// Runs steps 1-5 with at most `max_iterations` update/assign rounds.
@@ -80,14 +82,39 @@ pub fn cluster(
         limits,
         grow,
         max_iterations,
-        &mut |labels, medoids| update(dual, labels, medoids).medoids,
+        &mut |labels, medoids| medoids_and_distances(dual, labels, medoids.len()),
     )
 }
 
-/// The paper's medoid of every cluster: `(labels, any member of each cluster) -> medoids`, same
-/// cluster order. [`update`] on the CPU; the GPU's `update` kernel in
-/// `gpu::kmedoids::cluster_capacity`. Both are exact, so the results are identical.
-pub type MedoidUpdate<'a> = dyn FnMut(&[u32], &[u32]) -> Vec<u32> + 'a;
+/// The paper's medoid of every cluster: `(labels, any member of each cluster) -> (medoids, each
+/// triangle's hop distance to its new medoid if computed)`, same cluster order.
+/// [`medoids_and_distances`] on the CPU; the GPU's `update` kernel in
+/// `gpu::kmedoids::cluster_capacity` (no distances: the host finds them). Both are exact, so the
+/// results are identical.
+pub type MedoidUpdate<'a> = dyn FnMut(&[u32], &[u32]) -> (Vec<u32>, Option<Vec<u32>>) + 'a;
+
+/// Step 2 on the CPU: each of the `k` clusters' paper medoid (as [`super::kmedoids::update`]
+/// finds it) and every member's distance to it, from one local graph per cluster (a separate
+/// update and distance pass built each twice).
+pub fn medoids_and_distances(dual: &Csr, labels: &[u32], k: usize) -> (Vec<u32>, Option<Vec<u32>>) {
+    let mem = members(labels, k);
+    let rows: Vec<(u32, Vec<u32>)> = (0..k)
+        .into_par_iter()
+        .map(|c| {
+            let m = mem.row(c);
+            let sub = LocalGraph::new(dual, labels, c as u32, m);
+            let best = sub.medoid_index();
+            (m[best], member_distances(&sub, best))
+        })
+        .collect();
+    let mut distances = vec![0; labels.len()];
+    for (c, (_, d)) in rows.iter().enumerate() {
+        for (&t, &x) in mem.row(c).iter().zip(d) {
+            distances[t as usize] = x;
+        }
+    }
+    (rows.into_iter().map(|r| r.0).collect(), Some(distances))
+}
 
 /// [`cluster`] with the medoid update supplied (the one step that is parallel per cluster).
 pub fn cluster_with(
@@ -100,13 +127,16 @@ pub fn cluster_with(
     medoids_of: &mut MedoidUpdate<'_>,
 ) -> Grown {
     let order = morton_order(mesh);
+    let pieces = Pieces::new(dual, vt);
+    // Steps 1 and 4 over the free triangles of `labels`, clusters numbered on from `medoids`.
+    let grow_and_merge = |labels: &mut Vec<u32>, medoids: &mut Vec<u32>| {
+        seed_clusters(mesh, dual, limits, grow, &order, labels, medoids);
+        merge_neighbours(mesh, dual, vt, &pieces, limits, medoids, labels);
+        pack_pieces(mesh, vt, limits, medoids, labels);
+    };
     let mut labels = vec![FREE; mesh.triangle_count()];
-    let mut seeds = Vec::new();
-    seed_clusters(mesh, dual, limits, grow, &order, &mut labels, &mut seeds);
-    let seeded = seeds.len() as u32;
-    let mut medoids = seeds;
-    merge_neighbours(mesh, dual, vt, limits, &mut medoids, &mut labels);
-    pack_pieces(mesh, vt, limits, &mut medoids, &mut labels);
+    let mut medoids = Vec::new();
+    grow_and_merge(&mut labels, &mut medoids);
     let mut best = finish(dual, medoids, labels, medoids_of);
     let mut iterations = 0;
     for _ in 0..max_iterations {
@@ -116,9 +146,7 @@ pub fn cluster_with(
         let mut medoids = best.0.clone();
         assign_capacity(mesh, dual, limits, &medoids, &mut labels);
         // Triangles no cluster had room for start new clusters, grown as in the seeding.
-        seed_clusters(mesh, dual, limits, grow, &order, &mut labels, &mut medoids);
-        merge_neighbours(mesh, dual, vt, limits, &mut medoids, &mut labels);
-        pack_pieces(mesh, vt, limits, &mut medoids, &mut labels);
+        grow_and_merge(&mut labels, &mut medoids);
         if medoids.len() > best.0.len() {
             // More clusters: rejected before the exact medoids are paid for.
             break;
@@ -136,7 +164,6 @@ pub fn cluster_with(
         labels,
         distances,
         iterations,
-        seeded,
     }
 }
 
@@ -169,7 +196,7 @@ fn pack_pieces(mesh: &Mesh, vt: &Csr, limits: Limits, medoids: &mut Vec<u32>, la
     if !isolated.contains(&true) {
         return;
     }
-    let mem = super::kmedoids::members(labels, k);
+    let mem = members(labels, k);
     let mut tris: Vec<usize> = (0..k).map(|c| mem.row(c).len()).collect();
     let mut verts: Vec<usize> = (0..k)
         .map(|c| {
@@ -265,14 +292,18 @@ fn pack_pieces(mesh: &Mesh, vt: &Csr, limits: Limits, medoids: &mut Vec<u32>, la
 /// medoid, and in-cluster distances.
 fn finish(
     dual: &Csr,
-    mut medoids: Vec<u32>,
+    medoids: Vec<u32>,
     mut labels: Vec<u32>,
     medoids_of: &mut MedoidUpdate<'_>,
 ) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
-    medoids = medoids_of(&labels, &medoids);
+    let (mut medoids, distances) = medoids_of(&labels, &medoids);
+    // Renumbering changes cluster ids, not a triangle's distance to its medoid.
     renumber(&mut medoids, &mut labels);
-    let mut distances = vec![0; labels.len()];
-    refresh_distances(dual, &medoids, &labels, &mut distances);
+    let distances = distances.unwrap_or_else(|| {
+        let mut d = vec![0; labels.len()];
+        refresh_distances(dual, &medoids, &labels, &mut d);
+        d
+    });
     (medoids, labels, distances)
 }
 

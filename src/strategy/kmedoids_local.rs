@@ -171,10 +171,60 @@ pub fn split_until_fit(
         }
         rounds += 1;
     }
-    merge_neighbours(mesh, dual, vt, limits, medoids, labels);
+    merge_neighbours(
+        mesh,
+        dual,
+        vt,
+        &Pieces::new(dual, vt),
+        limits,
+        medoids,
+        labels,
+    );
     renumber(medoids, labels);
     refresh_distances(dual, medoids, labels, distances);
     rounds
+}
+
+/// The edge-connected pieces of a mesh: computed once per run, read by every merge.
+pub(crate) struct Pieces {
+    /// Piece of each triangle (ids in order of first triangle).
+    pub of: Vec<u32>,
+    /// Whether the mesh is one piece (then every merge goes across an edge).
+    pub one: bool,
+    /// Per vertex: whether triangles of more than one piece meet there (the only places two
+    /// clusters can touch without sharing an edge and without sharing a piece).
+    pub joint: Vec<bool>,
+}
+
+impl Pieces {
+    pub(crate) fn new(dual: &Csr, vt: &Csr) -> Self {
+        let of = pieces(dual);
+        let one = of.iter().all(|&p| p == 0);
+        let joint = (0..vt.rows())
+            .map(|v| {
+                let row = vt.row(v);
+                !one && row.iter().any(|&t| of[t as usize] != of[row[0] as usize])
+            })
+            .collect();
+        Self { of, one, joint }
+    }
+}
+
+/// How many values two sorted lists share.
+fn shared_count(x: &[u32], y: &[u32]) -> usize {
+    let (mut i, mut j, mut n) = (0, 0, 0);
+    while i < x.len() && j < y.len() {
+        match x[i].cmp(&y[j]) {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => {
+                n += 1;
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    n
 }
 
 /// Edge-connected piece of the mesh each triangle lies in (ids in order of first triangle).
@@ -202,6 +252,85 @@ pub(crate) fn pieces(dual: &Csr) -> Vec<u32> {
     piece
 }
 
+fn sorted(mut v: Vec<u32>) -> Vec<u32> {
+    v.sort_unstable();
+    v.dedup();
+    v
+}
+
+/// Per-cluster sets of a merge pass, built only for the clusters a merge test reads: on most
+/// meshes nearly every cluster is full and fails the cheap triangle test, so building every
+/// cluster's vertex and piece sets up front cost more than the merges (a sixth of the whole run
+/// on the dragon).
+struct Sets<'a> {
+    mesh: &'a Mesh,
+    piece: &'a [u32],
+    mem: Csr,
+    /// Members of a merged cluster; `None`: its row of `mem`.
+    tris: Vec<Option<Vec<u32>>>,
+    /// Sorted distinct vertices, once asked for.
+    verts: Vec<Option<Vec<u32>>>,
+    /// Sorted distinct pieces, once asked for.
+    parts: Vec<Option<Vec<u32>>>,
+}
+
+impl Sets<'_> {
+    fn tris(&self, c: u32) -> &[u32] {
+        self.tris[c as usize]
+            .as_deref()
+            .unwrap_or_else(|| self.mem.row(c as usize))
+    }
+
+    fn verts(&mut self, c: u32) -> &[u32] {
+        if self.verts[c as usize].is_none() {
+            let v = self
+                .tris(c)
+                .iter()
+                .flat_map(|&t| self.mesh.triangle(t as usize))
+                .collect();
+            self.verts[c as usize] = Some(sorted(v));
+        }
+        self.verts[c as usize].as_deref().expect("just set")
+    }
+
+    fn parts(&mut self, c: u32) -> &[u32] {
+        if self.parts[c as usize].is_none() {
+            let p = self
+                .tris(c)
+                .iter()
+                .map(|&t| self.piece[t as usize])
+                .collect();
+            self.parts[c as usize] = Some(sorted(p));
+        }
+        self.parts[c as usize].as_deref().expect("just set")
+    }
+
+    /// Whether no piece of the mesh holds members of both.
+    fn disjoint_parts(&mut self, a: u32, b: u32) -> bool {
+        self.parts(a);
+        self.parts(b);
+        let (x, y) = (&self.parts[a as usize], &self.parts[b as usize]);
+        let (x, y) = (x.as_deref().expect("set"), y.as_deref().expect("set"));
+        x.iter().all(|p| y.binary_search(p).is_err())
+    }
+
+    /// `gone` joins `keep`: the union's members and vertices (both were read by the test that
+    /// chose the merge); its pieces are rebuilt if asked for.
+    fn merge(&mut self, keep: u32, gone: u32) {
+        let t = sorted([self.tris(keep), self.tris(gone)].concat());
+        let mut v = self.verts(keep).to_vec();
+        v.extend_from_slice(self.verts(gone));
+        let v = sorted(v);
+        let (k, g) = (keep as usize, gone as usize);
+        self.tris[k] = Some(t);
+        self.tris[g] = Some(Vec::new());
+        self.verts[k] = Some(v);
+        self.verts[g] = None;
+        self.parts[k] = None;
+        self.parts[g] = None;
+    }
+}
+
 /// Merges neighbouring clusters whose union fits the limits, smallest first (ties to the lower
 /// id; among neighbours, the one sharing most vertices, then the lower id). Bisection leaves
 /// half-full parts, and a mesh whose pieces touch only at vertices (a strut lattice) leaves one
@@ -213,27 +342,21 @@ pub(crate) fn merge_neighbours(
     mesh: &Mesh,
     dual: &Csr,
     vt: &Csr,
+    pieces: &Pieces,
     limits: Limits,
     medoids: &mut Vec<u32>,
     labels: &mut [u32],
 ) {
-    let piece = pieces(dual);
     let k = medoids.len();
     let mem = members(labels, k);
-    let mut tris: Vec<Vec<u32>> = (0..k).map(|c| mem.row(c).to_vec()).collect();
-    let sorted = |mut v: Vec<u32>| {
-        v.sort_unstable();
-        v.dedup();
-        v
+    let mut sets = Sets {
+        mesh,
+        piece: &pieces.of,
+        mem,
+        tris: vec![None; k],
+        verts: vec![None; k],
+        parts: vec![None; k],
     };
-    let mut verts: Vec<Vec<u32>> = tris
-        .iter()
-        .map(|m| sorted(m.iter().flat_map(|&t| mesh.triangle(t as usize)).collect()))
-        .collect();
-    let mut parts: Vec<Vec<u32>> = tris
-        .iter()
-        .map(|m| sorted(m.iter().map(|&t| piece[t as usize]).collect()))
-        .collect();
     // Current cluster of a triangle: follow `into` from its label.
     let mut into: Vec<u32> = (0..k as u32).collect();
     let find = |into: &[u32], mut c: u32| {
@@ -243,74 +366,68 @@ pub(crate) fn merge_neighbours(
         c
     };
     let mut order: Vec<u32> = (0..k as u32).collect();
-    order.sort_unstable_by_key(|&c| (tris[c as usize].len(), c));
+    order.sort_unstable_by_key(|&c| (sets.tris(c).len(), c));
     let mut merged = vec![false; k];
-    // On a mesh of one edge-connected piece every merge goes across an edge.
-    let one_piece = piece.iter().all(|&p| p == 0);
     for a in order {
         if into[a as usize] != a {
             continue;
         }
-        if one_piece {
-            // Cheap test first (most clusters are near full): an edge-neighbour small enough
-            // for the triangle limit, else no neighbour can fit and the count below is skipped.
-            let room = (limits.max_triangles as usize).saturating_sub(tris[a as usize].len());
-            let any = tris[a as usize].iter().any(|&t| {
-                dual.row(t as usize).iter().any(|&u| {
-                    let b = find(&into, labels[u as usize]);
-                    b != a && tris[b as usize].len() <= room
-                })
-            });
-            if !any {
-                continue;
-            }
-        }
-        // (shared vertices, edge-adjacent) per neighbouring cluster.
-        let mut near: std::collections::BTreeMap<u32, (u32, bool)> = Default::default();
-        for &v in &verts[a as usize] {
-            let mut seen_here: Vec<u32> = Vec::new();
-            for &u in vt.row(v as usize) {
-                let b = find(&into, labels[u as usize]);
-                if b != a && !seen_here.contains(&b) {
-                    seen_here.push(b);
-                    near.entry(b).or_default().0 += 1;
-                }
-            }
-        }
-        for &t in &tris[a as usize] {
+        // Candidates: clusters across an edge, and (on a mesh of several pieces) clusters met
+        // at a vertex where pieces join; any other neighbour shares a piece and no edge with
+        // `a`, which would leave the union in more pieces than the mesh. Reading labels across
+        // the joints only, not around every vertex, is most of this pass's saving.
+        let mut cand: Vec<(u32, bool)> = Vec::new();
+        for &t in sets.tris(a) {
             for &u in dual.row(t as usize) {
                 let b = find(&into, labels[u as usize]);
                 if b != a {
-                    near.entry(b).or_default().1 = true;
+                    cand.push((b, true));
                 }
             }
         }
-        let disjoint = |x: &[u32], y: &[u32]| x.iter().all(|p| y.binary_search(p).is_err());
+        if !pieces.one {
+            for &v in sets.verts(a) {
+                if pieces.joint[v as usize] {
+                    for &u in vt.row(v as usize) {
+                        let b = find(&into, labels[u as usize]);
+                        if b != a {
+                            cand.push((b, false));
+                        }
+                    }
+                }
+            }
+        }
+        // One entry per neighbour, edge-adjacent if any entry says so (true sorts last).
+        cand.sort_unstable();
+        cand.reverse();
+        cand.dedup_by_key(|c| c.0);
         let mut best: Option<(u32, u32)> = None;
-        for (&b, &(shared, edge)) in &near {
-            let (ia, ib) = (a as usize, b as usize);
-            if tris[ia].len() + tris[ib].len() > limits.max_triangles as usize
-                || verts[ia].len() + verts[ib].len() - shared as usize
-                    > limits.max_vertices as usize
-                || !(edge || disjoint(&parts[ia], &parts[ib]))
-            {
+        for &(b, edge) in &cand {
+            // Triangles first, then vertices, then pieces: each test reads only what the
+            // previous ones let through.
+            if sets.tris(a).len() + sets.tris(b).len() > limits.max_triangles as usize {
                 continue;
             }
+            let va = sets.verts(a).to_vec();
+            let vb = sets.verts(b);
+            let shared = shared_count(&va, vb);
+            if va.len() + vb.len() - shared > limits.max_vertices as usize {
+                continue;
+            }
+            if !edge && !sets.disjoint_parts(a, b) {
+                continue;
+            }
+            let shared = shared as u32;
             if best.is_none_or(|(s, c)| (shared, std::cmp::Reverse(b)) > (s, std::cmp::Reverse(c)))
             {
                 best = Some((shared, b));
             }
         }
         let Some((_, b)) = best else { continue };
-        let (keep, gone) = (a.min(b) as usize, a.max(b) as usize);
-        into[gone] = keep as u32;
-        merged[keep] = true;
-        let moved = std::mem::take(&mut tris[gone]);
-        tris[keep] = sorted([tris[keep].clone(), moved].concat());
-        let moved = std::mem::take(&mut verts[gone]);
-        verts[keep] = sorted([verts[keep].clone(), moved].concat());
-        let moved = std::mem::take(&mut parts[gone]);
-        parts[keep] = sorted([parts[keep].clone(), moved].concat());
+        let (keep, gone) = (a.min(b), a.max(b));
+        into[gone as usize] = keep;
+        merged[keep as usize] = true;
+        sets.merge(keep, gone);
     }
     // Relabel to the survivors, compact the ids, and give merged clusters their union's medoid.
     let survivors: Vec<u32> = (0..k as u32).filter(|&c| into[c as usize] == c).collect();
@@ -328,9 +445,9 @@ pub(crate) fn merge_neighbours(
             if !merged[c as usize] {
                 return medoids[c as usize];
             }
-            let m = &tris[c as usize];
-            let sub = LocalGraph::new(dual, labels, i as u32, m);
-            m[sub.medoid(&vec![0; m.len()], 0)]
+            let m = sets.tris(c);
+            // All members' distance sums at once (the same medoid as a BFS from each).
+            m[LocalGraph::new(dual, labels, i as u32, m).medoid_index()]
         })
         .collect();
     *medoids = fresh;
@@ -364,23 +481,7 @@ pub(crate) fn refresh_distances(
             let m = mem.row(c as usize);
             let sub = LocalGraph::new(dual, labels, c, m);
             let at = m.binary_search(&medoids[c as usize]).expect("member");
-            let mut d = sub.flood(&[at], None).1;
-            // A cluster joined through a vertex has pieces the medoid does not reach: each is
-            // numbered on after the previous one, from its lowest member.
-            while let Some(u) = d.iter().position(|&x| x == u32::MAX) {
-                let base = d
-                    .iter()
-                    .filter(|&&x| x != u32::MAX)
-                    .max()
-                    .map_or(0, |&x| x + 1);
-                let more = sub.flood(&[u], None).1;
-                for (x, &y) in d.iter_mut().zip(&more) {
-                    if *x == u32::MAX && y != u32::MAX {
-                        *x = base + y;
-                    }
-                }
-            }
-            (c, d)
+            (c, member_distances(&sub, at))
         })
         .collect();
     for (c, d) in rows {
@@ -388,6 +489,26 @@ pub(crate) fn refresh_distances(
             distances[t as usize] = x;
         }
     }
+}
+
+/// Hop distance of every member of `sub` from member `at`. A cluster joined through a vertex has
+/// pieces `at` does not reach: each is numbered on after the previous one, from its lowest member.
+pub(crate) fn member_distances(sub: &LocalGraph, at: usize) -> Vec<u32> {
+    let mut d = sub.flood(&[at], None).1;
+    while let Some(u) = d.iter().position(|&x| x == u32::MAX) {
+        let base = d
+            .iter()
+            .filter(|&&x| x != u32::MAX)
+            .max()
+            .map_or(0, |&x| x + 1);
+        let more = sub.flood(&[u], None).1;
+        for (x, &y) in d.iter_mut().zip(&more) {
+            if *x == u32::MAX && y != u32::MAX {
+                *x = base + y;
+            }
+        }
+    }
+    d
 }
 
 #[cfg(test)]
