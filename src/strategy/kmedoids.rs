@@ -556,6 +556,9 @@ impl LocalGraph {
     /// medoid update's clusters (up to a few hundred members) that is several times less work.
     pub(crate) fn distance_sums(&self) -> Vec<u64> {
         let n = self.len();
+        if n <= 128 {
+            return self.distance_sums_128();
+        }
         let w = n.div_ceil(64);
         let mut cur = vec![0u64; n * w];
         for x in 0..n {
@@ -600,6 +603,50 @@ impl LocalGraph {
         (0..n)
             .map(|x| {
                 let missing = n as u64 - count[x];
+                acc[x] - missing * levels + missing * n as u64
+            })
+            .collect()
+    }
+
+    /// [`Self::distance_sums`] for at most 128 nodes (every cluster that fits a meshlet: the
+    /// presets' triangle limits are at most 128), each reach set one `u128`: no inner loop over
+    /// words, a fifth of the run's medoid time on the dragon. Same sums.
+    fn distance_sums_128(&self) -> Vec<u64> {
+        let n = self.len();
+        let full = n as u32;
+        let mut cur: Vec<u128> = (0..n).map(|x| 1u128 << x).collect();
+        let mut next = vec![0u128; n];
+        let mut count = vec![1u32; n];
+        let mut acc = vec![0u64; n];
+        let mut levels = 0u64;
+        loop {
+            for x in 0..n {
+                acc[x] += (full - count[x]) as u64;
+            }
+            levels += 1;
+            let mut grew = false;
+            for x in 0..n {
+                let mut d = cur[x];
+                if count[x] != full {
+                    for &y in self.row(x) {
+                        d |= cur[y as usize];
+                    }
+                    let c = d.count_ones();
+                    if c != count[x] {
+                        grew = true;
+                        count[x] = c;
+                    }
+                }
+                next[x] = d;
+            }
+            std::mem::swap(&mut cur, &mut next);
+            if !grew {
+                break;
+            }
+        }
+        (0..n)
+            .map(|x| {
+                let missing = (full - count[x]) as u64;
                 acc[x] - missing * levels + missing * n as u64
             })
             .collect()
@@ -754,11 +801,12 @@ mod tests {
     #[test]
     fn distance_sums_equal_one_bfs_per_member() {
         // A tube (cycles, several paths between members) and a cluster in two pieces (the
-        // unreachable members count as the member count).
+        // unreachable members count as the member count); sizes either side of the one-word
+        // (128-node) path.
         let m = generate::knot_tube(40, 8, 1);
         let vt = vertex_triangles(&m);
         let dual = dual_graph(&m, &vt);
-        for pick in [0..150u32, 0..70u32] {
+        for pick in [0..150u32, 0..70u32, 0..128u32, 0..129u32] {
             let mut labels = vec![1u32; m.triangle_count()];
             for t in pick.clone() {
                 labels[t as usize] = 0;
