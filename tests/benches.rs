@@ -27,7 +27,7 @@ const BENCHES: [(&str, &str, &[&str]); 10] = [
     (
         "gpu",
         "# GPU kernels against their CPU references",
-        &["gpu.md", "gpu.csv"],
+        &["gpu.md", "gpu.csv", "gpu_floor.csv"],
     ),
     (
         "render",
