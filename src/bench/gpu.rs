@@ -36,8 +36,8 @@ pub struct Config {
     /// Above this many triangles, skip the GPU k-medoids (rayon still runs).
     #[arg(long, default_value_t = 16_000_000)]
     pub kmedoids_gpu_max: usize,
-    /// Above this many triangles, skip the flat method's GPU run (7.7 min on lavapipe for the
-    /// 14 M-triangle dragon; its rayon run stays).
+    /// Above this many triangles, skip the flat method's GPU run (on lavapipe its 14 M-triangle
+    /// run alone outlasts the rest of the benchmark; its rayon run stays).
     #[arg(long, default_value_t = 4_000_000)]
     pub flat_gpu_max: usize,
     /// Above this many triangles, skip the one-thread CPU runs and the GPU grower.
