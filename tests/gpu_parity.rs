@@ -165,9 +165,9 @@ fn paper_mode_is_refused_with_a_clear_error() {
 #[test]
 fn copy_kernel_copies_and_measures_a_bandwidth() {
     let gpu = gpu();
-    // 1 MiB + 20 bytes: rounded down to whole 16-byte elements; the kernel's output is checked
-    // inside (a wrong copy is an error).
-    let b = meshletlab::gpu::copy::bandwidth(&gpu, (1 << 20) + 20, 3).unwrap();
+    // 1 MiB + 12 bytes: rounded down to whole 16-byte elements (1 MiB); the kernel's output is
+    // checked inside (a wrong copy is an error).
+    let b = meshletlab::gpu::copy::bandwidth(&gpu, (1 << 20) + 12, 3).unwrap();
     assert_eq!(b.bytes, 2 << 20);
     assert!(b.seconds > 0.0 && b.per_second().is_finite());
 }
