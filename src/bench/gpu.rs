@@ -264,16 +264,28 @@ pub fn run(cfg: &Config) -> Result<()> {
         // The profile: the same run again with every dispatch timed on its own (its pass
         // boundaries cost a little, so its times are not the table's).
         let profiled = PROFILED.contains(&name.as_str()) || (cfg.common.smoke && rows.is_empty());
-        let profile = if km_gpu.is_some() && profiled {
-            pb.set_message(format!("{name} ({t} triangles): k-medoids, GPU profile"));
+        // A GPU run again with every kernel timed, checked against the CPU's labels.
+        let profile_run = |what: &str,
+                           run: &dyn Fn()
+            -> Result<gpu::kmedoids::GpuClustering, gpu::GpuError>,
+                           labels: &[u32]|
+         -> Result<Profile> {
+            pb.set_message(format!("{name} ({t} triangles): {what}, GPU profile"));
             g.time_each_kernel(true);
             let before = g.profile();
-            let r = gpu::kmedoids::cluster(&g, m, cfg.limits, &kc);
+            let r = run();
             g.time_each_kernel(false);
-            if r?.clustering.labels != cr.labels {
-                bail!("{name}: profiled GPU k-medoids differs from the CPU's");
+            if r?.clustering.labels != labels {
+                bail!("{name}: profiled GPU {what} differs from the CPU's");
             }
-            Some(g.profile().since(&before))
+            Ok(g.profile().since(&before))
+        };
+        let profile = if km_gpu.is_some() && profiled {
+            Some(profile_run(
+                "k-medoids",
+                &|| gpu::kmedoids::cluster(&g, m, cfg.limits, &kc),
+                &cr.labels,
+            )?)
         } else {
             None
         };
@@ -295,15 +307,11 @@ pub fn run(cfg: &Config) -> Result<()> {
             None
         };
         let cap_profile = if cap_gpu.is_some() && profiled {
-            pb.set_message(format!("{name} ({t} triangles): kmedoids, GPU profile"));
-            g.time_each_kernel(true);
-            let before = g.profile();
-            let r = gpu::kmedoids::cluster_capacity(&g, m, cfg.limits, &capc);
-            g.time_each_kernel(false);
-            if r?.clustering.labels != cap_r.labels {
-                bail!("{name}: profiled GPU capacity-aware k-medoids differs from the CPU's");
-            }
-            Some(g.profile().since(&before))
+            Some(profile_run(
+                "capacity-aware k-medoids",
+                &|| gpu::kmedoids::cluster_capacity(&g, m, cfg.limits, &capc),
+                &cap_r.labels,
+            )?)
         } else {
             None
         };

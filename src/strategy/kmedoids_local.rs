@@ -210,23 +210,6 @@ impl Pieces {
     }
 }
 
-/// How many values two sorted lists share.
-fn shared_count(x: &[u32], y: &[u32]) -> usize {
-    let (mut i, mut j, mut n) = (0, 0, 0);
-    while i < x.len() && j < y.len() {
-        match x[i].cmp(&y[j]) {
-            std::cmp::Ordering::Less => i += 1,
-            std::cmp::Ordering::Greater => j += 1,
-            std::cmp::Ordering::Equal => {
-                n += 1;
-                i += 1;
-                j += 1;
-            }
-        }
-    }
-    n
-}
-
 /// Edge-connected piece of the mesh each triangle lies in (ids in order of first triangle).
 pub(crate) fn pieces(dual: &Csr) -> Vec<u32> {
     let mut piece = vec![u32::MAX; dual.rows()];
@@ -410,10 +393,11 @@ pub(crate) fn merge_neighbours(
             }
             let va = sets.verts(a).to_vec();
             let vb = sets.verts(b);
-            let shared = shared_count(&va, vb);
-            if va.len() + vb.len() - shared > limits.max_vertices as usize {
+            let union = super::qem::union_len(&va, vb);
+            if union > limits.max_vertices as usize {
                 continue;
             }
+            let shared = va.len() + vb.len() - union;
             if !edge && !sets.disjoint_parts(a, b) {
                 continue;
             }

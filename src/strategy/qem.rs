@@ -142,8 +142,8 @@ fn find(parent: &mut [u32], mut x: u32) -> u32 {
     x
 }
 
-/// Size of the union of two sorted lists.
-fn union_len(a: &[u32], b: &[u32]) -> usize {
+/// Size of the union of two sorted, duplicate-free lists.
+pub(crate) fn union_len(a: &[u32], b: &[u32]) -> usize {
     let (mut i, mut j, mut n) = (0, 0, 0);
     while i < a.len() && j < b.len() {
         match a[i].cmp(&b[j]) {
