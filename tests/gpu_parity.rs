@@ -171,3 +171,75 @@ fn copy_kernel_copies_and_measures_a_bandwidth() {
     assert_eq!(b.bytes, 2 << 20);
     assert!(b.seconds > 0.0 && b.per_second().is_finite());
 }
+
+#[test]
+fn capacity_assignment_matches_on_wide_fans_and_conflict_chains() {
+    use meshletlab::gpu::capacity;
+    use meshletlab::strategy::kmedoids_capacity::assign_capacity;
+    let gpu = gpu();
+    // A book of 300 pages on one edge: each page's dual row holds the other 299, more candidates
+    // than a walk sorts in registers (its minimum-search path). Medoids on neighbouring pages
+    // all want the same lowest pages, so each walk settles one more cluster: a conflict chain
+    // as deep as the medoid list, beyond the walks one submission records.
+    let pages = 300u32;
+    let mut book = Mesh {
+        positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],
+        indices: Vec::new(),
+    };
+    for k in 0..pages {
+        let a = k as f32 * std::f32::consts::TAU / pages as f32;
+        book.positions.push([0.5, a.cos(), a.sin()]);
+        book.indices.extend([0, 1, 2 + k]);
+    }
+    let mut deep = false;
+    for (medoids, limits) in [
+        (vec![0u32, 150], Limits::DEFAULT),
+        (vec![3, 7, 11, 200], Limits::new(64, 84).unwrap()),
+        ((10..22).collect::<Vec<u32>>(), Limits::new(8, 6).unwrap()),
+    ] {
+        let mut cpu = vec![u32::MAX; book.triangle_count()];
+        let dual = meshletlab::adjacency::dual_graph(
+            &book,
+            &meshletlab::adjacency::vertex_triangles(&book),
+        );
+        assign_capacity(&book, &dual, limits, &medoids, &mut cpu);
+        let (g, stats) = capacity::assign(&gpu, &book, limits, &medoids).unwrap();
+        assert_eq!(g, cpu, "book, medoids {medoids:?}, limits {limits:?}");
+        assert!(cpu.iter().filter(|&&l| l != u32::MAX).count() > medoids.len());
+        deep |= stats.submissions > stats.levels + 1;
+    }
+    assert!(
+        deep,
+        "no level needed more walks than one submission records"
+    );
+    // Generated meshes with random medoids and small limits: many contested levels.
+    let mut rng = 0x9e37_79b9_7f4a_7c15u64;
+    for g in generate::stress_set(3) {
+        let t = g.mesh.triangle_count() as u64;
+        let dual = meshletlab::adjacency::dual_graph(
+            &g.mesh,
+            &meshletlab::adjacency::vertex_triangles(&g.mesh),
+        );
+        for limits in [Limits::new(8, 6).unwrap(), Limits::DEFAULT] {
+            let mut medoids: Vec<u32> = (0..t / 20)
+                .map(|_| {
+                    rng ^= rng << 13;
+                    rng ^= rng >> 7;
+                    rng ^= rng << 17;
+                    (rng % t) as u32
+                })
+                .collect();
+            medoids.sort_unstable();
+            medoids.dedup();
+            let mut cpu = vec![u32::MAX; t as usize];
+            assign_capacity(&g.mesh, &dual, limits, &medoids, &mut cpu);
+            let (gl, stats) = capacity::assign(&gpu, &g.mesh, limits, &medoids).unwrap();
+            assert_eq!(gl, cpu, "{}, limits {limits:?}", g.name);
+            assert!(
+                stats.walks > stats.levels,
+                "{}: no level was contested",
+                g.name
+            );
+        }
+    }
+}

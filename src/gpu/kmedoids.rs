@@ -149,7 +149,8 @@ pub struct GpuClustering {
     pub adjacency_kernel: f64,
     /// Cluster updates that took the one-thread path (over 256 members or a dense local graph).
     pub large_updates: u32,
-    /// BFS levels run in total (dispatches of `push` that had a frontier).
+    /// BFS levels run in total (dispatches of `push` that had a frontier; in capacity mode the
+    /// capacity-aware assignment's levels).
     pub bfs_rounds: u32,
     /// Extra submissions for assignments deeper than the levels recorded up front (each one a
     /// host round trip beyond the one per iteration).
@@ -267,11 +268,12 @@ impl Modules {
 }
 
 /// Capacity-aware k-medoids (the default `kmedoids`, [`crate::strategy::kmedoids_capacity`])
-/// with the GPU running its parallel steps: the adjacency, and every medoid update (one workgroup
-/// per cluster: the `update` kernel of `wgsl/kmedoids.wgsl` with every cluster marked changed).
-/// The growth, the merges and the capacity-aware assignment are sequential by nature and run on
-/// the host between the updates, over the adjacency read back from the GPU. The output equals
-/// the CPU's (medoids, labels, distances, iterations, meshlets).
+/// with the GPU running its parallel steps: the adjacency, every medoid update (one workgroup
+/// per cluster: the `update` kernel of `wgsl/kmedoids.wgsl` with every cluster marked changed)
+/// and the capacity-aware assignment ([`super::capacity`], level by level to the fixed point that
+/// equals the CPU's sequential order). The seeding growth, the merges and the packing are
+/// sequential by nature and run on the host between them, over the adjacency read back from the
+/// GPU. The output equals the CPU's (medoids, labels, distances, iterations, meshlets).
 pub fn cluster_capacity(
     gpu: &Gpu,
     mesh: &Mesh,
@@ -291,7 +293,8 @@ pub fn cluster_capacity(
     let (family, scan) = modules.family();
     let mut run = Run::new(gpu, family, scan, &adj, limits, adj_timing)?;
     run.timing.readback += read_s;
-    let mut failed = None;
+    let failed = std::cell::RefCell::new(None);
+    let mut cap = super::capacity::CapacityAssign::new(gpu, mesh.triangle_count());
     let g = crate::strategy::kmedoids_capacity::cluster_with(
         mesh,
         &host.dual,
@@ -300,29 +303,45 @@ pub fn cluster_capacity(
         cfg.grow,
         cfg.max_iterations,
         &mut |labels, medoids| {
-            if failed.is_some() {
+            if failed.borrow().is_some() {
                 return (medoids.to_vec(), None);
             }
             let m = run.medoids_of(labels, medoids).unwrap_or_else(|e| {
-                failed = Some(e);
+                *failed.borrow_mut() = Some(e);
                 medoids.to_vec()
             });
             (m, None)
         },
+        &mut |medoids, labels| {
+            if failed.borrow().is_some() {
+                return;
+            }
+            if !super::capacity::CapacityAssign::fits(medoids.len(), limits) {
+                // Cluster lists beyond one binding: the CPU step, whose labels are the same.
+                crate::strategy::kmedoids_capacity::assign_capacity(
+                    mesh, &host.dual, limits, medoids, labels,
+                );
+                return;
+            }
+            match cap.run(gpu, &adj, limits, medoids) {
+                Ok(l) => labels.copy_from_slice(&l),
+                Err(e) => *failed.borrow_mut() = Some(e),
+            }
+        },
     );
-    if let Some(e) = failed {
+    if let Some(e) = failed.into_inner() {
         return Err(e);
     }
     Ok(GpuClustering {
         clustering: Clustering::from_grown(mesh, limits, g, start.elapsed().as_secs_f64()),
         timing: Timing {
             readback: run.timing.readback + run.readback.get(),
-            kernel: run.timing.kernel + run.kernel.get(),
+            kernel: run.timing.kernel + run.kernel.get() + cap.kernel_seconds,
             ..run.timing
         },
         adjacency_kernel: adj_timing.kernel,
         large_updates: run.large,
-        bfs_rounds: 0,
+        bfs_rounds: cap.stats.levels as u32,
         deep_submissions: 0,
         updates: run.updates,
         seconds: start.elapsed().as_secs_f64(),

@@ -13,6 +13,7 @@
 
 pub mod adjacency;
 pub mod bounds;
+pub mod capacity;
 pub mod copy;
 pub mod grow;
 pub mod kmedoids;

@@ -194,6 +194,27 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
         ))
         .collect(),
     ));
+    // The capacity-aware assignment alone, from the final medoids: a run keeps its result only
+    // when the round is accepted, so the whole-run check above can miss a difference here.
+    let (a_cpu, cpu_s) = timed(|| {
+        let mut l = vec![u32::MAX; mesh.triangle_count()];
+        crate::strategy::kmedoids_capacity::assign_capacity(
+            mesh,
+            &dual,
+            limits,
+            &c_cpu.medoids,
+            &mut l,
+        );
+        l
+    });
+    let (a_gpu, gpu_s) = timed(|| super::capacity::assign(gpu, mesh, limits, &c_cpu.medoids));
+    let (a_gpu, _) = a_gpu?;
+    out.push(check(
+        "capacity-aware assignment: labels from the final medoids",
+        cpu_s,
+        gpu_s,
+        vec![first_difference("labels", &a_gpu, &a_cpu)],
+    ));
     // Bounding spheres of the k-medoids meshlets.
     let ml = &cpu.meshlets;
     let (cpu_spheres, cpu_s) = timed(|| {

@@ -129,15 +129,16 @@ fn every_wgsl_file_validates_and_emits_spirv() {
         assert_eq!(spv[0], 0x0723_0203, "{file}: SPIR-V magic");
         n += 1;
     }
-    assert_eq!(n, 9, "the kernel modules in {}", dir.display());
+    assert_eq!(n, 10, "the kernel modules in {}", dir.display());
 }
 
 #[test]
 fn every_module_matches_its_rust_interface() {
-    use super::{adjacency, bounds, copy, grow, kmedoids, scan, select};
+    use super::{adjacency, bounds, capacity, copy, grow, kmedoids, scan, select};
     let bad: Vec<String> = [
         interface::<adjacency::Params, adjacency::Buffers>("adjacency.wgsl"),
         interface::<bounds::Params, bounds::Buffers>("bounds.wgsl"),
+        interface::<capacity::Params, capacity::Buffers>("capacity.wgsl"),
         interface::<copy::Params, copy::Buffers>("copy.wgsl"),
         interface::<grow::Params, grow::Buffers>("grow.wgsl"),
         interface::<kmedoids::Params, kmedoids::UpdateBuffers>("kmedoids.wgsl"),

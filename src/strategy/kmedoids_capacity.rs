@@ -34,9 +34,11 @@
 //! is. Determinism: the growth and the merge are sequential in a fixed order; the medoid update is a
 //! parallel map. The same input gives the same output for any thread count.
 //!
-//! On the GPU (`gpu::kmedoids::cluster_capacity`) the adjacency and the medoid updates (step 2,
-//! the one step that is parallel per cluster) run as kernels and the rest on the host between
-//! them, through [`cluster_with`]; the output is identical.
+//! On the GPU (`gpu::kmedoids::cluster_capacity`) the adjacency, the medoid updates (step 2,
+//! parallel per cluster) and the capacity-aware assignment (step 3: every cluster walks a level at
+//! once, repeated to the fixed point that equals the sequential order, `wgsl/capacity.wgsl`) run
+//! as kernels and the rest on the host between them, through [`cluster_with`]; the output is
+//! identical.
 
 #[cfg(test)]
 use super::kmedoids::UNREACHED;
@@ -83,6 +85,7 @@ pub fn cluster(
         grow,
         max_iterations,
         &mut |labels, medoids| medoids_and_distances(dual, labels, medoids.len()),
+        &mut |medoids, labels| assign_capacity(mesh, dual, limits, medoids, labels),
     )
 }
 
@@ -116,7 +119,14 @@ pub fn medoids_and_distances(dual: &Csr, labels: &[u32], k: usize) -> (Vec<u32>,
     (rows.into_iter().map(|r| r.0).collect(), Some(distances))
 }
 
-/// [`cluster`] with the medoid update supplied (the one step that is parallel per cluster).
+/// Step 3, the capacity-aware assignment: `(medoids, labels all FREE) -> labels`.
+/// [`assign_capacity`] on the CPU; `gpu::capacity::CapacityAssign` on the GPU, with identical
+/// labels.
+pub type Assign<'a> = dyn FnMut(&[u32], &mut [u32]) + 'a;
+
+/// [`cluster`] with the medoid update (step 2) and the capacity-aware assignment (step 3)
+/// supplied: the steps that run on the GPU there.
+#[allow(clippy::too_many_arguments)]
 pub fn cluster_with(
     mesh: &Mesh,
     dual: &Csr,
@@ -125,6 +135,7 @@ pub fn cluster_with(
     grow: Grow,
     max_iterations: u32,
     medoids_of: &mut MedoidUpdate<'_>,
+    assign: &mut Assign<'_>,
 ) -> Grown {
     let order = morton_order(mesh);
     let pieces = Pieces::new(dual, vt);
@@ -144,7 +155,7 @@ pub fn cluster_with(
         // `best`'s medoids are already the paper's medoids of its clusters (step 2 is `finish`).
         let mut labels = vec![FREE; mesh.triangle_count()];
         let mut medoids = best.0.clone();
-        assign_capacity(mesh, dual, limits, &medoids, &mut labels);
+        assign(&medoids, &mut labels);
         // Triangles no cluster had room for start new clusters, grown as in the seeding.
         grow_and_merge(&mut labels, &mut medoids);
         if medoids.len() > best.0.len() {
