@@ -1,5 +1,5 @@
 // Capacity-aware assignment, src/strategy/kmedoids_capacity.rs `assign_capacity`, as kernels:
-//   clear          every triangle free                                   labels = FREE
+//   clear_labels   every triangle free                                   labels = FREE
 //   seed           cluster c takes its medoid: level 0, its corners      the first loop
 //   clear_claims   empties the claim array the next walk writes
 //   walk           one thread per cluster: the free neighbours of its    one cluster's pass over
@@ -76,7 +76,7 @@ fn claim(t: u32, c: u32) {
 }
 
 @compute @workgroup_size(64)
-fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+fn clear_labels(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     for (var t = flat(gid); t < p.t; t += stride(nwg)) {
         labels[t] = NONE;
     }

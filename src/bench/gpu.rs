@@ -77,8 +77,8 @@ struct Row {
     cap: Cap,
 }
 
-/// Capacity-aware k-medoids on one mesh: CPU one thread and rayon, GPU (adjacency and medoid
-/// updates on the GPU, the growth on the host).
+/// Capacity-aware k-medoids on one mesh: CPU one thread and rayon, GPU (adjacency, medoid
+/// updates and capacity-aware assignment on the GPU, the seeding growth and merges on the host).
 struct Cap {
     meshlets: usize,
     cpu1: Option<f64>,
@@ -707,7 +707,7 @@ fn write(
         "## k-medoids, capacity-aware (the default `kmedoids`, {}/{}), whole run including adjacency\n",
         cfg.limits.max_vertices, cfg.limits.max_triangles
     )?;
-    writeln!(md, "The GPU runs the adjacency and every medoid update (one workgroup per cluster, the `update` kernel above); the growth, merges and capacity-aware assignment are sequential and run on the host between them. Outputs identical to the CPU's (checked here and in `make test`).\n")?;
+    writeln!(md, "The GPU runs the adjacency, every medoid update (one workgroup per cluster, the `update` kernel above) and the capacity-aware assignment (`capacity.wgsl`: one thread per cluster walks each BFS level, walks repeated to the fixed point that equals the CPU's sequential order); the seeding growth, merges and packing are sequential and run on the host between them. Outputs identical to the CPU's (checked here and in `make test`).\n")?;
     writeln!(md, "| mesh | triangles | meshlets | CPU 1 thread s | CPU rayon s | GPU s | GPU kernel s | GPU / rayon | medoid updates on the GPU |")?;
     writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     for r in rows {

@@ -128,7 +128,7 @@ impl CapacityAssign {
                 "capacity",
                 wgsl!("capacity.wgsl"),
                 &[
-                    "clear",
+                    "clear_labels",
                     "clear_claims",
                     "clear_counters",
                     "seed",
@@ -216,7 +216,7 @@ impl CapacityAssign {
         // the level's walks.
         let mut b = Batch::new(gpu);
         b.threads(kern, "clear_counters", &bind, base, COUNTERS);
-        b.groups(kern, "clear", &bind, base, gpu.stride_groups(t));
+        b.groups(kern, "clear_labels", &bind, base, gpu.stride_groups(t));
         b.threads(kern, "seed", &bind, Params { slot: OPEN, ..base }, k);
         let mut batch = Some(b);
         let mut stats = AssignStats::default();
