@@ -13,6 +13,17 @@ fn gpu() -> Gpu {
     Gpu::new().unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// Where two label arrays first differ (a whole-array assert_eq would print every label).
+fn same_labels(gpu: &[u32], cpu: &[u32], what: &str) {
+    assert_eq!(gpu.len(), cpu.len(), "{what}: lengths");
+    if let Some(i) = gpu.iter().zip(cpu).position(|(a, b)| a != b) {
+        panic!(
+            "{what}: label of triangle {i}: GPU {}, CPU {}",
+            gpu[i], cpu[i]
+        );
+    }
+}
+
 fn assert_parity(gpu: &Gpu, name: &str, mesh: &Mesh, limits: Limits) {
     for c in parity::run(gpu, mesh, limits).unwrap().checks {
         assert!(
@@ -204,7 +215,11 @@ fn capacity_assignment_matches_on_wide_fans_and_conflict_chains() {
         );
         assign_capacity(&book, &dual, limits, &medoids, &mut cpu);
         let (g, stats) = capacity::assign(&gpu, &book, limits, &medoids).unwrap();
-        assert_eq!(g, cpu, "book, medoids {medoids:?}, limits {limits:?}");
+        same_labels(
+            &g,
+            &cpu,
+            &format!("book, medoids {medoids:?}, limits {limits:?}"),
+        );
         assert!(cpu.iter().filter(|&&l| l != u32::MAX).count() > medoids.len());
         deep |= stats.submissions > stats.levels + 1;
     }
@@ -212,6 +227,28 @@ fn capacity_assignment_matches_on_wide_fans_and_conflict_chains() {
         deep,
         "no level needed more walks than one submission records"
     );
+    // A strip (its dual graph a path) with medoids 200 triangles apart: about 100 levels of three
+    // walks, more than the claim stamps last, so the stamps start again mid-assignment.
+    let n = 1000u32;
+    let mut strip = Mesh {
+        positions: (0..=n)
+            .flat_map(|i| [[i as f32, 0.0, 0.0], [i as f32, 1.0, 0.0]])
+            .collect(),
+        indices: Vec::new(),
+    };
+    for i in 0..n {
+        let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+        strip.indices.extend([a, b, c, b, d, c]);
+    }
+    let dual =
+        meshletlab::adjacency::dual_graph(&strip, &meshletlab::adjacency::vertex_triangles(&strip));
+    let limits = Limits::new(256, 256).unwrap();
+    let medoids: Vec<u32> = (0..10).map(|i| 100 + 200 * i).collect();
+    let mut cpu = vec![u32::MAX; strip.triangle_count()];
+    assign_capacity(&strip, &dual, limits, &medoids, &mut cpu);
+    let (g, stats) = capacity::assign(&gpu, &strip, limits, &medoids).unwrap();
+    same_labels(&g, &cpu, "strip");
+    assert!(stats.walks > 130, "only {} walks: no restamp", stats.walks);
     // Generated meshes with random medoids and small limits: many contested levels.
     let mut rng = 0x9e37_79b9_7f4a_7c15u64;
     for g in generate::stress_set(3) {
@@ -234,11 +271,18 @@ fn capacity_assignment_matches_on_wide_fans_and_conflict_chains() {
             let mut cpu = vec![u32::MAX; t as usize];
             assign_capacity(&g.mesh, &dual, limits, &medoids, &mut cpu);
             let (gl, stats) = capacity::assign(&gpu, &g.mesh, limits, &medoids).unwrap();
-            assert_eq!(gl, cpu, "{}, limits {limits:?}", g.name);
+            same_labels(&gl, &cpu, &format!("{}, limits {limits:?}", g.name));
             assert!(
                 stats.walks > stats.levels,
                 "{}: no level was contested",
                 g.name
+            );
+            // Stamps that run out every other walk: restarts in the middle of contested levels.
+            let (gl, _) = capacity::assign_with_stamps(&gpu, &g.mesh, limits, &medoids, 1).unwrap();
+            same_labels(
+                &gl,
+                &cpu,
+                &format!("{}, limits {limits:?}, restamped", g.name),
             );
         }
     }

@@ -1,24 +1,32 @@
 // Capacity-aware assignment, src/strategy/kmedoids_capacity.rs `assign_capacity`, as kernels:
-//   clear_labels   every triangle free                                   labels = FREE
+//   clear_labels   every triangle free, no claims                        labels = FREE
 //   seed           cluster c takes its medoid: level 0, its corners      the first loop
-//   clear_claims   empties the claim array the next walk writes
 //   walk           one thread per cluster: the free neighbours of its    one cluster's pass over
 //                  last level, ascending, each taken if it fits          its sorted candidates
-//   lost           counts clusters a lower cluster took a triangle from  (the fixed-point test)
-//   commit         the level's takes become labels and the next level    frontier = this level's takes
+//   check          which clusters the next walk must redo                (the fixed-point test)
+//   commit         the level's takes become labels; the next level       frontier = this level's takes
+//                  starts from them
+//   restamp        renumbers the claim stamps when they run out          (bookkeeping)
 //
 // The CPU takes a level's clusters in ascending id, and a cluster skips a triangle a lower cluster
 // took earlier in the same level: a chain of dependencies no thread order can follow. So the walk
 // is iterated (Jacobi on that order): each walk skips what a lower cluster claimed in the previous
-// walk (atomicMin of the cluster id, so the lowest claimant is read whatever the thread order).
-// Cluster 0's walk is exact at once; cluster c's once every lower cluster it meets is. The fixed
-// point, where no cluster's takes change, is the sequential result, so the labels equal the CPU's.
-// A level's first walk reads no claims; if no cluster lost a triangle in it (`lost` counts 0), it
-// is already the fixed point, else walks repeat until one changes nothing (the host reads the
-// counters). A walk at the fixed point reproduces it, so the host may record spare walks.
-// All arithmetic is on u32: the same on every device.
+// walk (atomicMin, so the lowest claimant is read whatever the thread order). Cluster 0's walk is
+// exact at once; cluster c's once every lower cluster it meets is. The fixed point, where no
+// cluster's takes change, is the sequential result, so the labels equal the CPU's.
+// A level's first walk reads no claims. `check` marks for the next walk only the clusters whose
+// inputs changed: one that lost a triangle it took, or one that skipped a triangle no lower
+// cluster holds any more (one that skipped more than SKIP is always redone); the others only
+// claim their takes again, since their walk would repeat itself. The level is done when no
+// cluster is marked, or when a walk changed no cluster's takes (the host reads the counters). A
+// walk at the fixed point reproduces it, so the host may record spare walks.
+//
+// Claims carry a stamp so that nothing is cleared between walks: a claim is (code << 25) | cluster,
+// the code falling by one per walk, so atomicMin lets a newer walk's claim replace an older one,
+// and a reader tells the previous walk's claims by their code. Cluster ids stay below 2^24
+// (gpu::kmedoids refuses larger meshes). All arithmetic is on u32: the same on every device.
 
-struct Params { t: u32, k: u32, max_v: u32, max_t: u32, first: u32, par: u32, slot: u32 }
+struct Params { t: u32, k: u32, max_v: u32, max_t: u32, first: u32, par: u32, slot: u32, code: u32 }
 
 @group(0) @binding(0) var<uniform> p: Params;
 @group(0) @binding(1) var<storage, read> dual_off: array<u32>;
@@ -29,7 +37,8 @@ struct Params { t: u32, k: u32, max_v: u32, max_t: u32, first: u32, par: u32, sl
 @group(0) @binding(6) var<storage, read> medoids: array<u32>;
 // Cluster per triangle, NONE while free (the CPU's FREE).
 @group(0) @binding(7) var<storage, read_write> labels: array<u32>;
-// Lowest cluster that took each triangle in a walk: walk w writes claim_a if w is even, else claim_b.
+// Lowest cluster that took each triangle in a walk, stamped: walk w writes claim_a if w is even,
+// else claim_b.
 @group(0) @binding(8) var<storage, read_write> claim_a: array<atomic<u32>>;
 @group(0) @binding(9) var<storage, read_write> claim_b: array<atomic<u32>>;
 // Each cluster's triangles in the order taken, max_t slots per cluster: committed ones, then the
@@ -40,9 +49,11 @@ struct Params { t: u32, k: u32, max_v: u32, max_t: u32, first: u32, par: u32, sl
 @group(0) @binding(11) var<storage, read_write> cv: array<u32>;
 // Per cluster, STATE words: see the S_ constants.
 @group(0) @binding(12) var<storage, read_write> state: array<u32>;
-@group(0) @binding(13) var<storage, read_write> counters: array<atomic<u32>>;
+// The triangles each cluster's last walk skipped as a lower cluster's, SKIP slots per cluster.
+@group(0) @binding(13) var<storage, read_write> skipped: array<u32>;
+@group(0) @binding(14) var<storage, read_write> counters: array<atomic<u32>>;
 
-const STATE: u32 = 6u;
+const STATE: u32 = 8u;
 // Committed triangles; where the last level starts in ct; committed vertex slots (the medoid's
 // three corners count three, as the CPU's list holds them); the walk's takes and added vertices;
 // 1 while the cluster still grows (it took triangles last level and has room).
@@ -52,6 +63,12 @@ const S_VERTS: u32 = 2u;
 const S_TAKEN: u32 = 3u;
 const S_ADDED: u32 = 4u;
 const S_OPEN: u32 = 5u;
+// 1 when the next walk must redo the cluster; triangles its last walk skipped.
+const S_DIRTY: u32 = 6u;
+const S_SKIPPED: u32 = 7u;
+const SKIP: u32 = 16u;
+// The cluster-id bits of a claim.
+const ID: u32 = 0x1ffffffu;
 // Candidates a walk sorts in registers; a cluster with more (non-manifold fans) finds them in
 // ascending order by repeated minimum search instead: the same sequence, slower.
 const CAND: u32 = 192u;
@@ -59,33 +76,52 @@ const CAND: u32 = 192u;
 fn nb(i: u32) -> u32 { if (i < PART) { return dual_a[i]; } return dual_b[i - PART]; }
 fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART]; }
 
-// The lowest cluster that took t in the previous walk (NONE if none).
-fn claimed(t: u32) -> u32 {
-    if (p.par == 0u) { return atomicLoad(&claim_b[t]); }
-    return atomicLoad(&claim_a[t]);
+fn stamp(key: u32) -> u32 { return key >> 25u; }
+
+// Whether a cluster below c took t in the previous walk (whose claims carry code + 1).
+fn lower_before(t: u32, c: u32) -> bool {
+    var key: u32;
+    if (p.par == 0u) { key = atomicLoad(&claim_b[t]); } else { key = atomicLoad(&claim_a[t]); }
+    return stamp(key) == p.code + 1u && (key & ID) < c;
 }
 
-// Same, in the walk that just ran (`lost` runs after it with its parity).
-fn claimed_now(t: u32) -> u32 {
-    if (p.par == 0u) { return atomicLoad(&claim_a[t]); }
-    return atomicLoad(&claim_b[t]);
+// Same, in the walk that just ran (`check` runs after it with its parameters).
+fn lower_now(t: u32, c: u32) -> bool {
+    var key: u32;
+    if (p.par == 0u) { key = atomicLoad(&claim_a[t]); } else { key = atomicLoad(&claim_b[t]); }
+    return stamp(key) == p.code && (key & ID) < c;
 }
 
 fn claim(t: u32, c: u32) {
-    if (p.par == 0u) { atomicMin(&claim_a[t], c); } else { atomicMin(&claim_b[t], c); }
+    let key = (p.code << 25u) | c;
+    if (p.par == 0u) { atomicMin(&claim_a[t], key); } else { atomicMin(&claim_b[t], key); }
 }
 
 @compute @workgroup_size(64)
 fn clear_labels(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     for (var t = flat(gid); t < p.t; t += stride(nwg)) {
         labels[t] = NONE;
+        atomicStore(&claim_a[t], NONE);
+        atomicStore(&claim_b[t], NONE);
     }
 }
 
+// Before the walk of parity `par`, when the codes run out: the previous walk's claims (`code`)
+// get the code `first` (the host's fresh top code), and every other claim goes.
 @compute @workgroup_size(64)
-fn clear_claims(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
+fn restamp(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     for (var t = flat(gid); t < p.t; t += stride(nwg)) {
-        if (p.par == 0u) { atomicStore(&claim_a[t], NONE); } else { atomicStore(&claim_b[t], NONE); }
+        var a = atomicLoad(&claim_a[t]);
+        var b = atomicLoad(&claim_b[t]);
+        if (p.par == 0u) {
+            b = select(NONE, (p.first << 25u) | (b & ID), stamp(b) == p.code);
+            a = NONE;
+        } else {
+            a = select(NONE, (p.first << 25u) | (a & ID), stamp(a) == p.code);
+            b = NONE;
+        }
+        atomicStore(&claim_a[t], a);
+        atomicStore(&claim_b[t], b);
     }
 }
 
@@ -118,6 +154,7 @@ fn seed(@builtin(global_invocation_id) gid: vec3<u32>) {
     state[s + S_ADDED] = 0u;
     let open = 1u < p.max_t;
     state[s + S_OPEN] = select(0u, 1u, open);
+    state[s + S_DIRTY] = 1u;
     if (open) { atomicAdd(&counters[p.slot], 1u); }
 }
 
@@ -156,6 +193,12 @@ fn walk(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s = c * STATE;
     if (state[s + S_OPEN] == 0u) { return; }
     let count = state[s + S_COUNT];
+    if (state[s + S_DIRTY] == 0u) {
+        // Its inputs did not change: the same takes, claimed again for this walk.
+        let at = c * p.max_t + count;
+        for (var i = 0u; i < state[s + S_TAKEN]; i++) { claim(ct[at + i], c); }
+        return;
+    }
     let verts = state[s + S_VERTS];
     let bt = c * p.max_t;
     let bv = c * p.max_v;
@@ -186,6 +229,7 @@ fn walk(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     var taken = 0u;
     var added = 0u;
+    var skips = 0u;
     var changed = false;
     var i = 0u;
     var last = 0u;
@@ -205,7 +249,11 @@ fn walk(@builtin(global_invocation_id) gid: vec3<u32>) {
         started = true;
         if (count + taken >= p.max_t) { break; }
         // Taken by a lower cluster earlier in this level (as the previous walk has it).
-        if (p.first == 0u && claimed(t) < c) { continue; }
+        if (p.first == 0u && lower_before(t, c)) {
+            if (skips < SKIP) { skipped[c * SKIP + skips] = t; }
+            skips++;
+            continue;
+        }
         let end = bv + verts + added;
         var fresh = 0u;
         for (var j = 0u; j < 3u; j++) {
@@ -228,24 +276,27 @@ fn walk(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (taken != state[s + S_TAKEN]) { changed = true; }
     state[s + S_TAKEN] = taken;
     state[s + S_ADDED] = added;
+    state[s + S_SKIPPED] = skips;
     if (changed) { atomicAdd(&counters[p.slot], 1u); }
 }
 
-// After a walk (same parity): counts into `slot` the clusters that took a triangle a lower cluster
-// took too.
+// After a walk (same parameters): marks the clusters the next walk must redo, counted into `slot`.
 @compute @workgroup_size(64)
-fn lost(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn check(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = flat(gid);
     if (c >= p.k) { return; }
     let s = c * STATE;
     if (state[s + S_OPEN] == 0u) { return; }
+    var dirty = state[s + S_SKIPPED] > SKIP;
     let at = c * p.max_t + state[s + S_COUNT];
-    for (var i = 0u; i < state[s + S_TAKEN]; i++) {
-        if (claimed_now(ct[at + i]) < c) {
-            atomicAdd(&counters[p.slot], 1u);
-            return;
-        }
+    for (var i = 0u; i < state[s + S_TAKEN] && !dirty; i++) {
+        dirty = lower_now(ct[at + i], c);
     }
+    for (var i = 0u; i < state[s + S_SKIPPED] && !dirty; i++) {
+        dirty = !lower_now(skipped[c * SKIP + i], c);
+    }
+    state[s + S_DIRTY] = select(0u, 1u, dirty);
+    if (dirty) { atomicAdd(&counters[p.slot], 1u); }
 }
 
 // The fixed point's takes become labels; counts the clusters still open into `slot`.
@@ -275,5 +326,6 @@ fn commit(@builtin(global_invocation_id) gid: vec3<u32>) {
     state[s + S_ADDED] = 0u;
     let open = taken > 0u && count + taken < p.max_t;
     state[s + S_OPEN] = select(0u, 1u, open);
+    state[s + S_DIRTY] = 1u;
     if (open) { atomicAdd(&counters[p.slot], 1u); }
 }

@@ -70,7 +70,7 @@ pub fn bytes_per_call(kernel: &str, s: &Sizes) -> Option<(&'static str, f64)> {
         "remember" | "dirty_mark" => ("labels T, per-triangle medoid T", w * 2.0 * t),
         "dist_partial" => ("distances T", w * t),
         // Capacity-aware assignment; `walk` per assignment (all its levels and repeats together).
-        "clear_labels" | "clear_claims" => ("labels or claims T", w * t),
+        "clear_labels" => ("labels, two claim arrays 3T", w * 3.0 * t),
         "walk" => (
             "dual offsets T, rows E, labels T, indices 3T, cluster lists T",
             w * (7.0 * t + e),

@@ -4,11 +4,12 @@
 //!
 //! The CPU takes each BFS level's clusters in ascending id, a cluster skipping what a lower one
 //! took in the same level. Here every cluster walks its level at once and the level's walk is
-//! repeated until no cluster's takes change, each walk skipping what a lower cluster claimed in
-//! the one before: the fixed point of that iteration is the sequential order's result (the WGSL
-//! file's header gives the argument). Per level the host records one walk, the `lost` test and
-//! two spare walks, and reads their counters in one round trip; only a level whose conflicts
-//! chain deeper costs more round trips.
+//! repeated, each walk skipping what a lower cluster claimed in the one before, until no cluster's
+//! takes change: the fixed point of that iteration is the sequential order's result (the WGSL
+//! file's header gives the argument). A repeat redoes only the clusters whose inputs changed (one
+//! that lost a triangle, or one whose skipped triangle was freed); the rest re-claim their takes.
+//! Per level the host records three walks and reads their counters in one round trip; only a
+//! level whose conflicts chain deeper costs more round trips.
 
 use super::adjacency::{AdjacencyKernels, DeviceAdjacency};
 use super::{binding_set, param_block, wgsl, Batch, Gpu, GpuError, Kernels, PART};
@@ -24,8 +25,21 @@ pub fn assign(
     limits: Limits,
     medoids: &[u32],
 ) -> Result<(Vec<u32>, AssignStats), GpuError> {
+    assign_with_stamps(gpu, mesh, limits, medoids, TOP)
+}
+
+/// [`assign`] with claim stamps from `top` (1..=125) down: a small `top` makes the stamps start
+/// again every few walks, mid-level, which the tests use to check that path.
+pub fn assign_with_stamps(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    limits: Limits,
+    medoids: &[u32],
+    top: u32,
+) -> Result<(Vec<u32>, AssignStats), GpuError> {
     let (adj, _) = AdjacencyKernels::new(gpu).build(gpu, mesh)?;
     let mut a = CapacityAssign::new(gpu, mesh.triangle_count());
+    a.top = top.clamp(1, TOP);
     let labels = a.run(gpu, &adj, limits, medoids)?;
     Ok((labels, a.stats))
 }
@@ -47,6 +61,8 @@ param_block! {
         par,
         /// Counter slot this dispatch counts into.
         slot,
+        /// This walk's claim stamp (falls by one per walk).
+        code,
     }
 }
 
@@ -77,20 +93,27 @@ binding_set! {
         cv: ReadWrite,
         /// Per-cluster state (`STATE` words).
         state: ReadWrite,
+        /// Triangles each cluster's last walk skipped, `SKIP` slots per cluster.
+        skipped: ReadWrite,
         /// Counter slots.
         counters: ReadWrite,
     }
 }
 
 /// Words of per-cluster state (`STATE` in the WGSL).
-const STATE: usize = 6;
+const STATE: usize = 8;
+/// Skipped triangles kept per cluster (`SKIP` in the WGSL).
+const SKIP: usize = 16;
 /// Counter slots (`clear_counters` clears this many).
 const COUNTERS: usize = 8;
 /// The slot `seed` and `commit` count open clusters into.
 const OPEN: u32 = 7;
-/// Walks recorded per level up front: the first, then two spares (a level whose first walk lost
-/// nothing is done after one; one with conflicts usually after the second changes nothing).
+/// Walks recorded per level up front: most levels end after the first (nothing contested) or
+/// the second; three cover nearly all in one round trip.
 const WALKS: u32 = 3;
+/// The first walk's claim stamp; stamps fall by one per walk, and at 0 `restamp` starts them
+/// again (claims keep 7 bits of stamp above 25 of cluster id; 127 marks no claim).
+const TOP: u32 = 125;
 
 /// What the kernels did over the runs of one [`CapacityAssign`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -113,6 +136,8 @@ pub struct CapacityAssign {
     claim_b: wgpu::Buffer,
     counters: wgpu::Buffer,
     t: usize,
+    /// The first claim stamp ([`TOP`] but in tests).
+    top: u32,
     /// Kernel seconds over all runs.
     pub kernel_seconds: f64,
     /// Work counters over all runs.
@@ -129,11 +154,11 @@ impl CapacityAssign {
                 wgsl!("capacity.wgsl"),
                 &[
                     "clear_labels",
-                    "clear_claims",
+                    "restamp",
                     "clear_counters",
                     "seed",
                     "walk",
-                    "lost",
+                    "check",
                     "commit",
                 ],
             ),
@@ -142,6 +167,7 @@ impl CapacityAssign {
             claim_b: gpu.zeros("capacity claims b", t),
             counters: gpu.zeros("capacity counters", COUNTERS),
             t,
+            top: TOP,
             kernel_seconds: 0.0,
             stats: AssignStats::default(),
         }
@@ -175,6 +201,7 @@ impl CapacityAssign {
         let ct = gpu.zeros("capacity cluster triangles", k * max_t as usize);
         let cv = gpu.zeros("capacity cluster vertices", k * max_v as usize);
         let state = gpu.zeros("capacity state", k * STATE);
+        let skipped = gpu.zeros("capacity skipped", k * SKIP);
         let bind = self.kernels.bind(
             gpu,
             &Buffers {
@@ -190,6 +217,7 @@ impl CapacityAssign {
                 ct: &ct,
                 cv: &cv,
                 state: &state,
+                skipped: &skipped,
                 counters: &self.counters,
             },
         );
@@ -201,19 +229,23 @@ impl CapacityAssign {
             first: 0,
             par: 0,
             slot: 0,
+            code: self.top,
         };
         let kern = &self.kernels;
         let t = self.t;
-        let mut walks = 0u32;
-        let walker = Walker {
+        let mut walker = Walker {
             kern,
             bind: &bind,
             base,
             k,
-            claim_groups: gpu.stride_groups(t),
+            stride_groups: gpu.stride_groups(t),
+            walks: 0,
+            last_code: None,
+            top: self.top,
         };
         // The first batch seeds the clusters; every later one commits the level before. Then
-        // the level's walks.
+        // the level's walks, each followed by `check`: walk j counts changed clusters into slot
+        // 2j, `check` the clusters to redo into 2j + 1.
         let mut b = Batch::new(gpu);
         b.threads(kern, "clear_counters", &bind, base, COUNTERS);
         b.groups(kern, "clear_labels", &bind, base, gpu.stride_groups(t));
@@ -221,10 +253,8 @@ impl CapacityAssign {
         let mut batch = Some(b);
         let mut stats = AssignStats::default();
         while let Some(mut b) = batch.take() {
-            // Slot 0: the first walk's `lost`; slots 1.. the spare walks' changes.
-            walker.record(&mut b, &mut walks, true, 0);
-            for s in 1..WALKS {
-                walker.record(&mut b, &mut walks, false, s);
+            for j in 0..WALKS {
+                walker.record(&mut b, j == 0, 2 * j);
             }
             let (sec, out) = b.run_read(&[(&self.counters, 0, COUNTERS)])?;
             self.kernel_seconds += sec;
@@ -234,22 +264,28 @@ impl CapacityAssign {
                 break;
             }
             stats.levels += 1;
-            let mut done = c[..WALKS as usize].contains(&0);
+            // Done after walk j when no cluster is to be redone, or (after the first) when the
+            // walk changed nothing.
+            let settled = |c: &[u32], j: usize, first: bool| {
+                c[2 * j + 1] == 0 || (!(first && j == 0) && c[2 * j] == 0)
+            };
+            let mut done = (0..WALKS as usize).any(|j| settled(c, j, true));
             while !done {
                 let mut b = Batch::new(gpu);
                 b.threads(kern, "clear_counters", &bind, base, COUNTERS);
-                walker.record(&mut b, &mut walks, false, 0);
-                walker.record(&mut b, &mut walks, false, 1);
-                let (sec, out) = b.run_read(&[(&self.counters, 0, 2)])?;
+                walker.record(&mut b, false, 0);
+                walker.record(&mut b, false, 2);
+                let (sec, out) = b.run_read(&[(&self.counters, 0, 4)])?;
                 self.kernel_seconds += sec;
                 stats.submissions += 1;
-                done = out[0].contains(&0);
+                done = (0..2).any(|j| settled(&out[0], j, false));
             }
             let mut b = Batch::new(gpu);
             b.threads(kern, "clear_counters", &bind, base, COUNTERS);
             b.threads(kern, "commit", &bind, Params { slot: OPEN, ..base }, k);
             batch = Some(b);
         }
+        let walks = walker.walks;
         stats.walks = walks as u64;
         self.stats.levels += stats.levels;
         self.stats.walks += stats.walks;
@@ -258,29 +294,60 @@ impl CapacityAssign {
     }
 }
 
-/// Records walks of one run.
+/// Records the walks of one run, with their parities and stamps.
 struct Walker<'b> {
     kern: &'b Kernels<Params>,
     bind: &'b wgpu::BindGroup,
     base: Params,
     k: usize,
-    claim_groups: u32,
+    stride_groups: u32,
+    /// Walks recorded so far (the next one's parity is `walks & 1`).
+    walks: u32,
+    /// The previous walk's stamp.
+    last_code: Option<u32>,
+    /// The first stamp.
+    top: u32,
 }
 
 impl<'b> Walker<'b> {
-    /// Records walk number `*walks` counting into `slot` (and `lost` after a level's first walk).
-    fn record(&self, b: &mut Batch<'b>, walks: &mut u32, first: bool, slot: u32) {
+    /// Records the next walk (a level's first when `first`: it reads no claims) counting changed
+    /// clusters into `slot`, then `check` counting the clusters to redo into `slot + 1`.
+    fn record(&mut self, b: &mut Batch<'b>, first: bool, slot: u32) {
+        let par = self.walks & 1;
+        let code = match self.last_code {
+            None => self.top,
+            Some(0) => {
+                // Stamps ran out: the previous walk's claims move to top + 1, the rest go.
+                let p = Params {
+                    par,
+                    code: 0,
+                    first: self.top + 1,
+                    ..self.base
+                };
+                b.groups(self.kern, "restamp", self.bind, p, self.stride_groups);
+                self.top
+            }
+            Some(c) => c - 1,
+        };
         let p = Params {
             first: first as u32,
-            par: *walks & 1,
+            par,
             slot,
+            code,
             ..self.base
         };
-        *walks += 1;
-        b.groups(self.kern, "clear_claims", self.bind, p, self.claim_groups);
         b.threads(self.kern, "walk", self.bind, p, self.k);
-        if first {
-            b.threads(self.kern, "lost", self.bind, p, self.k);
-        }
+        b.threads(
+            self.kern,
+            "check",
+            self.bind,
+            Params {
+                slot: slot + 1,
+                ..p
+            },
+            self.k,
+        );
+        self.walks += 1;
+        self.last_code = Some(code);
     }
 }
