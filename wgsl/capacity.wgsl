@@ -107,7 +107,8 @@ fn clear_labels(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
 }
 
 // Before the walk of parity `par`, when the codes run out: the previous walk's claims (`code`)
-// get the code `first` (the host's fresh top code), and every other claim goes.
+// get the code `first` (here not a flag: the host's top code + 1, what the next walk reads as
+// its previous walk's), and every other claim goes.
 @compute @workgroup_size(64)
 fn restamp(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>) {
     for (var t = flat(gid); t < p.t; t += stride(nwg)) {

@@ -115,6 +115,13 @@ const WALKS: u32 = 3;
 /// again (claims keep 7 bits of stamp above 25 of cluster id; 127 marks no claim).
 const TOP: u32 = 125;
 
+/// Words per cluster of the largest per-cluster buffer.
+fn per_cluster(limits: Limits) -> usize {
+    (limits.max_triangles.max(limits.max_vertices) as usize)
+        .max(SKIP)
+        .max(STATE)
+}
+
 /// What the kernels did over the runs of one [`CapacityAssign`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct AssignStats {
@@ -126,6 +133,11 @@ pub struct AssignStats {
     pub walks: u64,
     /// Submissions (one host round trip each).
     pub submissions: u64,
+    /// Levels whose first walk left a cluster to redo (a lower cluster took one of its takes).
+    pub contested: u64,
+    /// Submissions beyond the one per level, for levels whose conflicts chained deeper than
+    /// the walks recorded up front.
+    pub extra: u64,
 }
 
 /// The assignment kernels and the per-triangle buffers they reuse from run to run.
@@ -173,9 +185,9 @@ impl CapacityAssign {
         }
     }
 
-    /// Whether `k` clusters' triangle and vertex lists fit one binding each.
+    /// Whether `k` clusters' triangle, vertex, skipped and state lists fit one binding each.
     pub fn fits(k: usize, limits: Limits) -> bool {
-        k * (limits.max_triangles.max(limits.max_vertices) as usize) <= PART
+        k * per_cluster(limits) <= PART
     }
 
     /// The labels [`crate::strategy::kmedoids_capacity::assign_capacity`] gives from `medoids`
@@ -191,9 +203,18 @@ impl CapacityAssign {
         if !Self::fits(k, limits) {
             return Err(GpuError::TooLarge {
                 what: "capacity-assignment cluster lists",
-                len: k * limits.max_triangles.max(limits.max_vertices) as usize,
+                len: k * per_cluster(limits),
                 max: PART,
             });
+        }
+        let mut sorted = medoids.to_vec();
+        sorted.sort_unstable();
+        sorted.dedup();
+        if sorted.len() != k || sorted.last().is_some_and(|&m| m as usize >= self.t) {
+            // Two clusters seeding one triangle would race on its label.
+            return Err(GpuError::Unsupported(
+                "capacity assignment needs distinct medoids that are triangles of the mesh",
+            ));
         }
         self.stats.runs += 1;
         let (max_v, max_t) = (limits.max_vertices, limits.max_triangles);
@@ -264,6 +285,7 @@ impl CapacityAssign {
                 break;
             }
             stats.levels += 1;
+            stats.contested += (c[1] > 0) as u64;
             // Done after walk j when no cluster is to be redone, or (after the first) when the
             // walk changed nothing.
             let settled = |c: &[u32], j: usize, first: bool| {
@@ -278,6 +300,7 @@ impl CapacityAssign {
                 let (sec, out) = b.run_read(&[(&self.counters, 0, 4)])?;
                 self.kernel_seconds += sec;
                 stats.submissions += 1;
+                stats.extra += 1;
                 done = (0..2).any(|j| settled(&out[0], j, false));
             }
             let mut b = Batch::new(gpu);
@@ -290,6 +313,8 @@ impl CapacityAssign {
         self.stats.levels += stats.levels;
         self.stats.walks += stats.walks;
         self.stats.submissions += stats.submissions + 1;
+        self.stats.contested += stats.contested;
+        self.stats.extra += stats.extra;
         gpu.read(&self.labels, 0, self.t)
     }
 }
