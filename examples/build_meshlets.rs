@@ -18,9 +18,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(path) => mesh::load(path.as_ref())?,
         None => mesh::generate::terrain(64, 7),
     };
-    let out = match args.get(1) {
-        Some(p) => PathBuf::from(p),
-        None => std::env::temp_dir().join("meshletlab-example.mlt"),
+    // Without OUT the file is a scratch file, removed once it has been read back.
+    let (out, scratch) = match args.get(1) {
+        Some(p) => (PathBuf::from(p), false),
+        None => (std::env::temp_dir().join("meshletlab-example.mlt"), true),
     };
     let limits = Limits::new(64, 126)?;
     let opts = Options::default();
@@ -53,6 +54,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             back.check(&mesh, &out)?; // the file belongs to this mesh
             assert_eq!(back, file);
             println!("wrote {} and read it back", out.display());
+            if scratch {
+                std::fs::remove_file(&out)?;
+            }
         }
     }
     Ok(())

@@ -53,12 +53,12 @@ pub fn write(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> io::Result<()> 
 mod tests {
     use super::*;
 
-    fn scratch(name: &str) -> std::path::PathBuf {
-        let d =
-            std::env::temp_dir().join(format!("meshletlab-atomic-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
+    /// A fresh scratch folder, removed again when the test ends (passed or failed).
+    fn scratch(name: &str) -> tempfile::TempDir {
+        tempfile::Builder::new()
+            .prefix(&format!("meshletlab-atomic-{name}-"))
+            .tempdir()
+            .unwrap()
     }
 
     fn entries(d: &Path) -> Vec<String> {
@@ -73,7 +73,7 @@ mod tests {
     #[test]
     fn an_interrupted_write_leaves_the_previous_file_intact() {
         let d = scratch("interrupted");
-        let p = d.join("out.bin");
+        let p = d.path().join("out.bin");
         write(&p, b"the previous, complete file").unwrap();
         // An error after half the bytes (a full disk, a failed encoder): nothing changes.
         let e = write_with(&p, |w| {
@@ -93,10 +93,10 @@ mod tests {
         assert!(r.is_err());
         assert_eq!(std::fs::read(&p).unwrap(), b"the previous, complete file");
         // No temporary file is left behind by either, and a complete write replaces the file.
-        assert_eq!(entries(&d), ["out.bin"]);
+        assert_eq!(entries(d.path()), ["out.bin"]);
         write(&p, b"new").unwrap();
         assert_eq!(std::fs::read(&p).unwrap(), b"new");
-        assert_eq!(entries(&d), ["out.bin"]);
+        assert_eq!(entries(d.path()), ["out.bin"]);
     }
 
     #[cfg(unix)]
@@ -104,7 +104,7 @@ mod tests {
     fn written_files_get_the_usual_permissions() {
         use std::os::unix::fs::PermissionsExt as _;
         let d = scratch("mode");
-        let (a, b) = (d.join("plain"), d.join("atomic"));
+        let (a, b) = (d.path().join("plain"), d.path().join("atomic"));
         std::fs::write(&a, b"x").unwrap();
         write(&b, b"x").unwrap();
         let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
@@ -115,6 +115,6 @@ mod tests {
     fn a_path_without_a_file_name_or_folder_is_an_error() {
         assert!(write(Path::new("/"), b"x").is_err());
         let d = scratch("bare");
-        assert!(write(d.join("missing/out.bin"), b"x").is_err());
+        assert!(write(d.path().join("missing/out.bin"), b"x").is_err());
     }
 }

@@ -9,13 +9,18 @@ use meshletlab::fuzz::{Mutation, Target};
 use std::path::PathBuf;
 use std::time::Duration;
 
-fn config(name: &str, cases: u64, selftest: Option<SelfTest>, stall: Duration) -> Config {
+fn config(
+    scratch: &common::Scratch,
+    cases: u64,
+    selftest: Option<SelfTest>,
+    stall: Duration,
+) -> Config {
     Config {
         exe: PathBuf::from(env!("CARGO_BIN_EXE_meshletlab")),
         seed: 1,
         cases,
         workers: 2,
-        scratch: common::scratch(name),
+        scratch: scratch.to_path_buf(),
         selftest,
         stall,
         progress: None,
@@ -25,7 +30,8 @@ fn config(name: &str, cases: u64, selftest: Option<SelfTest>, stall: Duration) -
 #[test]
 fn seeded_cases_load_or_fail_with_a_typed_error() {
     // The test binary is built with overflow checks, so arithmetic overflow shows as a panic.
-    let r = harness::run(&config("fuzz", 20000, None, harness::STALL)).unwrap();
+    let dir = common::scratch("fuzz");
+    let r = harness::run(&config(&dir, 20000, None, harness::STALL)).unwrap();
     let t = r.totals();
     assert_eq!(r.cases, 20000);
     assert_eq!(t.defects(), 0, "defects: {:#?}", r.failures);
@@ -58,12 +64,8 @@ fn the_harness_catches_panics_hangs_and_allocations_over_the_bound() {
         (SelfTest::Alloc, Verdict::OverLimit),
         (SelfTest::Hang, Verdict::Hang),
     ] {
-        let mut cfg = config(
-            &format!("selftest-{want:?}"),
-            4,
-            Some(st),
-            Duration::from_secs(3),
-        );
+        let dir = common::scratch(&format!("selftest-{want:?}"));
+        let mut cfg = config(&dir, 4, Some(st), Duration::from_secs(3));
         cfg.workers = 1;
         let r = harness::run(&cfg).unwrap();
         assert_eq!(r.cases, 4, "{st:?}");

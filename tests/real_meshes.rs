@@ -104,7 +104,7 @@ fn paper_code_growers_reproduce_the_papers_bunny_counts() {
     let cfg = fidelity::Config {
         mesh: common::meshes_dir().join("stanford_bunny.ply.zst"),
         runs: 1,
-        out: dir.clone(),
+        out: dir.to_path_buf(),
     };
     let rows = fidelity::run(&cfg).unwrap();
     let gap = |n: &str| {

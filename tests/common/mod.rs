@@ -42,10 +42,29 @@ pub fn pool(n: usize) -> rayon::ThreadPool {
 /// More threads than CI's two cores: work is split differently from the one-thread run.
 pub const MANY_THREADS: usize = 4;
 
-/// A unique scratch folder for one test.
-pub fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("meshletlab-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A unique scratch folder for one test, removed when dropped (whether the test passed or not),
+/// so test runs leave nothing in the system temp folder. Derefs to its path.
+pub struct Scratch(tempfile::TempDir);
+
+impl std::ops::Deref for Scratch {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+
+impl AsRef<std::path::Path> for Scratch {
+    fn as_ref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+
+/// A fresh [`Scratch`] folder named after the test.
+pub fn scratch(name: &str) -> Scratch {
+    Scratch(
+        tempfile::Builder::new()
+            .prefix(&format!("meshletlab-test-{name}-"))
+            .tempdir()
+            .unwrap(),
+    )
 }
