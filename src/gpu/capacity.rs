@@ -100,10 +100,10 @@ binding_set! {
     }
 }
 
-/// Words of per-cluster state (`STATE` in the WGSL).
-const STATE: usize = 8;
-/// Skipped triangles kept per cluster (`SKIP` in the WGSL).
-const SKIP: usize = 16;
+/// Words of per-cluster state (`STATE` in the WGSL; `gpu::shaders_test` checks both agree).
+pub(crate) const STATE: usize = 8;
+/// Skipped triangles kept per cluster (`SKIP` in the WGSL; checked likewise).
+pub(crate) const SKIP: usize = 16;
 /// Counter slots (`clear_counters` clears this many).
 const COUNTERS: usize = 8;
 /// The slot `seed` and `commit` count open clusters into.

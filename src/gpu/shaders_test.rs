@@ -151,19 +151,30 @@ fn every_module_matches_its_rust_interface() {
     assert!(bad.is_empty(), "{}", bad.join("\n"));
 }
 
-#[test]
-fn the_prelude_part_is_the_rust_part() {
-    let (module, _) = parse("bounds.wgsl");
-    let (_, part) = module
+/// The value of the u32 constant `name` that `file` (behind the prelude) declares.
+fn constant(file: &str, name: &str) -> u32 {
+    let (module, _) = parse(file);
+    let (_, c) = module
         .constants
         .iter()
-        .find(|(_, c)| c.name.as_deref() == Some("PART"))
-        .expect("PART in the prelude");
-    let value = match module.global_expressions[part.init] {
-        naga::Expression::Literal(naga::Literal::U32(v)) => v as usize,
-        ref e => panic!("PART is {e:?}"),
-    };
-    assert_eq!(value, super::PART);
+        .find(|(_, c)| c.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("{name} in {file}"));
+    match module.global_expressions[c.init] {
+        naga::Expression::Literal(naga::Literal::U32(v)) => v,
+        ref e => panic!("{file}: {name} is {e:?}"),
+    }
+}
+
+#[test]
+fn the_prelude_part_is_the_rust_part() {
+    assert_eq!(constant("bounds.wgsl", "PART") as usize, super::PART);
+}
+
+#[test]
+fn capacity_layout_constants_are_the_drivers() {
+    use super::capacity;
+    assert_eq!(constant("capacity.wgsl", "STATE") as usize, capacity::STATE);
+    assert_eq!(constant("capacity.wgsl", "SKIP") as usize, capacity::SKIP);
 }
 
 #[test]
