@@ -24,6 +24,43 @@ fn same_labels(gpu: &[u32], cpu: &[u32], what: &str) {
     }
 }
 
+/// A straight strip of `quads` quads (two triangles each): its dual graph is a path.
+fn strip(quads: u32) -> Mesh {
+    let mut m = Mesh {
+        positions: (0..=quads)
+            .flat_map(|i| [[i as f32, 0.0, 0.0], [i as f32, 1.0, 0.0]])
+            .collect(),
+        indices: Vec::new(),
+    };
+    for i in 0..quads {
+        let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+        m.indices.extend([a, b, c, b, d, c]);
+    }
+    m
+}
+
+/// The capacity-aware assignment from `medoids` on the CPU and on the GPU (claim stamps from
+/// `top`), compared label by label; returns the CPU's labels and the GPU's counters.
+fn assign_both(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    limits: Limits,
+    medoids: &[u32],
+    top: u32,
+    what: &str,
+) -> (Vec<u32>, meshletlab::gpu::capacity::AssignStats) {
+    let dual =
+        meshletlab::adjacency::dual_graph(mesh, &meshletlab::adjacency::vertex_triangles(mesh));
+    let mut cpu = vec![u32::MAX; mesh.triangle_count()];
+    meshletlab::strategy::kmedoids_capacity::assign_capacity(
+        mesh, &dual, limits, medoids, &mut cpu,
+    );
+    let (g, stats) =
+        meshletlab::gpu::capacity::assign_with_stamps(gpu, mesh, limits, medoids, top).unwrap();
+    same_labels(&g, &cpu, what);
+    (cpu, stats)
+}
+
 fn assert_parity(gpu: &Gpu, name: &str, mesh: &Mesh, limits: Limits) {
     for c in parity::run(gpu, mesh, limits).unwrap().checks {
         assert!(
@@ -77,17 +114,7 @@ fn deep_assignment_spans_several_submissions() {
     // A straight strip of 4000 triangles: its dual graph is a path, and 256-triangle clusters put
     // medoids about 256 hops apart, so an assignment runs ~128 BFS levels, more than one
     // submission records (the host reads the frontier sizes and records more).
-    let n = 2000u32;
-    let mut m = Mesh {
-        positions: (0..=n)
-            .flat_map(|i| [[i as f32, 0.0, 0.0], [i as f32, 1.0, 0.0]])
-            .collect(),
-        indices: Vec::new(),
-    };
-    for i in 0..n {
-        let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
-        m.indices.extend([a, b, c, b, d, c]);
-    }
+    let m = strip(2000);
     let limits = Limits::new(256, 256).unwrap();
     let cpu = meshletlab::strategy::kmedoids::cluster(&m, limits, &Default::default());
     let depth = cpu.distances.iter().max().copied().unwrap();
@@ -185,8 +212,7 @@ fn copy_kernel_copies_and_measures_a_bandwidth() {
 
 #[test]
 fn capacity_assignment_matches_on_wide_fans_and_conflict_chains() {
-    use meshletlab::gpu::capacity;
-    use meshletlab::strategy::kmedoids_capacity::assign_capacity;
+    use meshletlab::gpu::capacity::{self, TOP};
     let gpu = gpu();
     // A book of 300 pages on one edge: each page's dual row holds the other 299, more candidates
     // than a walk sorts in registers (its minimum-search path). Medoids on neighbouring pages
@@ -208,18 +234,8 @@ fn capacity_assignment_matches_on_wide_fans_and_conflict_chains() {
         (vec![3, 7, 11, 200], Limits::new(64, 84).unwrap()),
         ((10..22).collect::<Vec<u32>>(), Limits::new(8, 6).unwrap()),
     ] {
-        let mut cpu = vec![u32::MAX; book.triangle_count()];
-        let dual = meshletlab::adjacency::dual_graph(
-            &book,
-            &meshletlab::adjacency::vertex_triangles(&book),
-        );
-        assign_capacity(&book, &dual, limits, &medoids, &mut cpu);
-        let (g, stats) = capacity::assign(&gpu, &book, limits, &medoids).unwrap();
-        same_labels(
-            &g,
-            &cpu,
-            &format!("book, medoids {medoids:?}, limits {limits:?}"),
-        );
+        let what = format!("book, medoids {medoids:?}, limits {limits:?}");
+        let (cpu, stats) = assign_both(&gpu, &book, limits, &medoids, TOP, &what);
         assert!(cpu.iter().filter(|&&l| l != u32::MAX).count() > medoids.len());
         deep |= stats.extra > 0;
     }
@@ -233,16 +249,10 @@ fn capacity_assignment_matches_on_wide_fans_and_conflict_chains() {
         positions: (0..8).map(|i| [i as f32, (i % 2) as f32, 0.0]).collect(),
         indices: vec![0, 0, 1, 0, 1, 2, 1, 2, 3, 2, 3, 4, 3, 4, 5, 4, 5, 6],
     };
-    let dual = meshletlab::adjacency::dual_graph(
-        &degenerate,
-        &meshletlab::adjacency::vertex_triangles(&degenerate),
-    );
     for max_v in [3, 4, 5, 6] {
         let limits = Limits::new(max_v, 8).unwrap();
-        let mut cpu = vec![u32::MAX; degenerate.triangle_count()];
-        assign_capacity(&degenerate, &dual, limits, &[0], &mut cpu);
-        let (g, _) = capacity::assign(&gpu, &degenerate, limits, &[0]).unwrap();
-        same_labels(&g, &cpu, &format!("degenerate medoid, {max_v} vertices"));
+        let what = format!("degenerate medoid, {max_v} vertices");
+        let (cpu, _) = assign_both(&gpu, &degenerate, limits, &[0], TOP, &what);
         // The vertex limit decides how far the cluster reaches: 1, 2, 3, 4 triangles.
         let taken = cpu.iter().filter(|&&l| l == 0).count();
         assert_eq!(taken, max_v as usize - 2, "CPU at {max_v} vertices");
@@ -251,34 +261,14 @@ fn capacity_assignment_matches_on_wide_fans_and_conflict_chains() {
     assert!(capacity::assign(&gpu, &book, Limits::DEFAULT, &[3, 3]).is_err());
     // A strip (its dual graph a path) with medoids 200 triangles apart: about 100 levels of three
     // walks, more than the claim stamps last, so the stamps start again mid-assignment.
-    let n = 1000u32;
-    let mut strip = Mesh {
-        positions: (0..=n)
-            .flat_map(|i| [[i as f32, 0.0, 0.0], [i as f32, 1.0, 0.0]])
-            .collect(),
-        indices: Vec::new(),
-    };
-    for i in 0..n {
-        let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
-        strip.indices.extend([a, b, c, b, d, c]);
-    }
-    let dual =
-        meshletlab::adjacency::dual_graph(&strip, &meshletlab::adjacency::vertex_triangles(&strip));
     let limits = Limits::new(256, 256).unwrap();
     let medoids: Vec<u32> = (0..10).map(|i| 100 + 200 * i).collect();
-    let mut cpu = vec![u32::MAX; strip.triangle_count()];
-    assign_capacity(&strip, &dual, limits, &medoids, &mut cpu);
-    let (g, stats) = capacity::assign(&gpu, &strip, limits, &medoids).unwrap();
-    same_labels(&g, &cpu, "strip");
+    let (_, stats) = assign_both(&gpu, &strip(1000), limits, &medoids, TOP, "strip");
     assert!(stats.walks > 130, "only {} walks: no restamp", stats.walks);
     // Generated meshes with random medoids and small limits: many contested levels.
     let mut rng = 0x9e37_79b9_7f4a_7c15u64;
     for g in generate::stress_set(3) {
         let t = g.mesh.triangle_count() as u64;
-        let dual = meshletlab::adjacency::dual_graph(
-            &g.mesh,
-            &meshletlab::adjacency::vertex_triangles(&g.mesh),
-        );
         for limits in [Limits::new(8, 6).unwrap(), Limits::DEFAULT] {
             let mut medoids: Vec<u32> = (0..t / 20)
                 .map(|_| {
@@ -290,17 +280,17 @@ fn capacity_assignment_matches_on_wide_fans_and_conflict_chains() {
                 .collect();
             medoids.sort_unstable();
             medoids.dedup();
-            let mut cpu = vec![u32::MAX; t as usize];
-            assign_capacity(&g.mesh, &dual, limits, &medoids, &mut cpu);
-            let (gl, stats) = capacity::assign(&gpu, &g.mesh, limits, &medoids).unwrap();
-            same_labels(&gl, &cpu, &format!("{}, limits {limits:?}", g.name));
+            let what = format!("{}, limits {limits:?}", g.name);
+            let (_, stats) = assign_both(&gpu, &g.mesh, limits, &medoids, TOP, &what);
             assert!(stats.contested > 0, "{}: no level was contested", g.name);
             // Stamps that run out every other walk: restarts in the middle of contested levels.
-            let (gl, _) = capacity::assign_with_stamps(&gpu, &g.mesh, limits, &medoids, 1).unwrap();
-            same_labels(
-                &gl,
-                &cpu,
-                &format!("{}, limits {limits:?}, restamped", g.name),
+            assign_both(
+                &gpu,
+                &g.mesh,
+                limits,
+                &medoids,
+                1,
+                &format!("{what}, restamped"),
             );
         }
     }

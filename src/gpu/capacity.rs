@@ -113,7 +113,7 @@ const OPEN: u32 = 7;
 const WALKS: u32 = 3;
 /// The first walk's claim stamp; stamps fall by one per walk, and at 0 `restamp` starts them
 /// again (claims keep 7 bits of stamp above 25 of cluster id; 127 marks no claim).
-const TOP: u32 = 125;
+pub const TOP: u32 = 125;
 
 /// Words per cluster of the largest per-cluster buffer.
 fn per_cluster(limits: Limits) -> usize {
