@@ -13,6 +13,7 @@ pub mod kmedoids_local;
 mod meshopt;
 mod nvidia;
 pub mod parallel;
+pub mod partition;
 pub mod qem;
 pub mod refine;
 pub mod tipsify;
@@ -96,6 +97,26 @@ fn refined(name: &str) -> Option<(&str, refine::Effort, &'static str)> {
     Some((base, effort, full.as_str()))
 }
 
+/// Appended to a strategy name, this sends its output through [`partition`]: `greedy+partition`.
+pub const PARTITION_SUFFIX: &str = "+partition";
+
+/// Splits a `+partition` name into its base strategy and the name as a `'static` string; `None`
+/// for an unknown base and for `partition` itself (`meshopt+partition` builds what `partition`
+/// does).
+fn partitioned(name: &str) -> Option<(&str, &'static str)> {
+    static NAMED: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+    let base = name.strip_suffix(PARTITION_SUFFIX)?;
+    let all = NAMED.get_or_init(|| {
+        NAMES
+            .iter()
+            .filter(|&&n| n != "partition")
+            .map(|n| format!("{n}{PARTITION_SUFFIX}"))
+            .collect()
+    });
+    let full = all.iter().find(|n| n.as_str() == name)?;
+    Some((base, full.as_str()))
+}
+
 /// Names accepted by [`by_name`], in table order (each also with one of [`REFINE_SUFFIXES`]).
 pub const NAMES: &[&str] = &[
     "nvidia",
@@ -115,6 +136,7 @@ pub const NAMES: &[&str] = &[
     "meshopt-scan",
     "meshopt-spatial",
     "qem",
+    "partition",
 ];
 
 /// Referenced vertices sorted along the mesh's longest bounding-box axis, low to high (ties by
@@ -163,7 +185,7 @@ pub(crate) fn mark_used(mesh: &Mesh, t: u32, used: &mut [bool], live: &mut [u32]
 
 /// A name that no strategy answers to.
 #[derive(Debug, Error)]
-#[error("unknown strategy '{0}' (known: {known}; any of them followed by +refine, +refine-fast or +refine-max)", known = NAMES.join(", "))]
+#[error("unknown strategy '{0}' (known: {known}; any of them followed by +refine, +refine-fast or +refine-max, or by +partition)", known = NAMES.join(", "))]
 pub struct UnknownStrategy(pub String);
 
 /// Looks a strategy up by name; the ordering options wrap it in a post-pass. The typed way to
@@ -174,7 +196,12 @@ pub fn by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, UnknownS
         Some((base, effort, _)) => Kind::from_name(base)
             .ok_or_else(unknown)?
             .refined(effort, opts),
-        None => Kind::from_name(name).ok_or_else(unknown)?.strategy(opts),
+        None => match partitioned(name) {
+            Some((base, _)) => Kind::from_name(base)
+                .and_then(|k| k.partitioned(opts))
+                .ok_or_else(unknown)?,
+            None => Kind::from_name(name).ok_or_else(unknown)?.strategy(opts),
+        },
     };
     Ok(with_order(inner, opts))
 }
@@ -255,11 +282,13 @@ pub enum Kind {
     MeshoptSpatial,
     /// [`qem::Qem`]: `qem`.
     Qem,
+    /// [`partition::Partitioned`] over [`Meshopt`]: `partition`.
+    Partition,
 }
 
 impl Kind {
     /// Every kind, in [`NAMES`] (table) order.
-    pub const ALL: [Kind; 17] = [
+    pub const ALL: [Kind; 18] = [
         Kind::Nvidia,
         Kind::NvidiaTipsify,
         Kind::Greedy,
@@ -277,6 +306,7 @@ impl Kind {
         Kind::MeshoptScan,
         Kind::MeshoptSpatial,
         Kind::Qem,
+        Kind::Partition,
     ];
 
     /// The name the command line and the files use.
@@ -328,7 +358,23 @@ impl Kind {
                 fill_weight: opts.fill_weight,
             }),
             Kind::Qem => Box::new(qem::Qem),
+            Kind::Partition => Box::new(partition::Partitioned {
+                inner: Kind::Meshopt.strategy(opts),
+                config: partition::Config::default(),
+                name: "partition",
+            }),
         }
+    }
+
+    /// The strategy followed by [`partition`], named e.g. `greedy+partition` (`partition` is
+    /// `meshopt+partition`); `None` for [`Kind::Partition`].
+    pub fn partitioned(self, opts: &Options) -> Option<Box<dyn Strategy>> {
+        let (_, name) = partitioned(&format!("{}{PARTITION_SUFFIX}", self.name()))?;
+        Some(Box::new(partition::Partitioned {
+            inner: self.strategy(opts),
+            config: partition::Config::default(),
+            name,
+        }))
     }
 
     /// The strategy followed by [`refine`] at `effort`, named e.g. `meshopt+refine`.

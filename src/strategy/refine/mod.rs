@@ -53,9 +53,9 @@
 
 mod anneal;
 mod dissolve;
-mod moves;
+pub(crate) mod moves;
 mod rebuild;
-mod state;
+pub(crate) mod state;
 
 use super::Strategy;
 use crate::adjacency::{dual_graph, vertex_triangles};

@@ -16,7 +16,7 @@ const SSE_EPS: f64 = 1e-12;
 
 /// Which objective a boundary move must lower first.
 #[derive(Clone, Copy, PartialEq, Eq)]
-pub(super) enum Rank {
+pub(crate) enum Rank {
     /// The vertex total, then the spread (step 1).
     Vertices,
     /// The spread alone, vertex total aside (step 2: rounder meshlets).
@@ -65,7 +65,7 @@ impl Search<'_> {
     }
 
     /// Boundary moves under `rank` until none improves, starting from the triangles in `seeds`.
-    pub(super) fn improve(&mut self, seeds: &[u32], rank: Rank) {
+    pub(crate) fn improve(&mut self, seeds: &[u32], rank: Rank) {
         let mut work: VecDeque<u32> = VecDeque::new();
         for &t in seeds {
             if !self.scratch.queued[t as usize] {
@@ -107,7 +107,7 @@ impl Search<'_> {
 
     /// Step 1 around moved triangles: vertex-first boundary moves seeded with every triangle
     /// sharing a vertex with one of `moved`.
-    pub(super) fn improve_around(&mut self, moved: impl IntoIterator<Item = u32>) {
+    pub(crate) fn improve_around(&mut self, moved: impl IntoIterator<Item = u32>) {
         let mut seeds = Vec::new();
         for t in moved {
             for v in distinct(self.part.mesh.triangle(t as usize)) {

@@ -19,7 +19,7 @@ use crate::strategy::parallel::distinct;
 
 /// Per-triangle features whose spread (sum of squared distances to the meshlet mean) is the third
 /// objective: the centroid, scaled to unit RMS spread in the input, and the unit normal.
-pub(super) const F: usize = 6;
+pub(crate) const F: usize = 6;
 
 /// Weight of the normal against the scaled centroid in the spread: tight normal cones keep
 /// meshlets cone-cullable. Measured on the bunny with `+refine-max`: 0 lost 0.3 % of the
@@ -30,7 +30,7 @@ const NORMAL_WEIGHT: f64 = 0.3;
 /// The mesh triangle behind every meshlet triangle, as a label (meshlet index) per mesh triangle.
 /// Duplicated triangles are matched in order; a valid partition labels every triangle once.
 /// Also returns the mesh triangles in meshlet order.
-pub(super) fn labels_of(mesh: &Mesh, vt: &Csr, ml: &Meshlets) -> (Vec<u32>, Vec<u32>) {
+pub(crate) fn labels_of(mesh: &Mesh, vt: &Csr, ml: &Meshlets) -> (Vec<u32>, Vec<u32>) {
     const NONE: u32 = u32::MAX;
     let mut labels = vec![NONE; mesh.triangle_count()];
     let mut seq = Vec::with_capacity(mesh.triangle_count());
@@ -55,46 +55,46 @@ pub(super) fn labels_of(mesh: &Mesh, vt: &Csr, ml: &Meshlets) -> (Vec<u32>, Vec<
 /// One journaled move: the triangle, where it came from and went, and both meshlets' change
 /// stamps before it.
 #[derive(Clone, Copy)]
-pub(super) struct Undo {
-    pub(super) t: u32,
+pub(crate) struct Undo {
+    pub(crate) t: u32,
     from: u32,
     to: u32,
     stamps: [usize; 2],
 }
 
 /// A partition of the mesh's triangles into meshlets, with every count a move needs.
-pub(super) struct Partition<'a> {
-    pub(super) mesh: &'a Mesh,
+pub(crate) struct Partition<'a> {
+    pub(crate) mesh: &'a Mesh,
     /// Vertex -> triangles.
-    pub(super) vt: &'a Csr,
+    pub(crate) vt: &'a Csr,
     /// Triangle -> edge-adjacent triangles.
-    pub(super) dual: &'a Csr,
-    pub(super) limits: Limits,
+    pub(crate) dual: &'a Csr,
+    pub(crate) limits: Limits,
     /// The meshlet of each triangle.
-    pub(super) label: Vec<u32>,
+    pub(crate) label: Vec<u32>,
     /// Triangles per meshlet (0 = dissolved).
-    pub(super) tcount: Vec<u32>,
+    pub(crate) tcount: Vec<u32>,
     /// Distinct vertices per meshlet.
-    pub(super) vcount: Vec<u32>,
+    pub(crate) vcount: Vec<u32>,
     /// Members of each meshlet, unordered.
-    pub(super) members: Vec<Vec<u32>>,
+    pub(crate) members: Vec<Vec<u32>>,
     /// Sum of member triangle features, per meshlet.
-    pub(super) csum: Vec<[f64; F]>,
+    pub(crate) csum: Vec<[f64; F]>,
     /// Per triangle, its features ([`F`]).
-    pub(super) features: Vec<[f64; F]>,
+    pub(crate) features: Vec<[f64; F]>,
     /// Meshlets with at least one triangle.
-    pub(super) live: usize,
+    pub(crate) live: usize,
     /// Moves made (a rollback takes its moves back off).
-    pub(super) moves: usize,
+    pub(crate) moves: usize,
     /// Per meshlet, the move counter when it last changed.
-    pub(super) changed_at: Vec<usize>,
+    pub(crate) changed_at: Vec<usize>,
     /// Moves since the journal was opened, for rollback.
-    pub(super) journal: Option<Vec<Undo>>,
+    pub(crate) journal: Option<Vec<Undo>>,
 }
 
 impl<'a> Partition<'a> {
     /// The partition `label` (meshlets `0..k`) with every count made.
-    pub(super) fn new(
+    pub(crate) fn new(
         mesh: &'a Mesh,
         vt: &'a Csr,
         dual: &'a Csr,
@@ -180,7 +180,7 @@ impl<'a> Partition<'a> {
 
     /// Triangles of meshlet `m` that use vertex `v`.
     #[inline]
-    pub(super) fn uses(&self, v: u32, m: u32) -> usize {
+    pub(crate) fn uses(&self, v: u32, m: u32) -> usize {
         self.vt
             .row(v as usize)
             .iter()
@@ -190,7 +190,7 @@ impl<'a> Partition<'a> {
 
     /// Vertices of `t` that meshlet `b` would gain by taking it.
     #[inline]
-    pub(super) fn added(&self, t: u32, b: u32) -> u32 {
+    pub(crate) fn added(&self, t: u32, b: u32) -> u32 {
         distinct(self.mesh.triangle(t as usize))
             .filter(|&v| self.uses(v, b) == 0)
             .count() as u32
@@ -198,7 +198,7 @@ impl<'a> Partition<'a> {
 
     /// Vertices meshlet `a` would lose by giving `t` away (`t` is its only user of them).
     #[inline]
-    pub(super) fn removed(&self, t: u32, a: u32) -> u32 {
+    pub(crate) fn removed(&self, t: u32, a: u32) -> u32 {
         distinct(self.mesh.triangle(t as usize))
             .filter(|&v| self.uses(v, a) == 1)
             .count() as u32
@@ -206,13 +206,13 @@ impl<'a> Partition<'a> {
 
     /// Whether meshlet `b` has room for `t` (which adds `add` vertices).
     #[inline]
-    pub(super) fn fits(&self, b: u32, add: u32) -> bool {
+    pub(crate) fn fits(&self, b: u32, add: u32) -> bool {
         self.tcount[b as usize] < self.limits.max_triangles
             && self.vcount[b as usize] + add <= self.limits.max_vertices
     }
 
     /// Meshlets other than `t`'s own that share an edge with `t`, ascending, without repeats.
-    pub(super) fn neighbour_labels(&self, t: u32) -> ([u32; 8], usize) {
+    pub(crate) fn neighbour_labels(&self, t: u32) -> ([u32; 8], usize) {
         let own = self.label[t as usize];
         let mut out = [0u32; 8];
         let mut n = 0;
@@ -228,7 +228,7 @@ impl<'a> Partition<'a> {
     }
 
     /// Meshlets sharing an edge with meshlet `m`, ascending.
-    pub(super) fn adjacent_meshlets(&self, m: u32) -> Vec<u32> {
+    pub(crate) fn adjacent_meshlets(&self, m: u32) -> Vec<u32> {
         let mut out = Vec::new();
         for &t in &self.members[m as usize] {
             let (nb, n) = self.neighbour_labels(t);
@@ -243,7 +243,7 @@ impl<'a> Partition<'a> {
     /// `hops` edge-adjacency hops of it, in the order found (`m`, then ring after ring, each in
     /// the order its meshlets were reached). `ring` is shown each ring as it is completed (an
     /// empty one too) and ends the search after it by returning true.
-    pub(super) fn rings(
+    pub(crate) fn rings(
         &self,
         m: u32,
         hops: usize,
@@ -271,7 +271,7 @@ impl<'a> Partition<'a> {
     /// The live meshlets, emptiest first (fewest triangles, then the lowest index): the order in
     /// which victims and neighbourhoods are tried, since the emptiest meshlet is the cheapest to
     /// hand out.
-    pub(super) fn emptiest_first(&self) -> Vec<u32> {
+    pub(crate) fn emptiest_first(&self) -> Vec<u32> {
         let mut order: Vec<u32> = (0..self.tcount.len() as u32)
             .filter(|&m| self.tcount[m as usize] > 0)
             .collect();
@@ -280,12 +280,12 @@ impl<'a> Partition<'a> {
     }
 
     /// The key of [`Self::emptiest_first`] (unique per meshlet).
-    pub(super) fn emptiness(&self, m: u32) -> (u32, u32) {
+    pub(crate) fn emptiness(&self, m: u32) -> (u32, u32) {
         (self.tcount[m as usize], m)
     }
 
     /// Live meshlets among `region`.
-    pub(super) fn live_in(&self, region: &[u32]) -> usize {
+    pub(crate) fn live_in(&self, region: &[u32]) -> usize {
         region
             .iter()
             .filter(|&&m| self.tcount[m as usize] > 0)
@@ -294,7 +294,7 @@ impl<'a> Partition<'a> {
 
     /// Change of the feature spread (sum of squared distances to the meshlet mean) when `t`
     /// moves from `a` to `b` (Hartigan's formula).
-    pub(super) fn sse_delta(&self, t: u32, a: u32, b: u32) -> f64 {
+    pub(crate) fn sse_delta(&self, t: u32, a: u32, b: u32) -> f64 {
         let x = self.features[t as usize];
         let d2 = |m: u32| {
             let n = self.tcount[m as usize] as f64;
@@ -319,7 +319,7 @@ impl<'a> Partition<'a> {
     }
 
     /// Moves `t` to meshlet `b`, keeping every count in step (and the journal, when open).
-    pub(super) fn apply(&mut self, t: u32, b: u32) {
+    pub(crate) fn apply(&mut self, t: u32, b: u32) {
         let a = self.label[t as usize];
         let (rem, add) = (self.removed(t, a), self.added(t, b));
         self.vcount[a as usize] -= rem;
@@ -352,7 +352,7 @@ impl<'a> Partition<'a> {
     }
 
     /// Undoes the journaled moves in reverse; a rollback is no change, so the stamps come back too.
-    pub(super) fn rollback(&mut self, journal: &[Undo]) {
+    pub(crate) fn rollback(&mut self, journal: &[Undo]) {
         for u in journal.iter().rev() {
             self.apply(u.t, u.from);
             self.moves -= 1;
@@ -362,7 +362,7 @@ impl<'a> Partition<'a> {
     }
 
     /// Puts the labels of `snapshot` back and recounts everything.
-    pub(super) fn restore(&mut self, snapshot: &[u32]) {
+    pub(crate) fn restore(&mut self, snapshot: &[u32]) {
         self.label.copy_from_slice(snapshot);
         self.recount();
         self.moves += 1;
@@ -372,7 +372,7 @@ impl<'a> Partition<'a> {
     /// Gives the triangles `tris` (exactly the members of the `region` meshlets) the meshlets
     /// `labels` (all in `region`) and recounts the region. Not journaled: the caller keeps the old
     /// labels to put back.
-    pub(super) fn relabel(
+    pub(crate) fn relabel(
         &mut self,
         scratch: &mut Scratch,
         tris: &[u32],
@@ -403,7 +403,7 @@ impl<'a> Partition<'a> {
 
     /// The partition as meshlets, in the input's meshlet order; inside a meshlet the triangles
     /// keep the input's triangle order (`seq`), received ones where they came from.
-    pub(super) fn into_meshlets(self, seq: &[u32]) -> Meshlets {
+    pub(crate) fn into_meshlets(self, seq: &[u32]) -> Meshlets {
         let mut order: Vec<Vec<u32>> = vec![Vec::new(); self.tcount.len()];
         for &t in seq {
             order[self.label[t as usize] as usize].push(t);
@@ -421,24 +421,24 @@ impl<'a> Partition<'a> {
 
 /// Reusable buffers of the queries. A triangle or vertex counts as seen when its stamp equals the
 /// current epoch; one epoch counter serves both kinds of stamp.
-pub(super) struct Scratch {
+pub(crate) struct Scratch {
     /// The epoch a triangle was last seen in (flood fills).
     seen: Vec<u32>,
     /// The epoch a vertex was last seen in (vertex counts).
-    pub(super) vseen: Vec<u32>,
+    pub(crate) vseen: Vec<u32>,
     /// An augmenting search's use count of a vertex in the expanded meshlet, valid where `vseen`
     /// holds the search step's epoch.
-    pub(super) vuse: Vec<u32>,
+    pub(crate) vuse: Vec<u32>,
     epoch: u32,
     /// Whether a triangle is in the boundary-move work queue.
-    pub(super) queued: Vec<bool>,
+    pub(crate) queued: Vec<bool>,
     /// The triangles the last flood fill reached, in the order reached.
     piece: Vec<u32>,
 }
 
 impl Scratch {
     /// Buffers for a mesh of `triangles` triangles and `vertices` vertices.
-    pub(super) fn new(triangles: usize, vertices: usize) -> Self {
+    pub(crate) fn new(triangles: usize, vertices: usize) -> Self {
         Self {
             seen: vec![0; triangles],
             vseen: vec![0; vertices],
@@ -450,7 +450,7 @@ impl Scratch {
     }
 
     /// Starts a new epoch (nothing is seen in it yet) and returns it.
-    pub(super) fn new_epoch(&mut self) -> u32 {
+    pub(crate) fn new_epoch(&mut self) -> u32 {
         self.epoch += 1;
         self.epoch
     }
@@ -490,7 +490,7 @@ impl Scratch {
 
     /// Whether removing `t` leaves its meshlet's edge-connected piece around `t` in one piece:
     /// a fill from one of `t`'s same-meshlet neighbours, walled at `t`, reaches the others.
-    pub(super) fn stays_connected(&mut self, part: &Partition, t: u32) -> bool {
+    pub(crate) fn stays_connected(&mut self, part: &Partition, t: u32) -> bool {
         let own = part.label[t as usize];
         let targets: Vec<u32> = part
             .dual
@@ -516,7 +516,7 @@ impl Scratch {
     }
 
     /// Whether meshlet `m` is one edge-connected piece.
-    pub(super) fn is_connected(&mut self, part: &Partition, m: u32) -> bool {
+    pub(crate) fn is_connected(&mut self, part: &Partition, m: u32) -> bool {
         let members = &part.members[m as usize];
         let Some(&first) = members.first() else {
             return true;
@@ -528,7 +528,7 @@ impl Scratch {
 
     /// The edge-connected pieces of meshlet `m`, each led by its smallest triangle and in the
     /// order the fill reached it, smallest leader first.
-    pub(super) fn pieces(&mut self, part: &Partition, m: u32) -> Vec<Vec<u32>> {
+    pub(crate) fn pieces(&mut self, part: &Partition, m: u32) -> Vec<Vec<u32>> {
         let mut members = part.members[m as usize].clone();
         members.sort_unstable();
         let e = self.new_epoch();
@@ -560,14 +560,14 @@ impl Scratch {
 }
 
 /// What the steps work on: the partition and the scratch buffers of its queries.
-pub(super) struct Search<'a> {
-    pub(super) part: Partition<'a>,
-    pub(super) scratch: Scratch,
+pub(crate) struct Search<'a> {
+    pub(crate) part: Partition<'a>,
+    pub(crate) scratch: Scratch,
 }
 
 impl<'a> Search<'a> {
     /// The search over the partition `label` (meshlets `0..k`) of `mesh`.
-    pub(super) fn new(
+    pub(crate) fn new(
         mesh: &'a Mesh,
         vt: &'a Csr,
         dual: &'a Csr,
@@ -582,12 +582,12 @@ impl<'a> Search<'a> {
     }
 
     /// [`Scratch::stays_connected`] on the partition.
-    pub(super) fn stays_connected(&mut self, t: u32) -> bool {
+    pub(crate) fn stays_connected(&mut self, t: u32) -> bool {
         self.scratch.stays_connected(&self.part, t)
     }
 
     /// [`Scratch::is_connected`] on the partition.
-    pub(super) fn is_connected(&mut self, m: u32) -> bool {
+    pub(crate) fn is_connected(&mut self, m: u32) -> bool {
         self.scratch.is_connected(&self.part, m)
     }
 }

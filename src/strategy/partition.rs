@@ -1,0 +1,704 @@
+//! `partition`: fewer meshlets by re-partitioning the whole mesh at a fixed count and packing the
+//! result with ejection chains over the meshlet graph (issue 33).
+//!
+//! Background (`../shared/notes/meshlet-count-bound.md`): at a vertex limit a disc-shaped patch
+//! with V vertices, B of them on its boundary, holds 2V - B - 2 triangles, so only shorter
+//! boundaries make room. meshoptimizer's greedy growth leaves meshlets whose boundaries are about
+//! 4 vertices longer than a hexagon's, because each meshlet grows into the ragged space its
+//! predecessors left. A global partition places all cells at once.
+//!
+//! The steps, on the state of `+refine` (`refine::state`: labels, counts, move journal):
+//! 1. **Start**: the input strategy's meshlets (meshoptimizer's for `partition`), then the
+//!    vertex-gain boundary moves of `+refine` step 1. This state is kept as the fallback.
+//! 2. **Global re-partition** ([`Config::lloyd_iterations`]): balanced geodesic Lloyd over the
+//!    dual graph at the same count. Seeds are the triangles nearest each cell's centroid; a
+//!    multi-source Dijkstra over centroid distances assigns every triangle; each cell's distance
+//!    carries an additive weight that grows with its vertex count over the limit
+//!    ([`Config::balance_step`]), so cells head for equal vertex counts (a power diagram on the
+//!    surface).
+//! 3. **Boundary moves without the limits**: the same vertex-gain moves with the limits lifted,
+//!    which shortens the Voronoi cells' ragged boundaries. Cells may now be over the vertex limit.
+//! 4. **Repair**: every cell over a limit sheds triangles along an ejection chain: the shortest
+//!    path in the meshlet adjacency graph to a cell with room, one boundary triangle (or a small
+//!    fan) passed per hop, executed from the far end back so that every hop is a move within the
+//!    limits of its receiver. A cell that cannot be repaired within [`Config::chains_per_meshlet`]
+//!    chains makes the whole re-partition fall back to step 1's state.
+//! 5. **Packing**: the emptiest cells are emptied one at a time, every triangle handed to a
+//!    neighbour with room or, when none has any, through an ejection chain as in step 4; a victim
+//!    that cannot be emptied is rolled back from the journal. [`Config::max_failures`] failures in
+//!    a row end it.
+//!
+//! Where this differs from textbook multilevel partitioners (METIS, KaHIP): one level only (the
+//! dual graph itself; the cells are few hundred triangles), the balance constraint is the hard
+//! vertex and triangle limits rather than a size tolerance, and the gain of a boundary move is
+//! the meshlet-vertex total rather than the edge cut. Where it differs from `+refine`: no
+//! annealing; capacity travels along whole chains of meshlets instead of one neighbourhood.
+//!
+//! Determinism: one thread, a fixed order everywhere, ties broken by index; the heap's keys are
+//! (distance bits, triangle, cell). The output depends neither on the thread count nor the run.
+
+use super::refine::moves::Rank;
+use super::refine::state::{labels_of, Search};
+use super::Strategy;
+use crate::adjacency::{dual_graph, vertex_triangles};
+use crate::mesh::Mesh;
+use crate::meshlet::{Limits, Meshlets};
+use crate::strategy::parallel::distinct;
+use glam::DVec3;
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, VecDeque};
+
+/// Search settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    /// Step 2: Lloyd iterations (0 = no re-partition, only packing the input).
+    pub lloyd_iterations: u32,
+    /// Step 2: growth of a cell's additive weight per vertex over (limit - 1), in mean
+    /// centroid-to-centroid edge lengths.
+    pub balance_step: f64,
+    /// Step 4: ejection chains one over-full cell may start before the re-partition is given up.
+    pub chains_per_meshlet: u32,
+    /// Step 5: victims in a row that may fail before the packing ends.
+    pub max_failures: u32,
+    /// Step 5: ejection chains one victim may start per triangle it holds.
+    pub chains_per_triangle: u32,
+}
+
+impl Default for Config {
+    /// Measured on the shared meshes at 64/126 (issue 33 note): one Lloyd iteration removed as
+    /// many meshlets as two or six and is the cheapest; 64 chains per over-full cell repaired the
+    /// bunny, igea and the aneurysm where 16 failed on the aneurysm; 2 chains per victim triangle
+    /// removed as many as 4, in less time; a 4th to 8th failed victim in a row never went.
+    fn default() -> Self {
+        Self {
+            lloyd_iterations: 1,
+            balance_step: 0.05,
+            chains_per_meshlet: 64,
+            max_failures: 3,
+            chains_per_triangle: 2,
+        }
+    }
+}
+
+/// What a run did, for reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Meshlets before.
+    pub meshlets_before: usize,
+    /// Meshlets after.
+    pub meshlets_after: usize,
+    /// Meshlet vertex references before.
+    pub vertices_before: usize,
+    /// Meshlet vertex references after.
+    pub vertices_after: usize,
+    /// Cells over a limit after the re-partition's boundary moves (step 3), before the repair.
+    pub overfull: usize,
+    /// Whether the global re-partition was kept (false: it could not be repaired).
+    pub repartitioned: bool,
+    /// Meshlets emptied by the packing.
+    pub dissolved: usize,
+    /// Victims rolled back.
+    pub failed: usize,
+    /// Ejection chains started (repair and packing).
+    pub chains: usize,
+    /// Hops of those chains that moved triangles.
+    pub hops: usize,
+}
+
+/// Any strategy followed by the re-partition and packing.
+pub struct Partitioned {
+    /// The strategy whose output is re-partitioned.
+    pub inner: Box<dyn Strategy>,
+    /// Search settings.
+    pub config: Config,
+    /// The name it was selected by, e.g. `partition` or `greedy+partition`.
+    pub name: &'static str,
+}
+
+impl Strategy for Partitioned {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+    fn summary(&self) -> &'static str {
+        "meshoptimizer's meshlets (or any strategy's), re-partitioned globally by balanced Lloyd and packed along ejection chains (fewer meshlets)"
+    }
+    fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
+        let ml = self.inner.build(mesh, limits);
+        partition(mesh, &ml, limits, self.config)
+    }
+}
+
+/// Re-partitions `ml` (a valid partition of `mesh` within `limits`); the result is valid for the
+/// same limits and has at most as many meshlets.
+///
+/// # Panics
+/// When `ml` does not hold every triangle of `mesh` exactly once (check it with
+/// [`crate::meshlet::validate`] first when it comes from outside).
+pub fn partition(mesh: &Mesh, ml: &Meshlets, limits: Limits, config: Config) -> Meshlets {
+    partition_with_stats(mesh, ml, limits, config).0
+}
+
+/// [`partition`], also returning what it did.
+pub fn partition_with_stats(
+    mesh: &Mesh,
+    ml: &Meshlets,
+    limits: Limits,
+    config: Config,
+) -> (Meshlets, Stats) {
+    let vt = vertex_triangles(mesh);
+    let (labels, seq) = labels_of(mesh, &vt, ml);
+    let dual = dual_graph(mesh, &vt);
+    let mut s = Search::new(mesh, &vt, &dual, labels, ml.len(), limits);
+    let mut stats = Stats {
+        meshlets_before: ml.len(),
+        vertices_before: s.part.vcount.iter().map(|&v| v as usize).sum(),
+        ..Stats::default()
+    };
+    let all: Vec<u32> = (0..mesh.triangle_count() as u32).collect();
+    s.improve(&all, Rank::Vertices);
+    let mut adj = Adjacency::new(ml.len());
+    // At the hard bound nothing can be removed: skip the search.
+    let floor = limits.min_meshlets(mesh.triangle_count());
+    if config.lloyd_iterations > 0 && s.part.live > floor {
+        let fallback = s.part.label.clone();
+        let labels = lloyd(&s, config);
+        s.part.restore(&labels);
+        // Step 3: the limits are lifted to the largest the format allows (cells are near the real
+        // limits, far from these).
+        s.part.limits = Limits::new(256, 256).expect("the largest limits");
+        s.improve(&all, Rank::Vertices);
+        s.part.limits = limits;
+        stats.overfull = (0..ml.len() as u32).filter(|&m| over(&s, m)).count();
+        stats.repartitioned = repair(&mut s, &mut adj, config, &mut stats);
+        if stats.repartitioned {
+            s.improve(&all, Rank::Vertices);
+        } else {
+            s.part.restore(&fallback);
+        }
+    }
+    pack(&mut s, &mut adj, config, &mut stats);
+    let live = s.part.live;
+    let out = s.part.into_meshlets(&seq);
+    // Every step ends within the limits, so no meshlet is split on the way out.
+    debug_assert_eq!(out.len(), live, "a partitioned meshlet broke a limit");
+    stats.meshlets_after = out.len();
+    stats.vertices_after = out.vertices.len();
+    (out, stats)
+}
+
+/// Step 2: balanced geodesic Lloyd from the current cells; the new label of every triangle.
+fn lloyd(s: &Search, config: Config) -> Vec<u32> {
+    let p = &s.part;
+    let n = p.label.len();
+    let k = p.tcount.len();
+    // The features start with the centroid, scaled to unit spread: scale-free distances.
+    let pos: Vec<DVec3> = p
+        .features
+        .iter()
+        .map(|f| DVec3::new(f[0], f[1], f[2]))
+        .collect();
+    // Edge lengths once, in the dual graph's row order.
+    let mut edge = Vec::with_capacity(3 * n);
+    for t in 0..n {
+        for &u in p.dual.row(t) {
+            edge.push(pos[t].distance(pos[u as usize]));
+        }
+    }
+    let h = edge.iter().sum::<f64>() / edge.len().max(1) as f64;
+    let mut label = p.label.clone();
+    let mut weight = vec![0.0f64; k];
+    let target = p.limits.max_vertices as f64 - 1.0;
+    for _ in 0..config.lloyd_iterations {
+        let seeds = central_triangles(&pos, &label, k);
+        label = voronoi(p.dual, &edge, &seeds, &weight, &label);
+        let vc = vertex_counts(p.vt, &label, k);
+        for c in 0..k {
+            weight[c] += config.balance_step * h * (vc[c] as f64 - target);
+        }
+    }
+    label
+}
+
+/// Per cell, the member triangle nearest the cell's centroid (`u32::MAX` for an empty cell).
+fn central_triangles(pos: &[DVec3], label: &[u32], k: usize) -> Vec<u32> {
+    let mut sum = vec![(DVec3::ZERO, 0.0f64); k];
+    for (t, &l) in label.iter().enumerate() {
+        sum[l as usize].0 += pos[t];
+        sum[l as usize].1 += 1.0;
+    }
+    let mut best = vec![(f64::MAX, u32::MAX); k];
+    for (t, &l) in label.iter().enumerate() {
+        let (s, c) = sum[l as usize];
+        let d = pos[t].distance(s / c);
+        if d < best[l as usize].0 {
+            best[l as usize] = (d, t as u32);
+        }
+    }
+    best.into_iter().map(|b| b.1).collect()
+}
+
+/// Multi-source Dijkstra over the dual graph from `seeds`, each cell's distances offset by its
+/// weight. Triangles no seed reaches (a mesh piece whose cells all emptied) keep `old`.
+fn voronoi(
+    dual: &crate::adjacency::Csr,
+    edge: &[f64],
+    seeds: &[u32],
+    weight: &[f64],
+    old: &[u32],
+) -> Vec<u32> {
+    let n = old.len();
+    // Offsets start at 0: the heap orders the distances' bit patterns, which only works for
+    // non-negative floats.
+    let low = weight.iter().copied().fold(f64::MAX, f64::min);
+    let mut dist = vec![f64::MAX; n];
+    let mut label = vec![u32::MAX; n];
+    let mut heap = BinaryHeap::new();
+    for (c, &t) in seeds.iter().enumerate() {
+        if t == u32::MAX {
+            continue;
+        }
+        let d = weight[c] - low;
+        if d < dist[t as usize] {
+            dist[t as usize] = d;
+            heap.push(Reverse((d.to_bits(), t, c as u32)));
+        }
+    }
+    // Row offsets of the dual graph, to index `edge`.
+    let mut start = Vec::with_capacity(n + 1);
+    start.push(0usize);
+    for t in 0..n {
+        start.push(start[t] + dual.row(t).len());
+    }
+    while let Some(Reverse((bits, t, c))) = heap.pop() {
+        let d = f64::from_bits(bits);
+        if label[t as usize] != u32::MAX || d > dist[t as usize] {
+            continue;
+        }
+        label[t as usize] = c;
+        for (i, &u) in dual.row(t as usize).iter().enumerate() {
+            let nd = d + edge[start[t as usize] + i];
+            if label[u as usize] == u32::MAX && nd < dist[u as usize] {
+                dist[u as usize] = nd;
+                heap.push(Reverse((nd.to_bits(), u, c)));
+            }
+        }
+    }
+    for t in 0..n {
+        if label[t] == u32::MAX {
+            label[t] = old[t];
+        }
+    }
+    label
+}
+
+/// Distinct vertices per cell.
+fn vertex_counts(vt: &crate::adjacency::Csr, label: &[u32], k: usize) -> Vec<u32> {
+    let mut count = vec![0u32; k];
+    let mut last = vec![u32::MAX; k];
+    for v in 0..vt.rows() {
+        for &t in vt.row(v) {
+            let m = label[t as usize] as usize;
+            if last[m] != v as u32 {
+                last[m] = v as u32;
+                count[m] += 1;
+            }
+        }
+    }
+    count
+}
+
+/// Meshlet adjacency lists, recomputed for a meshlet when it has changed since (its
+/// `changed_at` stamp). A neighbour that changed alone can leave a list stale by a meshlet; a
+/// stale entry only costs a hop that finds nothing to pass (and is then blocked), a missing one
+/// a longer path. Recomputing every list per search cost half the run time on the shared meshes.
+struct Adjacency {
+    lists: Vec<(usize, Vec<u32>)>,
+}
+
+impl Adjacency {
+    fn new(k: usize) -> Self {
+        Self {
+            lists: vec![(usize::MAX, Vec::new()); k],
+        }
+    }
+
+    fn of(&mut self, s: &Search, m: u32) -> &[u32] {
+        let stamp = s.part.changed_at[m as usize];
+        let entry = &mut self.lists[m as usize];
+        if entry.0 != stamp {
+            *entry = (stamp, s.part.adjacent_meshlets(m));
+        }
+        &entry.1
+    }
+}
+
+/// Whether meshlet `m` is over a limit.
+fn over(s: &Search, m: u32) -> bool {
+    let p = &s.part;
+    p.vcount[m as usize] > p.limits.max_vertices || p.tcount[m as usize] > p.limits.max_triangles
+}
+
+/// Step 4: brings every cell back within the limits; false when one stays over. A cell that
+/// fails is tried once more after the others (their chains change its surroundings).
+fn repair(s: &mut Search, adj: &mut Adjacency, config: Config, stats: &mut Stats) -> bool {
+    let mut todo: Vec<u32> = (0..s.part.tcount.len() as u32)
+        .filter(|&m| over(s, m))
+        .collect();
+    for _pass in 0..2 {
+        todo.retain(|&o| {
+            let mut blocked: Vec<(u32, u32)> = Vec::new();
+            let mut chains = config.chains_per_meshlet;
+            while over(s, o) && chains > 0 {
+                chains -= 1;
+                stats.chains += 1;
+                let Some(path) = shortest_path_to_room(s, adj, o, &blocked) else {
+                    break;
+                };
+                run_chain(s, &path, false, &mut blocked, stats);
+            }
+            over(s, o)
+        });
+    }
+    // A chain may push a cell that was within its limits over them only through a bug: every
+    // hop is a move within its receiver's limits.
+    todo.is_empty()
+}
+
+/// Step 5: empties the emptiest meshlets while victims go.
+fn pack(s: &mut Search, adj: &mut Adjacency, config: Config, stats: &mut Stats) {
+    let floor = s.part.limits.min_meshlets(s.part.label.len());
+    let mut failed = vec![false; s.part.tcount.len()];
+    let mut failures = 0;
+    while s.part.live > floor && failures < config.max_failures {
+        let Some(v) = s
+            .part
+            .emptiest_first()
+            .into_iter()
+            .find(|&m| !failed[m as usize])
+        else {
+            break;
+        };
+        s.part.journal = Some(Vec::new());
+        let ok = empty(s, adj, v, config, stats);
+        let journal = s.part.journal.take().expect("open journal");
+        if ok {
+            stats.dissolved += 1;
+            failures = 0;
+            failed.fill(false);
+            s.improve_around(journal.iter().map(|u| u.t));
+        } else {
+            stats.failed += 1;
+            failures += 1;
+            s.part.rollback(&journal);
+            failed[v as usize] = true;
+        }
+    }
+}
+
+/// Empties meshlet `v`; false (state dirty, to be rolled back) when it cannot.
+fn empty(s: &mut Search, adj: &mut Adjacency, v: u32, config: Config, stats: &mut Stats) -> bool {
+    let mut chains = config.chains_per_triangle * s.part.tcount[v as usize];
+    let mut blocked: Vec<(u32, u32)> = Vec::new();
+    while s.part.tcount[v as usize] > 0 {
+        if hand_over(s, v) {
+            continue;
+        }
+        if chains == 0 {
+            return false;
+        }
+        chains -= 1;
+        stats.chains += 1;
+        let Some(path) = shortest_path_to_room(s, adj, v, &blocked) else {
+            return false;
+        };
+        run_chain(s, &path, true, &mut blocked, stats);
+    }
+    true
+}
+
+/// Passes one triangle (or fan) along every hop of `path` from the far end back; the first hop
+/// that finds nothing to pass is blocked for the rest of this cell's turn.
+fn run_chain(
+    s: &mut Search,
+    path: &[u32],
+    victim: bool,
+    blocked: &mut Vec<(u32, u32)>,
+    stats: &mut Stats,
+) {
+    for i in (0..path.len() - 1).rev() {
+        let (y, z) = (path[i], path[i + 1]);
+        if pass_one(s, y, z, victim && i == 0) {
+            stats.hops += 1;
+        } else {
+            blocked.push((y, z));
+            return;
+        }
+    }
+}
+
+/// Hands one triangle of `v` to an edge neighbour with room, cheapest (fewest added vertices)
+/// first, ties to the lowest triangle; false when none fits.
+fn hand_over(s: &mut Search, v: u32) -> bool {
+    let p = &s.part;
+    let mut best: Option<(u32, u32, u32)> = None;
+    for &t in &p.members[v as usize] {
+        let (nb, n) = p.neighbour_labels(t);
+        for &b in &nb[..n] {
+            let add = p.added(t, b);
+            if p.fits(b, add) && best.is_none_or(|x| (add, t, b) < x) {
+                best = Some((add, t, b));
+            }
+        }
+    }
+    let Some((_, t, b)) = best else {
+        return false;
+    };
+    s.part.apply(t, b);
+    true
+}
+
+/// Whether meshlet `m` can take a triangle that adds a vertex.
+fn has_room(s: &Search, m: u32) -> bool {
+    let p = &s.part;
+    p.tcount[m as usize] > 0
+        && p.tcount[m as usize] < p.limits.max_triangles
+        && p.vcount[m as usize] < p.limits.max_vertices
+}
+
+/// The shortest chain of edge-adjacent meshlets from `v` to one with room, avoiding `blocked`
+/// hops: `[v, .., goal]`.
+fn shortest_path_to_room(
+    s: &Search,
+    adj: &mut Adjacency,
+    v: u32,
+    blocked: &[(u32, u32)],
+) -> Option<Vec<u32>> {
+    let mut parent = vec![u32::MAX; s.part.tcount.len()];
+    parent[v as usize] = v;
+    let mut queue = VecDeque::from([v]);
+    while let Some(y) = queue.pop_front() {
+        for &z in adj.of(s, y) {
+            if parent[z as usize] != u32::MAX || blocked.contains(&(y, z)) {
+                continue;
+            }
+            parent[z as usize] = y;
+            if has_room(s, z) {
+                let mut path = vec![z];
+                let mut c = z;
+                while c != v {
+                    c = parent[c as usize];
+                    path.push(c);
+                }
+                path.reverse();
+                return Some(path);
+            }
+            queue.push_back(z);
+        }
+    }
+    None
+}
+
+/// Moves boundary triangles of `y` into its neighbour `z` within `z`'s limits, keeping `y`
+/// edge-connected unless `y` is the victim being emptied. A link inside a chain must free a
+/// vertex of `y` for what comes in next, so those go first: a single triangle, cheapest first;
+/// then the fan of `y` around a vertex it shares with `z` (all of `y`'s triangles there, 2 to 4:
+/// it frees that vertex, which a single triangle rarely does once boundaries are short); then a
+/// single triangle that frees nothing.
+fn pass_one(s: &mut Search, y: u32, z: u32, victim: bool) -> bool {
+    let p = &s.part;
+    // (frees nothing, vertices added - freed, triangle)
+    let mut singles: Vec<(bool, i64, u32)> = Vec::new();
+    let mut shared: Vec<u32> = Vec::new();
+    for &t in &p.members[y as usize] {
+        let (nb, n) = p.neighbour_labels(t);
+        if !nb[..n].contains(&z) {
+            continue;
+        }
+        for w in distinct(p.mesh.triangle(t as usize)) {
+            if p.uses(w, z) > 0 && !shared.contains(&w) {
+                shared.push(w);
+            }
+        }
+        let add = p.added(t, z);
+        if p.fits(z, add) {
+            let rem = p.removed(t, y);
+            singles.push((!victim && rem == 0, add as i64 - rem as i64, t));
+        }
+    }
+    singles.sort_unstable();
+    for &(frees_none, _, t) in &singles {
+        if !frees_none && (victim || s.stays_connected(t)) {
+            s.part.apply(t, z);
+            return true;
+        }
+    }
+    shared.sort_unstable();
+    let mut fans: Vec<(i64, usize, u32)> = Vec::new();
+    for &w in &shared {
+        if let Some((net, size)) = fan_cost(s, y, z, w, victim) {
+            fans.push((net, size, w));
+        }
+    }
+    fans.sort_unstable();
+    for &(_, _, w) in &fans {
+        if move_fan(s, y, z, w, victim) {
+            return true;
+        }
+    }
+    for &(frees_none, _, t) in &singles {
+        if frees_none && s.stays_connected(t) {
+            s.part.apply(t, z);
+            return true;
+        }
+    }
+    false
+}
+
+/// `y`'s triangles around vertex `w`.
+fn fan(s: &Search, y: u32, w: u32) -> Vec<u32> {
+    let p = &s.part;
+    p.vt.row(w as usize)
+        .iter()
+        .copied()
+        .filter(|&t| p.label[t as usize] == y)
+        .collect()
+}
+
+/// (vertices `z` gains - vertices `y` frees, size) of moving `y`'s fan around `w` into `z`, when
+/// it fits `z` and frees a vertex of `y` (always needed unless `y` is the victim).
+fn fan_cost(s: &Search, y: u32, z: u32, w: u32, victim: bool) -> Option<(i64, usize)> {
+    let p = &s.part;
+    let f = fan(s, y, w);
+    if f.len() < 2
+        || f.len() > 4
+        || p.tcount[z as usize] as usize + f.len() > p.limits.max_triangles as usize
+    {
+        return None;
+    }
+    let mut verts: Vec<u32> = f
+        .iter()
+        .flat_map(|&t| distinct(p.mesh.triangle(t as usize)))
+        .collect();
+    verts.sort_unstable();
+    let (mut added, mut freed) = (0i64, 0i64);
+    for run in verts.chunk_by(|a, b| a == b) {
+        let u = run[0];
+        added += (p.uses(u, z) == 0) as i64;
+        // Every use of u in y is in the fan.
+        freed += (p.uses(u, y) == run.len()) as i64;
+    }
+    let fits = p.vcount[z as usize] as i64 + added <= p.limits.max_vertices as i64;
+    (fits && (victim || freed > 0)).then_some((added - freed, f.len()))
+}
+
+/// Moves `y`'s fan around `w` into `z`, each triangle while it touches `z` by an edge; undone
+/// (false) when that leaves part of the fan behind or `y` in pieces.
+fn move_fan(s: &mut Search, y: u32, z: u32, w: u32, victim: bool) -> bool {
+    let mut rest = fan(s, y, w);
+    let mut moved: Vec<u32> = Vec::new();
+    while let Some(i) = rest.iter().position(|&t| {
+        let (nb, n) = s.part.neighbour_labels(t);
+        nb[..n].contains(&z)
+    }) {
+        let t = rest.swap_remove(i);
+        s.part.apply(t, z);
+        moved.push(t);
+    }
+    if rest.is_empty() && (victim || s.part.tcount[y as usize] == 0 || s.is_connected(y)) {
+        return true;
+    }
+    for &t in moved.iter().rev() {
+        s.part.apply(t, y);
+    }
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+    use crate::meshlet::validate;
+    use crate::strategy::{by_name, Options};
+
+    fn build(name: &str, mesh: &Mesh, limits: Limits) -> Meshlets {
+        by_name(name, &Options::default())
+            .unwrap()
+            .build(mesh, limits)
+    }
+
+    #[test]
+    fn keeps_the_limits_and_never_adds_meshlets() {
+        let meshes = [
+            generate::noisy_sphere(4, 0.3, 7),
+            generate::terrain(40, 5),
+            generate::cad_part(128, 3),
+        ];
+        for mesh in &meshes {
+            for limits in Limits::COUNT_PRESETS {
+                for base in ["nvidia", "greedy", "meshopt"] {
+                    let input = build(base, mesh, limits);
+                    for lloyd_iterations in [0, 1, 3] {
+                        let config = Config {
+                            lloyd_iterations,
+                            ..Config::default()
+                        };
+                        let (out, st) = partition_with_stats(mesh, &input, limits, config);
+                        let what = format!("{base} {limits} lloyd {lloyd_iterations}");
+                        validate(mesh, &out, limits).unwrap_or_else(|e| panic!("{what}: {e}"));
+                        assert!(out.len() <= input.len(), "{what}");
+                        assert_eq!(st.meshlets_after, out.len(), "{what}");
+                        assert!(out.len() >= limits.min_meshlets(mesh.triangle_count()));
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_poor_partition_loses_meshlets() {
+        // The index-order scan leaves long, thin meshlets: the packing must empty some.
+        let mesh = generate::noisy_sphere(4, 0.1, 3);
+        let input = build("nvidia", &mesh, Limits::DEFAULT);
+        let (out, st) = partition_with_stats(&mesh, &input, Limits::DEFAULT, Config::default());
+        assert!(out.len() < input.len(), "{} -> {}", input.len(), out.len());
+        assert!(st.dissolved > 0 && st.chains > 0 && st.hops > 0, "{st:?}");
+        assert!(st.vertices_after < st.vertices_before, "{st:?}");
+    }
+
+    #[test]
+    fn the_repartition_is_kept_or_undone_whole() {
+        // Either way the output validates; on a smooth sphere the repair succeeds.
+        let mesh = generate::noisy_sphere(5, 0.0, 1);
+        let input = build("meshopt", &mesh, Limits::DEFAULT);
+        let (out, st) = partition_with_stats(&mesh, &input, Limits::DEFAULT, Config::default());
+        validate(&mesh, &out, Limits::DEFAULT).unwrap();
+        assert!(st.overfull > 0 && st.repartitioned, "{st:?}");
+        // No chains at all: a cell over the limits cannot be repaired, so the input is kept.
+        let none = Config {
+            chains_per_meshlet: 0,
+            ..Config::default()
+        };
+        let (out, st) = partition_with_stats(&mesh, &input, Limits::DEFAULT, none);
+        validate(&mesh, &out, Limits::DEFAULT).unwrap();
+        assert!(!st.repartitioned, "{st:?}");
+    }
+
+    #[test]
+    fn names_select_the_base_strategy() {
+        assert_eq!(
+            by_name("partition", &Options::default()).unwrap().name(),
+            "partition"
+        );
+        for base in crate::strategy::NAMES.iter().filter(|&&n| n != "partition") {
+            let name = format!("{base}+partition");
+            assert_eq!(by_name(&name, &Options::default()).unwrap().name(), name);
+        }
+        assert!(by_name("partition+partition", &Options::default()).is_err());
+        let mesh = generate::terrain(30, 2);
+        assert_eq!(
+            build("meshopt+partition", &mesh, Limits::DEFAULT),
+            build("partition", &mesh, Limits::DEFAULT)
+        );
+        assert!(by_name("nope+partition", &Options::default()).is_err());
+    }
+}
