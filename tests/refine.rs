@@ -233,6 +233,7 @@ fn bench_build_writes_the_per_preset_comparison() {
         quiet: true,
         refined: true,
         refine_max: false,
+        stress: false,
     };
     let rows = build::run(&cfg).unwrap();
     for limits in Limits::COUNT_PRESETS {
@@ -245,6 +246,7 @@ fn bench_build_writes_the_per_preset_comparison() {
                 .meshlets
         };
         assert!(count("meshopt+refine") <= count("meshopt"), "{limits}");
+        assert!(count("partition") <= count("meshopt"), "{limits}");
         assert!(count("meshopt-scan") >= limits.min_meshlets(rows[0].triangles));
     }
     assert!(rows.iter().any(|r| r.eval.strategy == "kmedoids+refine"));
@@ -258,6 +260,7 @@ fn bench_build_writes_the_per_preset_comparison() {
         "### 128/128",
         "hard bound",
         "meshopt+refine",
+        "`partition` against every meshoptimizer builder",
     ] {
         assert!(md.contains(h), "strategies.md lacks {h}");
     }

@@ -438,7 +438,7 @@ fn corpus(cfg: &Config, dir: &std::path::Path) -> Result<Vec<(String, mesh::Mesh
     for f in mesh_files(dir)? {
         out.push((mesh_name(&f), mesh::load(&f)?));
     }
-    for name in ["cad-part-128", "cad-part-400", "strut-lattice"] {
+    for name in mesh::generate::STRESS_NAMES {
         let path = format!("{}{name}", mesh::GENERATED_PREFIX);
         out.push((name.to_string(), mesh::load(std::path::Path::new(&path))?));
     }

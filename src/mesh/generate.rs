@@ -54,6 +54,9 @@ pub fn stress_set(seed: u64) -> Vec<Generated> {
     ]
 }
 
+/// The names of [`stress_set`]'s meshes, in its order (what the benches load as `gen:NAME`).
+pub const STRESS_NAMES: [&str; 3] = ["cad-part-128", "cad-part-400", "strut-lattice"];
+
 /// Seed of the generated meshes a `gen:NAME` path names (so every bench and command sees the same
 /// mesh under one name).
 pub const NAMED_SEED: u64 = 1;
@@ -415,6 +418,8 @@ mod tests {
             assert_eq!(named(g.name).unwrap(), g.mesh, "{}", g.name);
         }
         assert_eq!(NAMES.len(), 6);
+        let stress: Vec<&str> = stress_set(1).iter().map(|g| g.name).collect();
+        assert_eq!(stress, STRESS_NAMES);
         assert!(named("no-such-mesh").is_none());
         for g in stress_set(5) {
             g.mesh.validate().unwrap();
