@@ -74,6 +74,9 @@ fn refine_every_output(small: bool) {
             for name in strategy::NAMES
                 .iter()
                 .filter(|n| !strategy::SLOW.contains(n))
+                // Already packed by the same boundary moves and chains: refining it again is no
+                // new input for `+refine`, and would cost a minute of every test run.
+                .filter(|n| **n != "partition")
                 .filter(|n| small || LARGE_MESH_INPUTS.contains(n))
             {
                 let input = strategy::by_name(name, &opts).unwrap().build(&m, limits);
@@ -101,7 +104,7 @@ fn refine_every_output(small: bool) {
     }
     // Six shared meshes are small and four large; a missing mesh must not pass silently.
     let expected = if small {
-        6 * 3 * (strategy::NAMES.len() - strategy::SLOW.len())
+        6 * 3 * (strategy::NAMES.len() - strategy::SLOW.len() - 1)
     } else {
         4 * 3 * LARGE_MESH_INPUTS.len()
     };
