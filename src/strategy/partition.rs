@@ -38,7 +38,7 @@
 //! (distance bits, triangle, cell). The output depends neither on the thread count nor the run.
 
 use super::refine::moves::Rank;
-use super::refine::state::{labels_of, Search};
+use super::refine::state::{labels_of, vertex_counts, Search};
 use super::Strategy;
 use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::mesh::Mesh;
@@ -197,8 +197,8 @@ fn lloyd(s: &Search, config: Config) -> Vec<u32> {
         .iter()
         .map(|f| DVec3::new(f[0], f[1], f[2]))
         .collect();
-    // Edge lengths once, in the dual graph's row order.
-    let mut edge = Vec::with_capacity(3 * n);
+    // Edge lengths once, in the dual graph's item order.
+    let mut edge = Vec::with_capacity(p.dual.items.len());
     for t in 0..n {
         for &u in p.dual.row(t) {
             edge.push(pos[t].distance(pos[u as usize]));
@@ -208,13 +208,16 @@ fn lloyd(s: &Search, config: Config) -> Vec<u32> {
     let mut label = p.label.clone();
     let mut weight = vec![0.0f64; k];
     let target = p.limits.max_vertices as f64 - 1.0;
-    for _ in 0..config.lloyd_iterations {
+    for it in 0..config.lloyd_iterations {
+        // The weights start at 0 and follow the previous step's cells.
+        if it > 0 {
+            let vc = vertex_counts(p.vt, &label, k);
+            for c in 0..k {
+                weight[c] += config.balance_step * h * (vc[c] as f64 - target);
+            }
+        }
         let seeds = central_triangles(&pos, &label, k);
         label = voronoi(p.dual, &edge, &seeds, &weight, &label);
-        let vc = vertex_counts(p.vt, &label, k);
-        for c in 0..k {
-            weight[c] += config.balance_step * h * (vc[c] as f64 - target);
-        }
     }
     label
 }
@@ -263,12 +266,6 @@ fn voronoi(
             heap.push(Reverse((d.to_bits(), t, c as u32)));
         }
     }
-    // Row offsets of the dual graph, to index `edge`.
-    let mut start = Vec::with_capacity(n + 1);
-    start.push(0usize);
-    for t in 0..n {
-        start.push(start[t] + dual.row(t).len());
-    }
     while let Some(Reverse((bits, t, c))) = heap.pop() {
         let d = f64::from_bits(bits);
         if label[t as usize] != u32::MAX || d > dist[t as usize] {
@@ -276,7 +273,8 @@ fn voronoi(
         }
         label[t as usize] = c;
         for (i, &u) in dual.row(t as usize).iter().enumerate() {
-            let nd = d + edge[start[t as usize] + i];
+            // `edge` is in the dual graph's item order.
+            let nd = d + edge[dual.offsets[t as usize] as usize + i];
             if label[u as usize] == u32::MAX && nd < dist[u as usize] {
                 dist[u as usize] = nd;
                 heap.push(Reverse((nd.to_bits(), u, c)));
@@ -289,22 +287,6 @@ fn voronoi(
         }
     }
     label
-}
-
-/// Distinct vertices per cell.
-fn vertex_counts(vt: &crate::adjacency::Csr, label: &[u32], k: usize) -> Vec<u32> {
-    let mut count = vec![0u32; k];
-    let mut last = vec![u32::MAX; k];
-    for v in 0..vt.rows() {
-        for &t in vt.row(v) {
-            let m = label[t as usize] as usize;
-            if last[m] != v as u32 {
-                last[m] = v as u32;
-                count[m] += 1;
-            }
-        }
-    }
-    count
 }
 
 /// Meshlet adjacency lists, recomputed for a meshlet when it has changed since (its

@@ -52,6 +52,23 @@ pub(crate) fn labels_of(mesh: &Mesh, vt: &Csr, ml: &Meshlets) -> (Vec<u32>, Vec<
     (labels, seq)
 }
 
+/// Distinct vertices of each of the `k` meshlets of the partition `label` (one pass over the
+/// vertex -> triangle rows: a meshlet is counted once per vertex it uses).
+pub(crate) fn vertex_counts(vt: &Csr, label: &[u32], k: usize) -> Vec<u32> {
+    let mut count = vec![0u32; k];
+    let mut last = vec![u32::MAX; k];
+    for v in 0..vt.rows() {
+        for &t in vt.row(v) {
+            let m = label[t as usize] as usize;
+            if last[m] != v as u32 {
+                last[m] = v as u32;
+                count[m] += 1;
+            }
+        }
+    }
+    count
+}
+
 /// One journaled move: the triangle, where it came from and went, and both meshlets' change
 /// stamps before it.
 #[derive(Clone, Copy)]
@@ -153,7 +170,6 @@ impl<'a> Partition<'a> {
     fn recount(&mut self) {
         let k = self.tcount.len();
         self.tcount.fill(0);
-        self.vcount.fill(0);
         self.csum.fill([0.0; F]);
         for m in &mut self.members {
             m.clear();
@@ -165,16 +181,7 @@ impl<'a> Partition<'a> {
                 self.csum[m as usize][i] += self.features[t][i];
             }
         }
-        let mut last = vec![u32::MAX; k];
-        for v in 0..self.vt.rows() {
-            for &t in self.vt.row(v) {
-                let m = self.label[t as usize] as usize;
-                if last[m] != v as u32 {
-                    last[m] = v as u32;
-                    self.vcount[m] += 1;
-                }
-            }
-        }
+        self.vcount = vertex_counts(self.vt, &self.label, k);
         self.live = self.tcount.iter().filter(|&&c| c > 0).count();
     }
 
