@@ -100,7 +100,7 @@ impl Search<'_> {
     }
 
     /// Step 2: spread-first boundary moves, then vertex-first ones.
-    pub(crate) fn round_off(&mut self, all: &[u32]) {
+    pub(super) fn round_off(&mut self, all: &[u32]) {
         self.improve(all, Rank::Spread);
         self.improve(all, Rank::Vertices);
     }
