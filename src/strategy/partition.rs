@@ -76,8 +76,9 @@ pub struct Config {
     pub balance_step: f64,
     /// Step 4: ejection chains one over-full cell may start before it is split.
     pub chains_per_meshlet: u32,
-    /// Step 2: re-partitions to try in turn until one is repaired, each with the seeds of this
-    /// share of the cells (the emptiest) left out.
+    /// Step 2: re-partitions to try in turn until one is repaired without splits, each with the
+    /// seeds of this share of the cells (the emptiest) left out. A dropped seed of a cell that
+    /// is a whole mesh piece drops nothing: no other seed reaches the piece, so it keeps its cell.
     pub drops: &'static [f64],
     /// Step 4: cells the repair may split off over-full cells that no chain fixes. With splits
     /// the re-partition is kept only when, packed, it ends with fewer meshlets than the packed
@@ -132,7 +133,9 @@ pub struct Stats {
     /// Whether the global re-partition was kept (false: it could not be repaired, or it packed
     /// no better than the fallback).
     pub repartitioned: bool,
-    /// Cells the repair split off over-full ones.
+    /// Cells the repair split off over-full ones. This and the counts below sum the work of
+    /// every attempt, also of re-partitions that were then dropped; the meshlet counts above are
+    /// the result's.
     pub splits: usize,
     /// Meshlets emptied by the packing.
     pub dissolved: usize,
@@ -310,6 +313,7 @@ fn repartition(
     pack(s, adj, config, stats);
     let packed = Outcome::Packed(s.part.label.clone(), s.part.live);
     s.part.restore(fallback);
+    adj.forget();
     packed
 }
 
@@ -484,6 +488,15 @@ impl Adjacency {
         }
     }
 
+    /// Forgets every list. Needed after a restore that follows a rollback: a rollback turns the
+    /// move counter back, so a restore's fresh stamp can equal one a list was cached under on a
+    /// partition since undone.
+    fn forget(&mut self) {
+        for entry in &mut self.lists {
+            entry.0 = usize::MAX;
+        }
+    }
+
     fn of(&mut self, s: &Search, m: u32) -> &[u32] {
         let stamp = s.part.changed_at[m as usize];
         let entry = &mut self.lists[m as usize];
@@ -501,7 +514,8 @@ fn over(s: &Search, m: u32) -> bool {
 }
 
 /// Step 4: brings every cell back within the limits; false when one stays over. A cell that
-/// fails is tried once more after the others (their chains change its surroundings).
+/// fails is tried once more after the others (their chains change its surroundings), unless
+/// more than four times [`Config::max_splits`] failed; what still fails is split.
 fn repair(s: &mut Search, adj: &mut Adjacency, config: Config, stats: &mut Stats) -> bool {
     let mut todo: Vec<u32> = (0..s.part.tcount.len() as u32)
         .filter(|&m| over(s, m))
