@@ -16,9 +16,9 @@
 //!    carries an additive weight that grows with its vertex count over the limit
 //!    ([`Config::balance_step`]), so cells head for equal vertex counts (a power diagram on the
 //!    surface). [`Config::drops`]: the first attempt leaves out the seeds of the emptiest 0.3 % of
-//!    the cells, so the repair and packing start from fewer cells (igea 2769 meshlets against
-//!    2775 without; pycortex 3178 against 3185); when it cannot be repaired, the next attempt
-//!    keeps every seed. The Dijkstra settles one band of distances at a time ([`Config::band`]) in
+//!    the cells, so the repair and packing start from fewer cells (one probe run at 64/126: igea
+//!    2769 meshlets against 2775 without, pycortex 3178 against 3185); when it cannot be
+//!    repaired, the next attempt keeps every seed. The Dijkstra settles one band of distances at a time ([`Config::band`]) in
 //!    triangle order: its pops otherwise jump across the whole mesh, and on igea it took 0.7x
 //!    meshoptimizer's whole build in cache misses.
 //! 3. **Boundary moves without the limits**: the same vertex-gain moves with the limits lifted,
