@@ -354,8 +354,7 @@ fn lloyd(s: &Search, config: Config, dropped: usize) -> Vec<u32> {
             }
         }
         label = voronoi(
-            h,
-            config.band,
+            config.band * h,
             &p.dual.offsets,
             &arcs,
             &seeds,
@@ -386,10 +385,9 @@ fn central_triangles(pos: &[DVec3], label: &[u32], k: usize) -> Vec<u32> {
 
 /// Multi-source Dijkstra over the dual graph (`offsets` into `arcs`: neighbour, length) from
 /// `seeds`, each cell's distances offset by its weight. Triangles no seed reaches (a mesh piece
-/// whose cells all emptied) keep `old`.
-#[allow(clippy::too_many_arguments)]
+/// whose cells all emptied) keep `old`. `band` is the width of distance settled at once, in the
+/// lengths' units ([`Config::band`] times the mean length).
 fn voronoi(
-    h: f64,
     band: f64,
     offsets: &[u32],
     arcs: &[(u32, f32)],
@@ -432,7 +430,6 @@ fn voronoi(
             heap.push(Reverse((d.to_bits(), t, c as u32)));
         }
     }
-    let band = band * h;
     let mut batch: Vec<(u32, u64, u32)> = Vec::new();
     while let Some(Reverse((bits, t, c))) = heap.pop() {
         // One band of distances, settled in triangle order (then distance, then cell).
