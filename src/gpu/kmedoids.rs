@@ -271,7 +271,8 @@ impl Modules {
 /// with the GPU running its parallel steps: the adjacency, every medoid update (one workgroup
 /// per cluster: the `update` kernel of `wgsl/kmedoids.wgsl` with every cluster marked changed)
 /// and the capacity-aware assignment ([`super::capacity`], level by level to the fixed point that
-/// equals the CPU's sequential order). The seeding growth, the merges and the packing are
+/// equals the CPU's sequential order; it runs only where the CPU's would, in the rounds that
+/// `worth_a_round` allows). The seeding growth, the merges and the packing are
 /// sequential by nature and run on the host between them, over the adjacency read back from the
 /// GPU. The output equals the CPU's (medoids, labels, distances, iterations, meshlets).
 pub fn cluster_capacity(

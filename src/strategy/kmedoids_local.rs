@@ -351,6 +351,10 @@ pub(crate) fn merge_neighbours(
     let mut order: Vec<u32> = (0..k as u32).collect();
     order.sort_unstable_by_key(|&c| (sets.tris(c).len(), c));
     let mut merged = vec![false; k];
+    let mut cand: Vec<(u32, bool)> = Vec::new();
+    // The cluster that last listed a neighbour, and where in `cand` it sits.
+    let mut stamp = vec![u32::MAX; k];
+    let mut slot = vec![0u32; k];
     for a in order {
         if into[a as usize] != a {
             continue;
@@ -359,12 +363,23 @@ pub(crate) fn merge_neighbours(
         // at a vertex where pieces join; any other neighbour shares a piece and no edge with
         // `a`, which would leave the union in more pieces than the mesh. Reading labels across
         // the joints only, not around every vertex, is most of this pass's saving.
-        let mut cand: Vec<(u32, bool)> = Vec::new();
+        // One entry per neighbour, edge-adjacent if any meeting is across an edge (deduplicated
+        // by stamps, not a sort: the choice below does not depend on the candidates' order).
+        cand.clear();
+        let mut add = |b: u32, edge: bool, cand: &mut Vec<(u32, bool)>| {
+            if stamp[b as usize] != a {
+                stamp[b as usize] = a;
+                slot[b as usize] = cand.len() as u32;
+                cand.push((b, edge));
+            } else {
+                cand[slot[b as usize] as usize].1 |= edge;
+            }
+        };
         for &t in sets.tris(a) {
             for &u in dual.row(t as usize) {
                 let b = find(&into, labels[u as usize]);
                 if b != a {
-                    cand.push((b, true));
+                    add(b, true, &mut cand);
                 }
             }
         }
@@ -374,16 +389,12 @@ pub(crate) fn merge_neighbours(
                     for &u in vt.row(v as usize) {
                         let b = find(&into, labels[u as usize]);
                         if b != a {
-                            cand.push((b, false));
+                            add(b, false, &mut cand);
                         }
                     }
                 }
             }
         }
-        // One entry per neighbour, edge-adjacent if any entry says so (true sorts last).
-        cand.sort_unstable();
-        cand.reverse();
-        cand.dedup_by_key(|c| c.0);
         let mut best: Option<(u32, u32)> = None;
         for &(b, edge) in &cand {
             // Triangles first, then vertices, then pieces: each test reads only what the
