@@ -738,5 +738,4 @@ mod tests {
         assert_eq!(a.iterations, 0);
         assert_eq!((&a.medoids, &a.labels), (&b.medoids, &b.labels));
     }
-
 }

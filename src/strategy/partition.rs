@@ -18,7 +18,8 @@
 //!    surface). [`Config::drops`]: the first attempt leaves out the seeds of the emptiest 0.3 % of
 //!    the cells, so the repair and packing start from fewer cells (one probe run at 64/126: igea
 //!    2769 meshlets against 2775 without, pycortex 3178 against 3185); when it cannot be
-//!    repaired, the next attempt keeps every seed. The Dijkstra settles one band of distances at a time ([`Config::band`]) in
+//!    repaired, the next attempt keeps every seed (unless the repair stopped early: then no
+//!    attempt with more seeds went either). The Dijkstra settles one band of distances at a time ([`Config::band`]) in
 //!    triangle order: its pops otherwise jump across the whole mesh, and on igea it took 0.7x
 //!    meshoptimizer's whole build in cache misses.
 //! 3. **Boundary moves without the limits**: the same vertex-gain moves with the limits lifted,
@@ -128,6 +129,8 @@ pub struct Stats {
     pub vertices_before: usize,
     /// Meshlet vertex references after.
     pub vertices_after: usize,
+    /// Re-partitions tried (steps 2-4; at most one per entry of [`Config::drops`]).
+    pub attempts: usize,
     /// Cells over a limit after the re-partition's boundary moves (step 3), before the repair.
     pub overfull: usize,
     /// Whether the global re-partition was kept (false: it could not be repaired, or it packed
@@ -226,8 +229,10 @@ pub fn partition_with_stats(
                 continue;
             }
             tried.push(dropped);
+            stats.attempts += 1;
             match repartition(&mut s, &mut adj, config, dropped, &fallback, &mut stats) {
-                Outcome::Kept => break,
+                // Far more unrepaired cells than the next attempt's extra seeds could take.
+                Outcome::Kept | Outcome::Hopeless => break,
                 Outcome::Failed => {}
                 Outcome::Packed(labels, live) => {
                     if candidate.as_ref().is_none_or(|c| live < c.1) {
@@ -268,6 +273,11 @@ enum Outcome {
     Kept,
     /// Not repaired: the state is the fallback again.
     Failed,
+    /// Not repaired, and the repair stopped early (far more failures than the splits can take):
+    /// the state is the fallback again, and no further attempt is made. Measured on the shared
+    /// meshes at 64/126, 64/84 and 128/128: where the first attempt's repair stopped early
+    /// (the motorbike, the dragon), the next attempt, with every seed, stopped early too.
+    Hopeless,
     /// Repaired with splits (more cells than the input), then packed: its labels and live
     /// count, to compare with the packed fallback. The state is the fallback again.
     Packed(Vec<u32>, usize),
@@ -296,10 +306,16 @@ fn repartition(
         .filter(|&m| over(s, m))
         .count();
     let splits = stats.splits;
-    let repaired = repair(s, adj, config, stats);
-    if !repaired {
-        s.part.restore(fallback);
-        return Outcome::Failed;
+    match repair(s, adj, config, stats) {
+        Repair::Done => {}
+        Repair::Unrepaired => {
+            s.part.restore(fallback);
+            return Outcome::Failed;
+        }
+        Repair::Stopped => {
+            s.part.restore(fallback);
+            return Outcome::Hopeless;
+        }
     }
     // All triangles, not only the repair's: zero-gain moves that lower the spread reach
     // anywhere (the cells' means moved), and they feed the packing (pycortex at 64/84: the hard
@@ -509,10 +525,20 @@ fn over(s: &Search, m: u32) -> bool {
     p.vcount[m as usize] > p.limits.max_vertices || p.tcount[m as usize] > p.limits.max_triangles
 }
 
-/// Step 4: brings every cell back within the limits; false when one stays over. A cell that
-/// fails is tried once more after the others (their chains change its surroundings), unless
-/// more than four times [`Config::max_splits`] failed; what still fails is split.
-fn repair(s: &mut Search, adj: &mut Adjacency, config: Config, stats: &mut Stats) -> bool {
+/// How a repair (step 4) ended.
+enum Repair {
+    /// Every cell within the limits.
+    Done,
+    /// Some cells still over a limit after the chains and splits.
+    Unrepaired,
+    /// Stopped in a pass with more failures than the splits could ever take.
+    Stopped,
+}
+
+/// Step 4: brings every cell back within the limits. A cell that fails is tried once more after
+/// the others (their chains change its surroundings), unless more than four times
+/// [`Config::max_splits`] failed (then it stops); what still fails is split.
+fn repair(s: &mut Search, adj: &mut Adjacency, config: Config, stats: &mut Stats) -> Repair {
     let mut todo: Vec<u32> = (0..s.part.tcount.len() as u32)
         .filter(|&m| over(s, m))
         .collect();
@@ -535,7 +561,7 @@ fn repair(s: &mut Search, adj: &mut Adjacency, config: Config, stats: &mut Stats
             if over(s, o) {
                 left.push(o);
                 if left.len() > most_failures {
-                    return false;
+                    return Repair::Stopped;
                 }
             }
         }
@@ -557,7 +583,11 @@ fn repair(s: &mut Search, adj: &mut Adjacency, config: Config, stats: &mut Stats
     });
     // A chain may push a cell that was within its limits over them only through a bug: every
     // hop is a move within its receiver's limits.
-    todo.is_empty()
+    if todo.is_empty() {
+        Repair::Done
+    } else {
+        Repair::Unrepaired
+    }
 }
 
 /// Moves triangles of the over-full cell `o` into the empty cell `z`, breadth-first inside `o`
@@ -980,6 +1010,26 @@ mod tests {
         }
         let (_, st) = partition_with_stats(&mesh, &input, Limits::DEFAULT, split_all);
         assert!(st.splits > 0, "{st:?}");
+    }
+
+    #[test]
+    fn a_repair_that_stops_early_ends_the_attempts() {
+        let mesh = generate::noisy_sphere(5, 0.1, 2);
+        let input = build("meshopt", &mesh, Limits::DEFAULT);
+        // No chains and no splits: the first cell left over a limit stops the repair, and the
+        // drops after the first are not tried.
+        let hopeless = Config {
+            chains_per_meshlet: 0,
+            max_splits: 0,
+            drops: &[0.05, 0.01, 0.0],
+            ..Config::default()
+        };
+        let (out, st) = partition_with_stats(&mesh, &input, Limits::DEFAULT, hopeless);
+        assert!(st.overfull > 0, "{st:?}");
+        assert_eq!(st.attempts, 1, "{st:?}");
+        assert!(!st.repartitioned, "{st:?}");
+        validate(&mesh, &out, Limits::DEFAULT).unwrap();
+        assert!(out.len() <= input.len());
     }
 
     #[test]
