@@ -705,7 +705,8 @@ pub fn run(cfg: &Config) -> Result<()> {
         s,
         "`kmedoids` (the default): clusters grown to the limits one at a time (among equally cheap triangles the \
          one nearest the cluster's centroid), neighbours merged, whole small pieces packed, capacity-aware \
-         re-assignment from the paper's medoids kept while it helps (src/strategy/kmedoids_capacity.rs). \
+         re-assignment from the paper's medoids kept while it helps, tried only where at least a third of \
+         the clusters hold at most half the triangle limit (src/strategy/kmedoids_capacity.rs). \
          `kmedoids, grow hops`: the same with `--kmedoids-grow hops` (fewest hops from the seed first: fewer \
          meshlets, larger spheres). \
          `kmedoids-flat`: nearest-medoid assignment, the largest quarter of overflowing clusters split per \
@@ -775,7 +776,8 @@ pub fn run(cfg: &Config) -> Result<()> {
     );
     let _ = writeln!(
         s,
-        "`kmedoids` and its `hops` growth: their most capacity-aware re-assignment rounds; `kmedoids-flat`: the iteration limit and \
+        "`kmedoids` and its `hops` growth: their most capacity-aware re-assignment rounds (no effect where \
+         too few clusters are light for a round to run: `iterations run` says how many ran); `kmedoids-flat`: the iteration limit and \
          convergence threshold (mean medoid shift in hops) of its clustering. One run per point. Error: mean \
          hops to the medoid, and the meshlet count. The Pareto front is taken over time and meshlets. Data: \
          kmedoids_sweep.csv.\n\n\

@@ -194,8 +194,9 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
         ))
         .collect(),
     ));
-    // The capacity-aware assignment alone, from the final medoids: a run keeps its result only
-    // when the round is accepted, so the whole-run check above can miss a difference here.
+    // The capacity-aware assignment alone, from the final medoids: a run runs it only in the
+    // rounds it tries (none on most surfaces) and keeps its result only when a round is accepted,
+    // so the whole-run check above can miss a difference here.
     let (a_cpu, cpu_s) = timed(|| {
         let mut l = vec![u32::MAX; mesh.triangle_count()];
         crate::strategy::kmedoids_capacity::assign_capacity(

@@ -66,8 +66,8 @@ pub struct Grown {
     pub labels: Vec<u32>,
     /// Hop distance of each triangle to its medoid inside its cluster.
     pub distances: Vec<u32>,
-    /// Medoid updates run (capacity-aware assignments tried; 0 where `worth_a_round` found too
-    /// few light clusters for a round to pay).
+    /// Re-assignment rounds tried (capacity-aware assignments run; 0 where `worth_a_round` found
+    /// too few light clusters for a round to pay).
     pub iterations: u32,
 }
 
@@ -728,14 +728,32 @@ mod tests {
         assert!(worth_a_round(&labels(&[63, 64, 126]), 3, limits));
         assert!(!worth_a_round(&labels(&[63, 64, 64, 126]), 4, limits));
         assert!(worth_a_round(&labels(&[1, 2, 64, 64, 126]), 5, limits));
-        // A closed surface grows nearly full clusters: no round runs, and the result is the
-        // clustering a run without rounds gives.
+        // A closed surface grows nearly full clusters: no round runs.
         let m = generate::noisy_sphere(4, 0.2, 7);
         let vt = vertex_triangles(&m);
         let dual = dual_graph(&m, &vt);
-        let a = cluster(&m, &dual, &vt, limits, Grow::Centre, 16);
-        let b = cluster(&m, &dual, &vt, limits, Grow::Centre, 0);
-        assert_eq!(a.iterations, 0);
-        assert_eq!((&a.medoids, &a.labels), (&b.medoids, &b.labels));
+        assert_eq!(
+            cluster(&m, &dual, &vt, limits, Grow::Centre, 16).iterations,
+            0
+        );
+        // A tube of three-vertex rings fills 32 vertices with about 60 triangles, so every
+        // cluster is light at 32/126: rounds run, and the result is the same on any thread count.
+        let m = generate::knot_tube(400, 3, 5);
+        let vt = vertex_triangles(&m);
+        let dual = dual_graph(&m, &vt);
+        let limits = Limits::new(32, 126).unwrap();
+        let run = |threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| cluster(&m, &dual, &vt, limits, Grow::Centre, 16))
+        };
+        let (a, b) = (run(1), run(3));
+        assert!(a.iterations > 0);
+        assert_eq!(
+            (&a.medoids, &a.labels, &a.distances, a.iterations),
+            (&b.medoids, &b.labels, &b.distances, b.iterations)
+        );
     }
 }

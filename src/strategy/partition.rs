@@ -18,10 +18,11 @@
 //!    surface). [`Config::drops`]: the first attempt leaves out the seeds of the emptiest 0.3 % of
 //!    the cells, so the repair and packing start from fewer cells (one probe run at 64/126: igea
 //!    2769 meshlets against 2775 without, pycortex 3178 against 3185); when it cannot be
-//!    repaired, the next attempt keeps every seed (unless the repair stopped early: then no
-//!    attempt with more seeds went either). The Dijkstra settles one band of distances at a time ([`Config::band`]) in
-//!    triangle order: its pops otherwise jump across the whole mesh, and on igea it took 0.7x
-//!    meshoptimizer's whole build in cache misses.
+//!    repaired, the next attempt keeps every seed, unless the repair stopped early (measured
+//!    on the shared meshes: then the attempt with every seed stopped early too). The Dijkstra
+//!    settles one band of distances at a time ([`Config::band`]) in triangle order: its pops
+//!    otherwise jump across the whole mesh, and on igea it took 0.7x meshoptimizer's whole build
+//!    in cache misses.
 //! 3. **Boundary moves without the limits**: the same vertex-gain moves with the limits lifted,
 //!    which shortens the Voronoi cells' ragged boundaries. Cells may now be over the vertex limit.
 //! 4. **Repair**: every cell over a limit sheds triangles along an ejection chain: the shortest
@@ -30,7 +31,7 @@
 //!    limits of its receiver. The few cells no chain repairs within
 //!    [`Config::chains_per_meshlet`] are split ([`Config::max_splits`]); a re-partition that needed
 //!    splits is packed (step 5) and kept only when it then beats the packed fallback. Too many
-//!    unrepaired cells end the attempt early and fall back to step 1's state.
+//!    unrepaired cells end the attempt early, fall back to step 1's state and end the attempts.
 //! 5. **Packing**: the emptiest cells are emptied one at a time, every triangle handed to a
 //!    neighbour with room or, when none has any, through an ejection chain as in step 4; a victim
 //!    that cannot be emptied is rolled back from the journal. [`Config::max_failures`] failures in
@@ -77,8 +78,9 @@ pub struct Config {
     pub balance_step: f64,
     /// Step 4: ejection chains one over-full cell may start before it is split.
     pub chains_per_meshlet: u32,
-    /// Step 2: re-partitions to try in turn until one is repaired without splits, each with the
-    /// seeds of this share of the cells (the emptiest) left out. A dropped seed of a cell that
+    /// Step 2: re-partitions to try in turn, each with the seeds of this share of the cells (the
+    /// emptiest) left out, largest first, until one is repaired without splits or a repair stops
+    /// early (its failures far beyond what fewer dropped seeds could take). A dropped seed of a cell that
     /// is a whole mesh piece drops nothing: no other seed reaches the piece, so it keeps its cell.
     pub drops: &'static [f64],
     /// Step 4: cells the repair may split off over-full cells that no chain fixes. With splits
@@ -231,7 +233,8 @@ pub fn partition_with_stats(
             tried.push(dropped);
             stats.attempts += 1;
             match repartition(&mut s, &mut adj, config, dropped, &fallback, &mut stats) {
-                // Far more unrepaired cells than the next attempt's extra seeds could take.
+                // Far more unrepaired cells than the next attempt's few extra seeds could take
+                // (the drops fall from one attempt to the next).
                 Outcome::Kept | Outcome::Hopeless => break,
                 Outcome::Failed => {}
                 Outcome::Packed(labels, live) => {
@@ -997,7 +1000,8 @@ mod tests {
             max_splits: 100_000,
             ..Config::default()
         };
-        // Many seeds dropped: the repair has to fill the gaps, or the next drop is tried.
+        // Many seeds dropped: the repair has to fill the gaps, or the next drop is tried (unless
+        // the repair stopped early).
         let drop_many = Config {
             drops: &[0.05, 0.01, 0.0],
             ..Config::default()
