@@ -38,9 +38,9 @@
 //!
 //! On the GPU (`gpu::kmedoids::cluster_capacity`) the adjacency, the medoid updates (step 2,
 //! parallel per cluster) and the capacity-aware assignment (step 3: every cluster walks a level at
-//! once, repeated to the fixed point that equals the sequential order, `wgsl/capacity.wgsl`) run
-//! as kernels and the rest on the host between them, through [`cluster_with`]; the output is
-//! identical.
+//! once, repeated to the fixed point that equals the sequential order, `wgsl/capacity.wgsl`; only
+//! in the rounds step 5 runs) run as kernels and the rest on the host between them, through
+//! [`cluster_with`]; the output is identical.
 
 #[cfg(test)]
 use super::kmedoids::UNREACHED;
