@@ -80,8 +80,9 @@ pub struct Config {
     pub chains_per_meshlet: u32,
     /// Step 2: re-partitions to try in turn, each with the seeds of this share of the cells (the
     /// emptiest) left out, largest first, until one is repaired without splits or a repair stops
-    /// early (its failures far beyond what fewer dropped seeds could take). A dropped seed of a cell that
-    /// is a whole mesh piece drops nothing: no other seed reaches the piece, so it keeps its cell.
+    /// early (its failures far beyond what fewer dropped seeds could take). A dropped seed of a
+    /// cell that is a whole mesh piece drops nothing: no other seed reaches the piece, so it keeps
+    /// its cell.
     pub drops: &'static [f64],
     /// Step 4: cells the repair may split off over-full cells that no chain fixes. With splits
     /// the re-partition is kept only when, packed, it ends with fewer meshlets than the packed
