@@ -287,26 +287,24 @@ fn pack_pieces(mesh: &Mesh, vt: &Csr, limits: Limits, medoids: &mut Vec<u32>, la
         let lo_i = at[ai].saturating_sub(WINDOW);
         let hi_i = (at[ai] + WINDOW + 1).min(k);
         count_verts(&mut verts, ai);
+        // The nearest centroid (then the lower id) among partners whose union fits; vertices are
+        // counted only for those that pass the triangle test.
+        let mut best: Option<(f32, u32)> = None;
         for &(_, b) in &by_code[lo_i..hi_i] {
             let bi = b as usize;
-            if into[bi] == b && tris[ai] + tris[bi] <= limits.max_triangles as usize {
-                count_verts(&mut verts, bi);
+            if b == a || into[bi] != b || tris[ai] + tris[bi] > limits.max_triangles as usize {
+                continue;
+            }
+            count_verts(&mut verts, bi);
+            if verts[ai] + verts[bi] > limits.max_vertices as usize {
+                continue;
+            }
+            let d = (centre[bi] - centre[ai]).length_squared();
+            if best.is_none_or(|(bd, bb)| d.total_cmp(&bd).then(b.cmp(&bb)).is_lt()) {
+                best = Some((d, b));
             }
         }
-        let best = by_code[lo_i..hi_i]
-            .iter()
-            .map(|&(_, b)| b)
-            .filter(|&b| {
-                let bi = b as usize;
-                b != a
-                    && into[bi] == b
-                    && tris[ai] + tris[bi] <= limits.max_triangles as usize
-                    && verts[ai] + verts[bi] <= limits.max_vertices as usize
-            })
-            .min_by(|&x, &y| {
-                let d = |b: u32| (centre[b as usize] - centre[ai]).length_squared();
-                d(x).total_cmp(&d(y)).then(x.cmp(&y))
-            });
+        let best = best.map(|(_, b)| b);
         if let Some(b) = best {
             let bi = b as usize;
             into[ai] = b;
