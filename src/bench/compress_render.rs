@@ -16,7 +16,7 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{line_chart, Axes, Series};
-use super::{machine_note, median, p95, today, Common};
+use super::{machine_note, median, p95, today, Common, Tag};
 use crate::compress::file::Format;
 use crate::compress::paper_tolerance;
 use crate::mesh::{self, Mesh};
@@ -49,6 +49,9 @@ pub struct Config {
     /// quiet.
     #[command(flatten)]
     pub common: Common,
+    /// A suffix for the file names, for a run on another device.
+    #[command(flatten)]
+    pub tag: Tag,
     /// Views per mesh (framed random directions).
     #[arg(long, default_value_t = 7, value_parser = clap::value_parser!(u64).range(1..))]
     pub views: u64,
@@ -464,15 +467,21 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
         });
     }
     line_chart(
-        &cfg.common.out.join("compress_render_tradeoff.svg"),
+        &cfg.common
+            .out
+            .join(cfg.tag.name("compress_render_tradeoff.svg")),
         &format!("{scene}: size against speed ({})", ctx.name),
         "bits per triangle resident",
         "M triangles / s",
         &series,
         Axes::default(),
     )?;
-    writeln!(md, "\n![size against speed](compress_render_tradeoff.svg)")?;
-    crate::atomic::write(cfg.common.out.join("compress-render.md"), md)?;
+    writeln!(
+        md,
+        "\n![size against speed]({})",
+        cfg.tag.name("compress_render_tradeoff.svg")
+    )?;
+    crate::atomic::write(cfg.common.out.join(cfg.tag.name("compress-render.md")), md)?;
     let mut csv = String::from(
         "mesh,triangles,meshlets,variant,bytes,ms_median,ms_p95,meshlets_culled_per_frame\n",
     );
@@ -488,6 +497,9 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
             r.mesh, r.triangles, r.meshlets, r.variant, r.bytes, r.culled
         )?;
     }
-    crate::atomic::write(cfg.common.out.join("compress-render.csv"), csv)?;
+    crate::atomic::write(
+        cfg.common.out.join(cfg.tag.name("compress-render.csv")),
+        csv,
+    )?;
     Ok(())
 }

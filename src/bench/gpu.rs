@@ -12,7 +12,7 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{floor, machine_note, today, Common};
+use super::{floor, machine_note, today, Common, Tag};
 use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::gpu::{self, timed as secs, Gpu, Profile};
 use crate::mesh::{self, subdivide::subdivide, Mesh};
@@ -30,6 +30,9 @@ pub struct Config {
     /// and the dragon, the first one profiled, and no subdivided dragons), quiet.
     #[command(flatten)]
     pub common: Common,
+    /// A suffix for the file names, for a run on another device.
+    #[command(flatten)]
+    pub tag: Tag,
     /// Meshlet limits.
     #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
     pub limits: Limits,
@@ -673,7 +676,9 @@ fn write(
         machine_note()
     )?;
     writeln!(md, "GPU adapter: **{}**{}. Every GPU output below was compared with the CPU reference and is identical (adjacency CSR arrays; k-medoids labels and meshlets; parallel-grower claims, orders and meshlets); a difference aborts the benchmark.\n", g.describe(), if g.timestamps { "; kernel times from GPU timestamp queries" } else { "; no timestamp queries: kernel times are wall time" })?;
-    writeln!(md, "Lavapipe is itself a CPU renderer on this machine's cores: a GPU/CPU ratio here compares LLVM-compiled compute shaders with native Rust on the same {} cores, not a GPU with a CPU.\n", std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1))?;
+    if g.is_cpu() {
+        writeln!(md, "Lavapipe is itself a CPU renderer on this machine's cores: a GPU/CPU ratio here compares LLVM-compiled compute shaders with native Rust on the same {} cores, not a GPU with a CPU.\n", std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1))?;
+    }
     writeln!(md, "## Adjacency (vertex -> triangle CSR + dual graph)\n")?;
     writeln!(md, "{}", adjacency_table().markdown(rows))?;
     writeln!(md, "\nTarget: >= 20 M triangles/s on lavapipe.\n")?;
@@ -810,12 +815,18 @@ fn write(
     }
     writeln!(
         md,
-        "\n![scaling](gpu_scaling.svg)\n\n![time vs error](gpu_time_vs_error.svg)\n\n![grower](gpu_grower_sweep.svg)"
+        "\n![scaling]({})\n\n![time vs error]({})\n\n![grower]({})",
+        cfg.tag.name("gpu_scaling.svg"),
+        cfg.tag.name("gpu_time_vs_error.svg"),
+        cfg.tag.name("gpu_grower_sweep.svg")
     )?;
-    crate::atomic::write(cfg.common.out.join("gpu.md"), md)?;
-    crate::atomic::write(cfg.common.out.join("gpu.csv"), adjacency_table().csv(rows))?;
+    crate::atomic::write(cfg.common.out.join(cfg.tag.name("gpu.md")), md)?;
     crate::atomic::write(
-        cfg.common.out.join("gpu_floor.csv"),
+        cfg.common.out.join(cfg.tag.name("gpu.csv")),
+        adjacency_table().csv(rows),
+    )?;
+    crate::atomic::write(
+        cfg.common.out.join(cfg.tag.name("gpu_floor.csv")),
         floor::table().csv(&floor_rows),
     )?;
     let pts = |f: &dyn Fn(&Row) -> Option<f64>| {
@@ -824,7 +835,7 @@ fn write(
             .collect::<Vec<_>>()
     };
     line_chart(
-        &cfg.common.out.join("gpu_scaling.svg"),
+        &cfg.common.out.join(cfg.tag.name("gpu_scaling.svg")),
         "k-medoids and adjacency run time against mesh size",
         "triangles (log)",
         "seconds",
@@ -838,7 +849,7 @@ fn write(
                 points: pts(&|r| Some(r.km_rayon)),
             },
             Series {
-                label: "k-medoids GPU (lavapipe)".into(),
+                label: format!("k-medoids GPU ({})", g.info.name),
                 points: pts(&|r| r.km_gpu.as_ref().map(|k| k.seconds)),
             },
             Series {
@@ -856,7 +867,7 @@ fn write(
         },
     )?;
     line_chart(
-        &cfg.common.out.join("gpu_time_vs_error.svg"),
+        &cfg.common.out.join(cfg.tag.name("gpu_time_vs_error.svg")),
         "bunny: k-medoids objective against run time (iteration caps 0..16)",
         "seconds (initial clustering)",
         "mean hops to medoid",
@@ -866,14 +877,14 @@ fn write(
                 points: curve.iter().map(|c| (c.2, c.1)).collect(),
             },
             Series {
-                label: "GPU (lavapipe)".into(),
+                label: format!("GPU ({})", g.info.name),
                 points: curve.iter().map(|c| (c.5, c.1)).collect(),
             },
         ],
         Axes::default(),
     )?;
     line_chart(
-        &cfg.common.out.join("gpu_grower_sweep.svg"),
+        &cfg.common.out.join(cfg.tag.name("gpu_grower_sweep.svg")),
         "bunny: bsphere-parallel meshlets against rounds (seed spacing 1, 2, 4, 8)",
         "growth rounds (parallel depth)",
         "meshlets",

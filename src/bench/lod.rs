@@ -19,7 +19,7 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{machine_note, median, today, Common};
+use super::{machine_note, median, today, Common, Tag};
 use crate::lod::flat::{self, Flat};
 use crate::lod::{self, Grouping, Level, LodInfo, NO_GROUP};
 use crate::mesh::{self, Mesh};
@@ -39,6 +39,9 @@ pub struct Config {
     /// view, no 14 M dragon), quiet.
     #[command(flatten)]
     pub common: Common,
+    /// A suffix for the file names, for a run on another device.
+    #[command(flatten)]
+    pub tag: Tag,
     /// Interleaved build runs per configuration (median reported).
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub runs: u32,
@@ -825,9 +828,9 @@ fn write_results(
         total(0) / total(2).max(1.0),
         cells.len()
     )?;
-    writeln!(md, "![ours / clod](lod_ratio.svg)\n")?;
+    writeln!(md, "![ours / clod]({})\n", cfg.tag.name("lod_ratio.svg"))?;
     line_chart(
-        &cfg.common.out.join("lod_ratio.svg"),
+        &cfg.common.out.join(cfg.tag.name("lod_ratio.svg")),
         "Triangles selected at 1 px: ours 128/128 / clod 128",
         "camera distance (bounding radii)",
         "ours / clod",
@@ -840,7 +843,9 @@ fn write_results(
     if let Some(r) = results.iter().find(|r| r.name.contains("dragon")) {
         let series = dag_series(cfg, r, &r.curve);
         line_chart(
-            &cfg.common.out.join("lod_dragon_triangles.svg"),
+            &cfg.common
+                .out
+                .join(cfg.tag.name("lod_dragon_triangles.svg")),
             &format!("{}: triangles selected at {} px", r.name, cfg.threshold),
             "camera distance (bounding radii)",
             "triangles",
@@ -850,12 +855,16 @@ fn write_results(
                 zero_y: true,
             },
         )?;
-        writeln!(md, "![dragon triangles](lod_dragon_triangles.svg)\n")?;
+        writeln!(
+            md,
+            "![dragon triangles]({})\n",
+            cfg.tag.name("lod_dragon_triangles.svg")
+        )?;
     }
     // Frame times.
     if results.iter().any(|r| !r.frame_ms.is_empty()) {
         writeln!(md, "## Frame time against camera distance ({} px, task-shader LOD with frustum and cone culling)\n", cfg.threshold)?;
-        writeln!(md, "Median GPU ms per frame over {} views per distance (one discarded first), on {}; \"full\" draws the source's 64/126 meshlets with culling. On lavapipe the GPU is the CPU: compare ratios, not absolute numbers.\n", cfg.render_views(), device.as_deref().unwrap_or("?"))?;
+        writeln!(md, "Median GPU ms per frame over {} views per distance (one discarded first), on {}; \"full\" draws the source's 64/126 meshlets with culling. {}\n", cfg.render_views(), device.as_deref().unwrap_or("?"), if device.as_deref().is_some_and(|d| d.contains("llvmpipe")) { "On lavapipe the GPU is the CPU: compare ratios, not absolute numbers." } else { "" })?;
         writeln!(md, "| mesh | DAG | {} |", dist_head.join(" | "))?;
         writeln!(md, "|---|---|{}", "---:|".repeat(cfg.distances.len()))?;
         for r in results.iter().filter(|r| !r.frame_ms.is_empty()) {
@@ -876,7 +885,9 @@ fn write_results(
                 points: along(&cfg.distances, &r.full_ms),
             });
             line_chart(
-                &cfg.common.out.join("lod_dragon_frame_time.svg"),
+                &cfg.common
+                    .out
+                    .join(cfg.tag.name("lod_dragon_frame_time.svg")),
                 &format!("{}: frame time at {} px", r.name, cfg.threshold),
                 "camera distance (bounding radii)",
                 "GPU ms per frame",
@@ -886,7 +897,11 @@ fn write_results(
                     zero_y: true,
                 },
             )?;
-            writeln!(md, "\n![dragon frame time](lod_dragon_frame_time.svg)\n")?;
+            writeln!(
+                md,
+                "\n![dragon frame time]({})\n",
+                cfg.tag.name("lod_dragon_frame_time.svg")
+            )?;
         }
     }
     // Level-0 strategies.
@@ -930,9 +945,18 @@ fn write_results(
                 .join(", ")
         )?;
     }
-    crate::atomic::write(cfg.common.out.join("lod.md"), md)?;
-    crate::atomic::write(cfg.common.out.join("lod.csv"), dag_table().csv(&dags))?;
-    crate::atomic::write(cfg.common.out.join("lod_levels.csv"), level_csv)?;
-    crate::atomic::write(cfg.common.out.join("lod_curve.csv"), curve_csv)?;
+    crate::atomic::write(cfg.common.out.join(cfg.tag.name("lod.md")), md)?;
+    crate::atomic::write(
+        cfg.common.out.join(cfg.tag.name("lod.csv")),
+        dag_table().csv(&dags),
+    )?;
+    crate::atomic::write(
+        cfg.common.out.join(cfg.tag.name("lod_levels.csv")),
+        level_csv,
+    )?;
+    crate::atomic::write(
+        cfg.common.out.join(cfg.tag.name("lod_curve.csv")),
+        curve_csv,
+    )?;
     Ok(())
 }

@@ -87,6 +87,38 @@ impl Common {
     }
 }
 
+/// The `--tag` of the benches that measure a GPU: a run on another device writes its files beside
+/// the committed lavapipe ones instead of over them.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct Tag {
+    /// Suffix for every file this bench writes, for a run on another device beside the committed
+    /// results: `--tag h100` writes gpu-h100.md, gpu_scaling-h100.svg, ... (letters, digits, '-').
+    #[arg(long, value_parser = parse_tag)]
+    pub tag: Option<String>,
+}
+
+impl Tag {
+    /// `file` with the tag before its extension (`gpu.md` -> `gpu-h100.md`); `file` untagged.
+    pub fn name(&self, file: &str) -> String {
+        match (&self.tag, file.rsplit_once('.')) {
+            (None, _) => file.to_string(),
+            (Some(t), Some((stem, ext))) => format!("{stem}-{t}.{ext}"),
+            (Some(t), None) => format!("{file}-{t}"),
+        }
+    }
+}
+
+/// A tag goes into file names and markdown links, so it keeps to characters that need no escaping.
+fn parse_tag(s: &str) -> std::result::Result<String, String> {
+    if !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '-') {
+        Ok(s.to_string())
+    } else {
+        Err(format!(
+            "tag {s:?}: use letters, digits and '-' only (it becomes part of file names)"
+        ))
+    }
+}
+
 /// One strategy's result on one mesh.
 #[derive(Clone, Debug, Serialize)]
 pub struct Evaluation {
@@ -291,5 +323,20 @@ mod tests {
         let d = today();
         assert_eq!(d.len(), 10);
         assert!(d.starts_with("20"));
+    }
+
+    #[test]
+    fn a_tag_goes_before_the_extension_and_keeps_to_safe_characters() {
+        let none = Tag::default();
+        assert_eq!(none.name("gpu.md"), "gpu.md");
+        let t = Tag {
+            tag: Some(parse_tag("h100").unwrap()),
+        };
+        assert_eq!(t.name("gpu.md"), "gpu-h100.md");
+        assert_eq!(t.name("gpu_scaling.svg"), "gpu_scaling-h100.svg");
+        assert_eq!(t.name("README"), "README-h100");
+        for bad in ["", "a b", "../x", "x.md", "h100)"] {
+            assert!(parse_tag(bad).is_err(), "{bad:?}");
+        }
     }
 }

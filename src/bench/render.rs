@@ -12,7 +12,7 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{machine_note, median, p95, today, Common};
+use super::{machine_note, median, p95, today, Common, Tag};
 use crate::mesh::{self, Mesh};
 use crate::meshlet::descriptor::Format;
 use crate::meshlet::order::{
@@ -35,6 +35,9 @@ pub struct Config {
     /// Mesh folder, output folder, smoke run (one view per mesh), quiet.
     #[command(flatten)]
     pub common: Common,
+    /// A suffix for the file names, for a run on another device.
+    #[command(flatten)]
+    pub tag: Tag,
     /// Meshlet limits.
     #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
     pub limits: Limits,
@@ -272,9 +275,10 @@ fn strategy_row(
             &pass,
             &fig,
             true,
-            &cfg.common
-                .out
-                .join(format!("render_bunny_{}.png", s.replace('+', "_"))),
+            &cfg.common.out.join(
+                cfg.tag
+                    .name(&format!("render_bunny_{}.png", s.replace('+', "_"))),
+            ),
         )?;
     }
     let n = views.len() as f64;
@@ -423,7 +427,9 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
         machine_note()
     )?;
     writeln!(md, "Device: **{}** (Vulkan, VK_EXT_mesh_shader). {}×{}, 4× MSAA resolved, D32 depth, back faces culled by the rasteriser in both pipelines. {} seeded random views per mesh at {} bounding radii (seed {}; every view sees the whole mesh), the first frame discarded; GPU time from timestamps around the draw. Close views for the culling shares: the same directions at {} radii. Limits {}/{}. Meshlets in the split layout unless a table says otherwise.\n", ctx.name, WIDTH, HEIGHT, cfg.views(), cfg.distance, cfg.seed, cfg.near_distance, cfg.limits.max_vertices, cfg.limits.max_triangles)?;
-    writeln!(md, "On lavapipe the \"GPU\" is this machine's CPU cores running LLVM-compiled shaders: the ratios say how the two pipelines map onto a software rasteriser, not onto a GPU.\n")?;
+    if ctx.name.contains("llvmpipe") {
+        writeln!(md, "On lavapipe the \"GPU\" is this machine's CPU cores running LLVM-compiled shaders: the ratios say how the two pipelines map onto a software rasteriser, not onto a GPU.\n")?;
+    }
     writeln!(md, "## ms per frame\n")?;
     writeln!(md, "{}", frame_table().markdown(rows))?;
     write_culling(cfg, &mut md, rows)?;
@@ -463,7 +469,8 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
     }
     writeln!(
         md,
-        "\n![ms per frame against triangles](render_per_triangle.svg)\n"
+        "\n![ms per frame against triangles]({})\n",
+        cfg.tag.name("render_per_triangle.svg")
     )?;
     writeln!(
         md,
@@ -473,15 +480,19 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
     for s in &cfg.strategy {
         writeln!(
             md,
-            "{s}:\n\n![{s}](render_bunny_{}.png)\n",
-            s.replace('+', "_")
+            "{s}:\n\n![{s}]({})\n",
+            cfg.tag
+                .name(&format!("render_bunny_{}.png", s.replace('+', "_")))
         )?;
     }
     write_experiments(cfg, &mut md, variants)?;
-    crate::atomic::write(cfg.common.out.join("render.md"), md)?;
-    crate::atomic::write(cfg.common.out.join("render.csv"), frame_table().csv(rows))?;
+    crate::atomic::write(cfg.common.out.join(cfg.tag.name("render.md")), md)?;
+    crate::atomic::write(
+        cfg.common.out.join(cfg.tag.name("render.csv")),
+        frame_table().csv(rows),
+    )?;
     line_chart(
-        &cfg.common.out.join("render_per_triangle.svg"),
+        &cfg.common.out.join(cfg.tag.name("render_per_triangle.svg")),
         "median ms per frame against triangles (no culling)",
         "triangles",
         "ms per frame",
@@ -591,9 +602,9 @@ fn write_culling(cfg: &Config, md: &mut String, rows: &[Row]) -> Result<()> {
         series("close: frustum", 1, &|r| r.near[0]),
         series("close: backface", 1, &|r| r.near[1]),
     ];
-    writeln!(md, "\nMean over the meshes (left bar of each pair: far views; right: close views):\n\n![culled meshlets](render_culling.svg)\n")?;
+    writeln!(md, "\nMean over the meshes (left bar of each pair: far views; right: close views):\n\n![culled meshlets]({})\n", cfg.tag.name("render_culling.svg"))?;
     bar_chart(
-        &cfg.common.out.join("render_culling.svg"),
+        &cfg.common.out.join(cfg.tag.name("render_culling.svg")),
         "meshlets culled by the task shader, % (mean over the meshes)",
         "% of meshlets",
         &cats,
@@ -635,7 +646,10 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
             p95(&v.no_cull)
         )?;
     }
-    crate::atomic::write(cfg.common.out.join("render_experiments.csv"), csv)?;
+    crate::atomic::write(
+        cfg.common.out.join(cfg.tag.name("render_experiments.csv")),
+        csv,
+    )?;
     writeln!(md, "\n## Experiments\n")?;
     writeln!(md, "Each experiment renders its variants of the same meshlets over the same far views in interleaved order (view 0 for every variant, then view 1, ...), so machine noise hits them alike; ratios are of medians against the first variant (< 1: faster). Strategies: {}.\n", cfg.experiment_strategies().join(", "))?;
 
@@ -720,13 +734,17 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
         })
         .collect();
     bar_chart(
-        &cfg.common.out.join("render_descriptors.svg"),
+        &cfg.common.out.join(cfg.tag.name("render_descriptors.svg")),
         "ms per frame with culling relative to split (geometric mean over the meshes)",
         "ratio to split",
         &cfg.experiment_strategies(),
         &bars,
     )?;
-    writeln!(md, "\n![descriptor layouts](render_descriptors.svg)\n")?;
+    writeln!(
+        md,
+        "\n![descriptor layouts]({})\n",
+        cfg.tag.name("render_descriptors.svg")
+    )?;
 
     for (experiment, other, title, note) in [
         (

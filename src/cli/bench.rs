@@ -83,13 +83,19 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::Gpu(mut c) => {
             complete(&mut c.common, q);
             bench::gpu::run(&c)?;
-            println!("wrote {}", c.common.out.join("gpu.md").display());
+            println!(
+                "wrote {}",
+                c.common.out.join(c.tag.name("gpu.md")).display()
+            );
             Ok(())
         }
         BenchCommand::Render(mut c) => {
             complete(&mut c.common, q);
             bench::render::run(&c)?;
-            println!("wrote {}", c.common.out.join("render.md").display());
+            println!(
+                "wrote {}",
+                c.common.out.join(c.tag.name("render.md")).display()
+            );
             Ok(())
         }
         BenchCommand::Fidelity(mut a) => {
@@ -120,7 +126,10 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::Lod(mut c) => {
             complete(&mut c.common, q);
             bench::lod::run(&c)?;
-            println!("wrote {}", c.common.out.join("lod.md").display());
+            println!(
+                "wrote {}",
+                c.common.out.join(c.tag.name("lod.md")).display()
+            );
             Ok(())
         }
         BenchCommand::Compress(mut c) => {
@@ -138,7 +147,10 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             let rows = bench::compress_render::run(&c)?;
             println!(
                 "wrote {} ({} rows)",
-                c.common.out.join("compress-render.md").display(),
+                c.common
+                    .out
+                    .join(c.tag.name("compress-render.md"))
+                    .display(),
                 rows.len()
             );
             Ok(())
