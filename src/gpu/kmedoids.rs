@@ -295,7 +295,9 @@ pub fn cluster_capacity(
     let mut run = Run::new(gpu, family, scan, &adj, limits, adj_timing)?;
     run.timing.readback += read_s;
     let failed = std::cell::RefCell::new(None);
-    let mut cap = super::capacity::CapacityAssign::new(gpu, mesh.triangle_count());
+    // Built on the first round: most meshes run none (`worth_a_round`), and its kernels and three
+    // per-triangle buffers would cost them for nothing.
+    let mut cap: Option<super::capacity::CapacityAssign> = None;
     let g = crate::strategy::kmedoids_capacity::cluster_with(
         mesh,
         &host.dual,
@@ -324,6 +326,9 @@ pub fn cluster_capacity(
                 );
                 return;
             }
+            let cap = cap.get_or_insert_with(|| {
+                super::capacity::CapacityAssign::new(gpu, mesh.triangle_count())
+            });
             match cap.run(gpu, &adj, limits, medoids) {
                 Ok(l) => labels.copy_from_slice(&l),
                 Err(e) => *failed.borrow_mut() = Some(e),
@@ -337,12 +342,14 @@ pub fn cluster_capacity(
         clustering: Clustering::from_grown(mesh, limits, g, start.elapsed().as_secs_f64()),
         timing: Timing {
             readback: run.timing.readback + run.readback.get(),
-            kernel: run.timing.kernel + run.kernel.get() + cap.kernel_seconds,
+            kernel: run.timing.kernel
+                + run.kernel.get()
+                + cap.as_ref().map_or(0.0, |c| c.kernel_seconds),
             ..run.timing
         },
         adjacency_kernel: adj_timing.kernel,
         large_updates: run.large,
-        bfs_rounds: cap.stats.levels as u32,
+        bfs_rounds: cap.as_ref().map_or(0, |c| c.stats.levels as u32),
         deep_submissions: 0,
         updates: run.updates,
         seconds: start.elapsed().as_secs_f64(),
