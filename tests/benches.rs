@@ -124,3 +124,49 @@ fn smoke_runs_never_write_into_results() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--smoke") && err.contains("results"), "{err}");
 }
+
+#[test]
+fn a_tagged_run_names_every_file_and_link_with_its_tag() {
+    let root = common::scratch("bench-tag");
+    for bench in ["gpu", "render"] {
+        let out = root.join(bench);
+        let o = meshletlab(&[
+            "-q",
+            "bench",
+            bench,
+            "--smoke",
+            "--tag",
+            "t1",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            o.status.success(),
+            "bench {bench} --smoke --tag t1: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let files: Vec<String> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap())
+            .filter(|e| e.file_type().unwrap().is_file())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .collect();
+        assert!(files.len() >= 3, "bench {bench}: {files:?}");
+        for f in &files {
+            assert!(f.contains("-t1."), "bench {bench}: untagged file {f}");
+        }
+        // Every plot the markdown links to is there (the smoke meshes hold no bunny, so the
+        // render bench writes no bunny images).
+        let md = std::fs::read_to_string(out.join(format!("{bench}-t1.md"))).unwrap();
+        for link in md.split("](").skip(1).filter_map(|r| r.split(')').next()) {
+            assert!(link.contains("-t1."), "bench {bench}: untagged link {link}");
+            if link.ends_with(".svg") {
+                assert!(out.join(link).is_file(), "bench {bench}: {link} missing");
+            }
+        }
+    }
+    // A tag that ends a strategy's name would overwrite that strategy's untagged image.
+    let o = meshletlab(&["-q", "bench", "render", "--smoke", "--tag", "parallel"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("overwrite"));
+}

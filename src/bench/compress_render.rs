@@ -16,7 +16,7 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{line_chart, Axes, Series};
-use super::{machine_note, median, p95, today, Common, Tag};
+use super::{is_lavapipe, machine_note, median, p95, today, Common, Tag};
 use crate::compress::file::Format;
 use crate::compress::paper_tolerance;
 use crate::mesh::{self, Mesh};
@@ -320,7 +320,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
         machine_note()
     )?;
     writeln!(md, "Device: **{}**. {}×{}, 4× MSAA, D32 depth, back faces culled by the rasteriser. {} framed random views per mesh (seed {}), interleaved across variants, one discarded warm-up frame per variant; GPU time from timestamps around the draw. Meshlets: meshopt 64/126 at the paper's tolerance (14-bit quantisation of the bounding box), the same for every variant. Scene: the ten shared meshes, each scaled to a unit diagonal, {} times over on a grid, as one mesh. Every compressed variant's first view was checked pixel for pixel against the uncompressed pass over its CPU-decoded meshlets before timing.\n", ctx.name, WIDTH, HEIGHT, cfg.views(), cfg.seed, cfg.scene_copies())?;
-    if ctx.name.contains("llvmpipe") {
+    if is_lavapipe(&ctx.name) {
         writeln!(md, "**Lavapipe's figures.** The \"GPU\" here is this machine's CPU cores running LLVM-compiled shaders and a software rasteriser at 1280×720 with 4× MSAA: rasterisation and shading take most of every frame, so decoding costs show up diluted, and a real GPU's balance (where the paper's laced wires take 2.5× SC compact's time) is not what these ratios measure. The memory columns are device-independent.\n")?;
     }
     writeln!(md, "Shader decoders: laced wires in the mesh shader ({}; parallel: item offsets by popcount, wire bases and lace cursors by prefix sums, delta wires by one prefix sum of their differences, strip corners by a scan over composed corner maps; four symbols per invocation, so no serial chain beyond four steps and a 32-wide scan per 128 symbols), SC and IX compact in the mesh shader, GI and TS compact by vertex pulling in the vertex shader. Culling: only laced wires carry culling data (8-byte records); the split layout has its exact spheres and cones.\n", if ctx.mesh_subgroups { format!("scans with subgroup operations, {} wide", ctx.subgroup_size) } else { "scans in workgroup memory".to_string() })?;

@@ -19,7 +19,7 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{machine_note, median, today, Common, Tag};
+use super::{is_lavapipe, machine_note, median, today, Common, Tag};
 use crate::lod::flat::{self, Flat};
 use crate::lod::{self, Grouping, Level, LodInfo, NO_GROUP};
 use crate::mesh::{self, Mesh};
@@ -713,7 +713,7 @@ fn write_results(
         );
     }
     writeln!(md, "{}", dag_table().markdown(&dags))?;
-    writeln!(md, "\nLevel ratios: each level's triangles over the level below, over levels whose lower level has at least {RATIO_MIN_TRIANGLES} triangles (all levels: lod_levels.csv).")?;
+    writeln!(md, "\nLevel ratios: each level's triangles over the level below, over levels whose lower level has at least {RATIO_MIN_TRIANGLES} triangles (all levels: {}).", cfg.tag.name("lod_levels.csv"))?;
     writeln!(md, "\n\"stuck\" for clod: groups it emitted as terminal (simplification above its threshold) before the last level. Monotonic violations: meshlets whose parent error is below their own or whose parent sphere does not enclose their own (f64, 1e-6 slack); clod's cluster bounds follow its own documented rule (it warns that cluster `bounds.error` is not monotonic), and both DAGs are selected here with the group bounds.\n")?;
     // Triangles per level, one table per mesh would be long: the dragon's, and the CSV has all.
     writeln!(md, "## Triangles per level\n")?;
@@ -738,7 +738,12 @@ fn write_results(
         }
     }
     for r in results.iter().filter(|r| r.name.contains("dragon")) {
-        writeln!(md, "{} (all meshes: lod_levels.csv):\n", r.name)?;
+        writeln!(
+            md,
+            "{} (all meshes: {}):\n",
+            r.name,
+            cfg.tag.name("lod_levels.csv")
+        )?;
         writeln!(
             md,
             "| level | {} |",
@@ -864,7 +869,7 @@ fn write_results(
     // Frame times.
     if results.iter().any(|r| !r.frame_ms.is_empty()) {
         writeln!(md, "## Frame time against camera distance ({} px, task-shader LOD with frustum and cone culling)\n", cfg.threshold)?;
-        writeln!(md, "Median GPU ms per frame over {} views per distance (one discarded first), on {}; \"full\" draws the source's 64/126 meshlets with culling. {}\n", cfg.render_views(), device.as_deref().unwrap_or("?"), if device.as_deref().is_some_and(|d| d.contains("llvmpipe")) { "On lavapipe the GPU is the CPU: compare ratios, not absolute numbers." } else { "" })?;
+        writeln!(md, "Median GPU ms per frame over {} views per distance (one discarded first), on {}; \"full\" draws the source's 64/126 meshlets with culling. {}\n", cfg.render_views(), device.as_deref().unwrap_or("?"), if device.as_deref().is_some_and(is_lavapipe) { "On lavapipe the GPU is the CPU: compare ratios, not absolute numbers." } else { "" })?;
         writeln!(md, "| mesh | DAG | {} |", dist_head.join(" | "))?;
         writeln!(md, "|---|---|{}", "---:|".repeat(cfg.distances.len()))?;
         for r in results.iter().filter(|r| !r.frame_ms.is_empty()) {

@@ -108,15 +108,33 @@ impl Tag {
     }
 }
 
-/// A tag goes into file names and markdown links, so it keeps to characters that need no escaping.
+/// A tag goes into file names and markdown links, so it keeps to characters that need no escaping;
+/// and it must not be the last word of a name the benches write (`--tag parallel` would turn
+/// `render_bunny_bsphere.png` into the untagged `render_bunny_bsphere-parallel.png`).
 fn parse_tag(s: &str) -> std::result::Result<String, String> {
-    if !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '-') {
-        Ok(s.to_string())
-    } else {
-        Err(format!(
+    if s.is_empty() || !s.chars().all(|c| c.is_ascii_alphanumeric() || c == '-') {
+        return Err(format!(
             "tag {s:?}: use letters, digits and '-' only (it becomes part of file names)"
-        ))
+        ));
     }
+    let taken = crate::strategy::NAMES
+        .iter()
+        .copied()
+        .chain(crate::strategy::REFINE_SUFFIXES.iter().map(|r| r.0))
+        .chain(["compress-render"])
+        .any(|n| n.ends_with(&format!("-{s}")));
+    if taken {
+        return Err(format!(
+            "tag {s:?} ends a strategy or bench name: its files would overwrite untagged ones"
+        ));
+    }
+    Ok(s.to_string())
+}
+
+/// Whether a device name is Mesa's lavapipe (whose "GPU" is this machine's CPU cores): the
+/// benches say so only then.
+pub fn is_lavapipe(device: &str) -> bool {
+    device.contains("llvmpipe")
 }
 
 /// One strategy's result on one mesh.
@@ -335,7 +353,9 @@ mod tests {
         assert_eq!(t.name("gpu.md"), "gpu-h100.md");
         assert_eq!(t.name("gpu_scaling.svg"), "gpu_scaling-h100.svg");
         assert_eq!(t.name("README"), "README-h100");
-        for bad in ["", "a b", "../x", "x.md", "h100)"] {
+        for bad in [
+            "", "a b", "../x", "x.md", "h100)", "parallel", "flat", "max", "render",
+        ] {
             assert!(parse_tag(bad).is_err(), "{bad:?}");
         }
     }

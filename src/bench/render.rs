@@ -12,7 +12,7 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{machine_note, median, p95, today, Common, Tag};
+use super::{is_lavapipe, machine_note, median, p95, today, Common, Tag};
 use crate::mesh::{self, Mesh};
 use crate::meshlet::descriptor::Format;
 use crate::meshlet::order::{
@@ -427,7 +427,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
         machine_note()
     )?;
     writeln!(md, "Device: **{}** (Vulkan, VK_EXT_mesh_shader). {}×{}, 4× MSAA resolved, D32 depth, back faces culled by the rasteriser in both pipelines. {} seeded random views per mesh at {} bounding radii (seed {}; every view sees the whole mesh), the first frame discarded; GPU time from timestamps around the draw. Close views for the culling shares: the same directions at {} radii. Limits {}/{}. Meshlets in the split layout unless a table says otherwise.\n", ctx.name, WIDTH, HEIGHT, cfg.views(), cfg.distance, cfg.seed, cfg.near_distance, cfg.limits.max_vertices, cfg.limits.max_triangles)?;
-    if ctx.name.contains("llvmpipe") {
+    if is_lavapipe(&ctx.name) {
         writeln!(md, "On lavapipe the \"GPU\" is this machine's CPU cores running LLVM-compiled shaders: the ratios say how the two pipelines map onto a software rasteriser, not onto a GPU.\n")?;
     }
     writeln!(md, "## ms per frame\n")?;

@@ -17,10 +17,11 @@
 //!    ([`Config::balance_step`]), so cells head for equal vertex counts (a power diagram on the
 //!    surface). [`Config::drops`]: the first attempt leaves out the seeds of the emptiest 0.3 % of
 //!    the cells, so the repair and packing start from fewer cells (one probe run at 64/126: igea
-//!    2769 meshlets against 2775 without, pycortex 3178 against 3185); when it cannot be
-//!    repaired, the next attempt keeps every seed, unless the repair stopped early or needed
-//!    splits (measured on the shared and stress meshes: the attempt with every seed then
-//!    stopped early too, or packed to no fewer meshlets). The Dijkstra
+//!    2769 meshlets against 2775 without, pycortex 3178 against 3185); only when the repair
+//!    fails even with splits does the next attempt keep every seed. A repair that succeeds (with
+//!    or without splits) or stops early ends the attempts (measured on the shared and stress
+//!    meshes: after an early stop the attempt with every seed stopped early too, and after a
+//!    repair with splits it packed to no fewer meshlets). The Dijkstra
 //!    settles one band of distances at a time ([`Config::band`]) in triangle order: its pops
 //!    otherwise jump across the whole mesh, and on igea it took 0.7x meshoptimizer's whole build
 //!    in cache misses.
@@ -220,8 +221,9 @@ pub fn partition_with_stats(
     let all: Vec<u32> = (0..mesh.triangle_count() as u32).collect();
     s.improve(&all, Rank::Vertices);
     let mut adj = Adjacency::new(k);
-    // At the hard bound nothing can be removed: skip the search.
+    // A re-partition repaired with splits, packed: weighed against the packed fallback below.
     let mut candidate: Option<(Vec<u32>, usize)> = None;
+    // At the hard bound nothing can be removed: skip the search.
     if config.lloyd_iterations > 0 && s.part.live > floor {
         let fallback = s.part.label.clone();
         let mut tried = Vec::new();
@@ -235,8 +237,8 @@ pub fn partition_with_stats(
             tried.push(dropped);
             stats.attempts += 1;
             match repartition(&mut s, &mut adj, config, dropped, &fallback, &mut stats) {
-                // Far more unrepaired cells than the next attempt's few extra seeds could take
-                // (the drops fall from one attempt to the next).
+                // Kept: done. Hopeless: far more unrepaired cells than the next attempt's few
+                // extra seeds could take (the drops fall from one attempt to the next).
                 Outcome::Kept | Outcome::Hopeless => break,
                 Outcome::Failed => {}
                 // Repaired with splits. The next attempt keeps more seeds; measured on the shared
@@ -1006,7 +1008,7 @@ mod tests {
             ..Config::default()
         };
         // Many seeds dropped: the repair has to fill the gaps, or the next drop is tried (unless
-        // the repair stopped early).
+        // the repair needed splits or stopped early).
         let drop_many = Config {
             drops: &[0.05, 0.01, 0.0],
             ..Config::default()
