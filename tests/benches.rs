@@ -68,24 +68,25 @@ fn meshletlab(args: &[&str]) -> std::process::Output {
         .expect("meshletlab runs")
 }
 
+/// `meshletlab -q bench BENCH --smoke [extra] --out OUT`, which must succeed.
+fn smoke(bench: &str, extra: &[&str], out: &std::path::Path) {
+    let mut args = vec!["-q", "bench", bench, "--smoke"];
+    args.extend_from_slice(extra);
+    args.extend(["--out", out.to_str().unwrap()]);
+    let o = meshletlab(&args);
+    assert!(
+        o.status.success(),
+        "bench {bench} --smoke {extra:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
 #[test]
 fn every_bench_writes_its_tables_in_smoke_mode() {
     let root = common::scratch("bench-smoke");
     for (bench, title, files) in BENCHES {
         let out = root.join(bench);
-        let o = meshletlab(&[
-            "-q",
-            "bench",
-            bench,
-            "--smoke",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        assert!(
-            o.status.success(),
-            "bench {bench} --smoke: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        smoke(bench, &[], &out);
         for f in files {
             let text = std::fs::read_to_string(out.join(f))
                 .unwrap_or_else(|e| panic!("bench {bench}: {f}: {e}"));
@@ -130,21 +131,7 @@ fn a_tagged_run_names_every_file_and_link_with_its_tag() {
     let root = common::scratch("bench-tag");
     for bench in ["gpu", "render"] {
         let out = root.join(bench);
-        let o = meshletlab(&[
-            "-q",
-            "bench",
-            bench,
-            "--smoke",
-            "--tag",
-            "t1",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        assert!(
-            o.status.success(),
-            "bench {bench} --smoke --tag t1: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        smoke(bench, &["--tag", "t1"], &out);
         let files: Vec<String> = std::fs::read_dir(&out)
             .unwrap()
             .map(|e| e.unwrap())
