@@ -82,9 +82,9 @@ pub struct Config {
     pub chains_per_meshlet: u32,
     /// Step 2: re-partitions to try in turn, each with the seeds of this share of the cells (the
     /// emptiest) left out, largest first, until one is repaired (with or without splits) or a
-    /// repair stops early (its failures far beyond what fewer dropped seeds could take). A dropped seed of a
-    /// cell that is a whole mesh piece drops nothing: no other seed reaches the piece, so it keeps
-    /// its cell.
+    /// repair stops early (its failures far beyond what fewer dropped seeds could take). A
+    /// dropped seed of a cell that is a whole mesh piece drops nothing: no other seed reaches the
+    /// piece, so it keeps its cell.
     pub drops: &'static [f64],
     /// Step 4: cells the repair may split off over-full cells that no chain fixes. With splits
     /// the re-partition is kept only when, packed, it ends with fewer meshlets than the packed
@@ -241,10 +241,10 @@ pub fn partition_with_stats(
                 // extra seeds could take (the drops fall from one attempt to the next).
                 Outcome::Kept | Outcome::Hopeless => break,
                 Outcome::Failed => {}
-                // Repaired with splits. The next attempt keeps more seeds; measured on the shared
-                // and stress meshes at 64/126, 64/84 and 128/128, it never packed below this
-                // one (pycortex 3185 against 3175, gaspra 338 against 337 at 64/126) and cost a
-                // whole attempt (pycortex: 40 % of the run).
+                // Repaired with splits. The next attempt keeps more seeds; on the shared and
+                // stress meshes at 64/126, 64/84 and 128/128 one followed only on pycortex and
+                // gaspra at 64/126, and it packed to more meshlets (3185 against 3175, 338
+                // against 337) at the cost of a whole attempt (pycortex: 40 % of the run).
                 Outcome::Packed(labels, live) => {
                     candidate = Some((labels, live));
                     break;
