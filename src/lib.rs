@@ -81,3 +81,13 @@ pub mod meshlet;
 #[cfg(feature = "render")]
 pub mod render;
 pub mod strategy;
+
+/// A rayon pool of exactly `n` threads for the unit tests' thread-count comparisons: on a
+/// one-core host the global pool is one thread too, so a test must not compare against it.
+#[cfg(test)]
+pub(crate) fn test_pool(n: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .expect("a test's thread pool")
+}

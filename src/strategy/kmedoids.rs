@@ -831,15 +831,8 @@ mod tests {
     fn serial_and_parallel_agree_and_output_is_valid() {
         let m = generate::knot_tube(120, 12, 3);
         let limits = Limits::new(32, 40).unwrap();
-        // Explicit pools: on a one-core host the global pool is one thread too.
-        let pool = |n| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build()
-                .unwrap()
-        };
-        let par = pool(4).install(|| cluster(&m, limits, &Config::default()));
-        let ser = pool(1).install(|| cluster(&m, limits, &Config::default()));
+        let par = crate::test_pool(4).install(|| cluster(&m, limits, &Config::default()));
+        let ser = crate::test_pool(1).install(|| cluster(&m, limits, &Config::default()));
         // Everything but the wall-clock time.
         let key = |c: &Clustering| {
             (

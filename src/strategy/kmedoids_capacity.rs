@@ -667,14 +667,8 @@ mod tests {
             ] {
                 let vt = vertex_triangles(m);
                 let dual = dual_graph(m, &vt);
-                let pool = |n| {
-                    rayon::ThreadPoolBuilder::new()
-                        .num_threads(n)
-                        .build()
-                        .unwrap()
-                };
-                let a = pool(1).install(|| cluster(m, &dual, &vt, limits, grow, 4));
-                let b = pool(4).install(|| cluster(m, &dual, &vt, limits, grow, 4));
+                let a = crate::test_pool(1).install(|| cluster(m, &dual, &vt, limits, grow, 4));
+                let b = crate::test_pool(4).install(|| cluster(m, &dual, &vt, limits, grow, 4));
                 assert_eq!(
                     (&a.medoids, &a.labels, &a.distances),
                     (&b.medoids, &b.labels, &b.distances)
@@ -741,11 +735,7 @@ mod tests {
         let dual = dual_graph(&m, &vt);
         let limits = Limits::new(32, 126).unwrap();
         let run = |threads| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| cluster(&m, &dual, &vt, limits, Grow::Centre, 16))
+            crate::test_pool(threads).install(|| cluster(&m, &dual, &vt, limits, Grow::Centre, 16))
         };
         let (a, b) = (run(1), run(3));
         assert!(a.iterations > 0);

@@ -543,12 +543,6 @@ mod tests {
             mode: Mode::Local,
             ..Config::default()
         };
-        let pool = |n| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build()
-                .unwrap()
-        };
         let meshes = [
             generate::knot_tube(120, 12, 3),
             generate::terrain(40, 2),
@@ -558,8 +552,8 @@ mod tests {
         for (i, m) in meshes.iter().enumerate() {
             let dual = dual_graph(m, &vertex_triangles(m));
             for limits in [Limits::DEFAULT, Limits::new(32, 40).unwrap()] {
-                let a = pool(1).install(|| cluster(m, limits, &cfg));
-                let b = pool(4).install(|| cluster(m, limits, &cfg));
+                let a = crate::test_pool(1).install(|| cluster(m, limits, &cfg));
+                let b = crate::test_pool(4).install(|| cluster(m, limits, &cfg));
                 assert_eq!(a.labels, b.labels, "mesh {i} {limits}");
                 assert_eq!(a.meshlets, b.meshlets, "mesh {i} {limits}");
                 validate(m, &a.meshlets, limits).unwrap();

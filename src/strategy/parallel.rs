@@ -380,19 +380,12 @@ mod tests {
         let mesh = generate::noisy_sphere(4, 0.2, 7);
         let dual = dual_graph(&mesh, &vertex_triangles(&mesh));
         for limits in Limits::PRESETS {
-            // Explicit pools: on a one-core host the global pool is one thread too.
-            let pool = |n| {
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(n)
-                    .build()
-                    .unwrap()
-            };
-            let g = pool(4).install(|| grow(&mesh, &dual, limits, DEFAULT_SPACING));
+            let g = crate::test_pool(4).install(|| grow(&mesh, &dual, limits, DEFAULT_SPACING));
             validate(&mesh, &g.meshlets, limits).unwrap();
             assert!(g.owner.iter().all(|&o| o != NONE));
             assert!(g.waves >= 1 && g.rounds as usize >= limits.max_triangles as usize / 2);
             // The same run on one thread gives the same result.
-            let one = pool(1).install(|| grow(&mesh, &dual, limits, DEFAULT_SPACING));
+            let one = crate::test_pool(1).install(|| grow(&mesh, &dual, limits, DEFAULT_SPACING));
             assert_eq!(one.owner, g.owner);
             assert_eq!(one.order, g.order);
         }

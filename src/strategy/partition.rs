@@ -21,10 +21,9 @@
 //!    fails even with splits does the next attempt keep every seed. A repair that succeeds (with
 //!    or without splits) or stops early ends the attempts (measured on the shared and stress
 //!    meshes: after an early stop the attempt with every seed stopped early too, and after a
-//!    repair with splits it packed to no fewer meshlets). The Dijkstra
-//!    settles one band of distances at a time ([`Config::band`]) in triangle order: its pops
-//!    otherwise jump across the whole mesh, and on igea it took 0.7x meshoptimizer's whole build
-//!    in cache misses.
+//!    repair with splits it packed to no fewer meshlets). The Dijkstra settles one band of
+//!    distances at a time ([`Config::band`]) in triangle order: its pops otherwise jump across
+//!    the whole mesh, and on igea it took 0.7x meshoptimizer's whole build in cache misses.
 //! 3. **Boundary moves without the limits**: the same vertex-gain moves with the limits lifted,
 //!    which shortens the Voronoi cells' ragged boundaries. Cells may now be over the vertex limit.
 //! 4. **Repair**: every cell over a limit sheds triangles along an ejection chain: the shortest
