@@ -705,7 +705,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         s,
         "`kmedoids` (the default): clusters grown to the limits one at a time (among equally cheap triangles the \
          one nearest the cluster's centroid), each taking the small free regions it encloses when it stops \
-         (giving back its last-grown triangles to make room), neighbours merged, whole small pieces packed, \
+         (giving back triangles at its growth front to make room), neighbours merged, whole small pieces packed, \
          capacity-aware \
          re-assignment from the paper's medoids kept while it helps, tried only where at least a third of \
          the clusters hold at most half the triangle limit (src/strategy/kmedoids_capacity.rs). \
