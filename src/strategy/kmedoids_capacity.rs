@@ -10,10 +10,10 @@
 //! 1. [`seed_clusters`]: one cluster at a time grows from a seed while both limits hold, taking
 //!    the frontier triangle that adds the fewest vertices, then the most enclosed one, then
 //!    ([`Grow`]) the one nearest the cluster's running centroid, or the one fewest hops from the
-//!    seed. The next seed is the rejected frontier triangle with the most taken neighbours (a
-//!    corner: starting there leaves no sliver behind), else the next free triangle in Morton order
-//!    of centroids. Step 1b (`Orphans`): a cluster that stops takes the small free regions it
-//!    encloses, giving back triangles at its growth front to make room.
+//!    seed. The next seed is the free frontier (or given-back) triangle with the most taken
+//!    neighbours (a corner: starting there leaves no sliver behind), else the next free triangle in Morton order
+//!    of centroids. Step 1b (`Orphans`): a cluster that stops takes the small enclosed free
+//!    regions next to it, giving back triangles at its growth front to make room.
 //! 2. [`medoids_and_distances`]: the paper's medoid of each cluster (smallest sum of in-cluster
 //!    hop distances, ties to the lowest id), all members' sums at once by bitset reachability,
 //!    and every member's distance to it from the same local graph.
@@ -27,8 +27,8 @@
 //!    to the medoid) falls; the best clustering seen is kept. They run only where at least a
 //!    third of the clusters are light (`worth_a_round`): on surfaces the first round adds
 //!    clusters (regions grown all at once leave gaps no cluster has room for) and was always
-//!    rejected, at a third of the run time; since step 1b only a thin-tube neuron at 128/128
-//!    still opens the gate.
+//!    rejected, at a third of the run time; since step 1b only a thin-tube neuron still opens
+//!    the gate (`worth_a_round`).
 //!
 //! Where it differs from the paper (§3): the paper's k is fixed by ceil(T / max_triangles) and
 //! grows by one per overflow with a global re-run each; here k comes out of the capacity-bounded
@@ -195,8 +195,9 @@ pub fn cluster_with(
 /// rounds were accepted only on the neurons (40-55 % light, 3-4 rounds, a fifth fewer clusters);
 /// every other mesh (at most 29 % light) rejected the first round, which cost a third of the run
 /// (the 14 M-triangle dragon: 6.8 s of 23 s). Step 1b leaves fewer light clusters: the gate now
-/// opens only on neuron 722817260 at 128/128 (5 rounds); rounds forced on at 64/126 and 64/84
-/// (last-grown rule only) were all rejected.
+/// opens with centre growth only on neuron 722817260 at 128/128 (5 rounds; with hops growth also
+/// on it at 64/126); rounds forced on at 64/126 and 64/84 (last-grown rule only) were all
+/// rejected.
 fn worth_a_round(labels: &[u32], k: usize, limits: Limits) -> bool {
     let mut tris = vec![0u32; k];
     for &l in labels {
@@ -410,6 +411,7 @@ pub fn seed_clusters(
     let mut rejected = Vec::new();
     let mut orphans = Orphans::new(mesh.vertex_count(), labels.len());
     let mut grown: Vec<u32> = Vec::new();
+    let mut frontier: Vec<u32> = Vec::new();
     let mut cursor = 0;
     let mut next_seed: Option<u32> = None;
     loop {
@@ -506,23 +508,22 @@ pub fn seed_clusters(
             }
         }
         // Step 1b: the orphans this cluster leaves behind join it.
-        let frontier: Vec<u32> = rejected
-            .iter()
-            .copied()
-            .chain(heap.iter().map(|r| r.0 .4))
-            .collect();
+        frontier.clear();
+        frontier.extend(rejected.iter().copied().chain(heap.iter().map(|r| r.0 .4)));
         let shed = orphans.absorb(mesh, dual, limits, c, &frontier, &mut grown, labels);
-        // The free frontier triangle with most taken neighbours (lowest id on ties) seeds next.
+        // The front rule may give the seed back; the medoid steps need a member of each cluster.
+        seeds[c as usize] = grown[0];
+        // The free frontier or given-back triangle with most taken neighbours (lowest id on ties)
+        // seeds next.
         let taken = |t: u32| {
             dual.row(t as usize)
                 .iter()
                 .filter(|&&n| labels[n as usize] != FREE)
                 .count()
         };
-        next_seed = rejected
+        next_seed = frontier
             .iter()
             .copied()
-            .chain(heap.iter().map(|r| r.0 .4))
             .chain(shed)
             .filter(|&t| labels[t as usize] == FREE)
             .max_by_key(|&t| (taken(t), std::cmp::Reverse(t)));
@@ -544,8 +545,8 @@ pub fn seed_clusters(
 ///   the orphan lies by the growth front), those nearest the open free region instead, never one
 ///   next to the orphan ([`Orphans::front_shed`]), kept only when the result is one piece.
 ///
-/// Either way the given-back triangles lie on the front, beside the free region the next cluster
-/// grows into, and at most half the cluster goes back. Measured on the ten shared and six
+/// The given-back triangles are free again and next-seed candidates; each rule gives back at most
+/// half of the cluster as it stands when the rule runs. Measured on the ten shared and six
 /// generated meshes, mean count over meshoptimizer's at 64/126, 64/84 and 128/128: 1.135, 1.141,
 /// 1.166 without step 1b; 1.090, 1.115, 1.113 with the last-grown rule alone; 1.074, 1.097, 1.102
 /// with the front rule after it (the front rule alone: 1.101, 1.093, 1.099). Spheres grow a few
@@ -553,18 +554,22 @@ pub fn seed_clusters(
 /// nothing; giving back at most a quarter, or no more than the orphans hold, gained less than
 /// half; re-growing the cluster with the orphans preferred was no better on average.
 struct Orphans {
-    /// Per triangle: the cluster whose check visited it last.
+    /// Per triangle: 1 + the cluster whose check visited it last (0: none; zeroed pages are free).
     stamp: Vec<u32>,
     /// Per triangle visited by the current cluster's check: its region's index, or [`OPEN`].
     region: Vec<u32>,
-    /// Per vertex: triangles of the prefix being tested that use it (valid where `vstamp` is the
-    /// current attempt).
+    /// Per vertex: triangles of the cluster being cut back that use it (valid where `vstamp` is
+    /// the current attempt).
     vcount: Vec<u32>,
     vstamp: Vec<u32>,
     /// Per vertex: the last attempt whose orphans use it.
     ostamp: Vec<u32>,
+    /// Counter behind the per-attempt stamps (`vstamp`, `ostamp`, `tseen`): never reset, so
+    /// no clearing between attempts.
     attempt: u32,
+    /// Breadth-first queue of the region search.
     queue: Vec<u32>,
+    /// Per triangle, in [`Orphans::front_shed`]: queued, given back or flooded (one stamp each).
     tseen: Vec<u32>,
 }
 
@@ -574,21 +579,22 @@ const OPEN: u32 = u32::MAX;
 impl Orphans {
     fn new(vertices: usize, triangles: usize) -> Self {
         Self {
-            stamp: vec![FREE; triangles],
-            region: vec![OPEN; triangles],
+            stamp: vec![0; triangles],
+            // Read only where `stamp` says this check wrote it.
+            region: vec![0; triangles],
             vcount: vec![0; vertices],
             vstamp: vec![0; vertices],
             ostamp: vec![0; vertices],
             attempt: 0,
             queue: Vec::new(),
-            tseen: Vec::new(),
+            tseen: vec![0; triangles],
         }
     }
 
     /// Finds the orphans among the free regions of `frontier` (cluster `c`'s free neighbours)
-    /// and absorbs those that fit, largest first (then by lowest first triangle), by the
-    /// last-grown rule, then each one left by the front rule; at most half of `grown` (the
-    /// cluster in growth order, updated) goes back per rule. Returns the triangles given back.
+    /// and absorbs those that fit, largest first (then by the triangle the search started from),
+    /// by the last-grown rule, then each one left by the front rule; `grown` is the cluster in
+    /// growth order, updated. Returns the triangles given back.
     #[allow(clippy::too_many_arguments)]
     fn absorb(
         &mut self,
@@ -651,7 +657,7 @@ impl Orphans {
     ) -> Option<Vec<u32>> {
         self.attempt += 1;
         let a = self.attempt;
-        let check = c;
+        let check = c + 1;
         let rid = self.region[r[0] as usize];
         let in_r = |stamp: &[u32], region: &[u32], t: u32| {
             labels[t as usize] == FREE && stamp[t as usize] == check && region[t as usize] == rid
@@ -688,9 +694,6 @@ impl Orphans {
         }
         let (max_v, max_t) = (limits.max_vertices as usize, limits.max_triangles as usize);
         // Breadth-first from the cluster's triangles on the open front; `tseen` marks visited.
-        if self.tseen.len() < labels.len() {
-            self.tseen = vec![0; labels.len()];
-        }
         let mut queue: Vec<u32> = Vec::new();
         for &t in grown.iter() {
             let on_front = dual
@@ -789,13 +792,13 @@ impl Orphans {
     ) -> Vec<Vec<u32>> {
         let mut regions: Vec<Vec<u32>> = Vec::new();
         for &f in frontier {
-            if labels[f as usize] != FREE || self.stamp[f as usize] == c {
+            if labels[f as usize] != FREE || self.stamp[f as usize] == c + 1 {
                 continue;
             }
             let id = regions.len() as u32;
             self.queue.clear();
             self.queue.push(f);
-            self.stamp[f as usize] = c;
+            self.stamp[f as usize] = c + 1;
             self.region[f as usize] = id;
             let mut open = false;
             let mut i = 0;
@@ -806,11 +809,11 @@ impl Orphans {
                     if labels[n as usize] != FREE {
                         continue;
                     }
-                    if self.stamp[n as usize] == c {
+                    if self.stamp[n as usize] == c + 1 {
                         open |= self.region[n as usize] == OPEN;
                         continue;
                     }
-                    self.stamp[n as usize] = c;
+                    self.stamp[n as usize] = c + 1;
                     self.region[n as usize] = id;
                     self.queue.push(n);
                 }
@@ -871,7 +874,7 @@ impl Orphans {
         ids.sort_unstable();
         ids.dedup();
         let slot = |stamp: &[u32], region: &[u32], m: u32| -> Option<usize> {
-            if labels[m as usize] != FREE || stamp[m as usize] != c {
+            if labels[m as usize] != FREE || stamp[m as usize] != c + 1 {
                 return None;
             }
             ids.binary_search(&region[m as usize]).ok()
@@ -1218,6 +1221,55 @@ mod tests {
             .filter(|&t| labels[t as usize] == c)
             .collect();
         assert_eq!(members.len(), 126);
+        assert_eq!(
+            pieces_per_cluster(&dual, &labels_only(&labels, c), 1),
+            vec![1]
+        );
+        // The same with the vertex limit binding: the ball holds exactly the limit, and the
+        // orphan (the first triangle after the ball with a vertex outside it) adds a vertex.
+        let ball = &order[..126];
+        let mut verts: Vec<u32> = ball.iter().flat_map(|&t| m.triangle(t as usize)).collect();
+        verts.sort_unstable();
+        verts.dedup();
+        let orphan = *order[126..]
+            .iter()
+            .find(|&&t| {
+                m.triangle(t as usize)
+                    .iter()
+                    .any(|v| verts.binary_search(v).is_err())
+            })
+            .unwrap();
+        let limits = Limits::new(verts.len() as u32, 255).unwrap();
+        let mut labels = vec![FREE; m.triangle_count()];
+        let mut grown = ball.to_vec();
+        for &t in &grown {
+            labels[t as usize] = c;
+        }
+        for &n in dual.row(orphan as usize) {
+            if labels[n as usize] == FREE {
+                labels[n as usize] = 7;
+            }
+        }
+        let mut o = Orphans::new(m.vertex_count(), m.triangle_count());
+        let regions = o.regions(&dual, 63, c, &[orphan], &labels);
+        assert_eq!(regions, vec![vec![orphan]]);
+        let shed = o
+            .front_shed(&m, &dual, limits, c, &mut grown, &regions[0], &mut labels)
+            .expect("a vertex on the front can be freed");
+        assert!(!shed.is_empty());
+        assert!(shed
+            .iter()
+            .all(|&t| labels[t as usize] == FREE && !dual.row(t as usize).contains(&orphan)));
+        assert_eq!(labels[orphan as usize], c);
+        let mut now: Vec<u32> = grown.iter().flat_map(|&t| m.triangle(t as usize)).collect();
+        now.sort_unstable();
+        now.dedup();
+        assert!(
+            now.len() <= verts.len(),
+            "{} vertices over the limit",
+            now.len()
+        );
+        assert_eq!(grown.len(), 127 - shed.len());
         assert_eq!(
             pieces_per_cluster(&dual, &labels_only(&labels, c), 1),
             vec![1]
