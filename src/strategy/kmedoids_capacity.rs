@@ -11,9 +11,9 @@
 //!    the frontier triangle that adds the fewest vertices, then the most enclosed one, then
 //!    ([`Grow`]) the one nearest the cluster's running centroid, or the one fewest hops from the
 //!    seed. The next seed is the free frontier (or given-back) triangle with the most taken
-//!    neighbours (a corner: starting there leaves no sliver behind), else the next free triangle in Morton order
-//!    of centroids. Step 1b (`Orphans`): a cluster that stops takes the small enclosed free
-//!    regions next to it, giving back triangles at its growth front to make room.
+//!    neighbours (a corner: starting there leaves no sliver behind), else the next free triangle
+//!    in Morton order of centroids. Step 1b (`Orphans`): a cluster that stops takes the small
+//!    enclosed free regions next to it, giving back triangles at its growth front to make room.
 //! 2. [`medoids_and_distances`]: the paper's medoid of each cluster (smallest sum of in-cluster
 //!    hop distances, ties to the lowest id), all members' sums at once by bitset reachability,
 //!    and every member's distance to it from the same local graph.
@@ -28,7 +28,7 @@
 //!    third of the clusters are light (`worth_a_round`): on surfaces the first round adds
 //!    clusters (regions grown all at once leave gaps no cluster has room for) and was always
 //!    rejected, at a third of the run time; since step 1b only a thin-tube neuron still opens
-//!    the gate (`worth_a_round`).
+//!    the gate.
 //!
 //! Where it differs from the paper (§3): the paper's k is fixed by ceil(T / max_triangles) and
 //! grows by one per overflow with a global re-run each; here k comes out of the capacity-bounded
