@@ -1113,24 +1113,8 @@ mod tests {
 
     #[test]
     fn a_full_cluster_takes_the_hole_it_encloses_and_gives_back_its_last_triangle() {
-        let m = generate::terrain(24, 5);
-        let vt = vertex_triangles(&m);
-        let dual = dual_graph(&m, &vt);
+        let (m, dual, order) = terrain_and_order();
         let limits = Limits::new(255, 126).unwrap();
-        // Breadth-first order from triangle 300: every prefix is edge-connected.
-        let mut order = vec![300u32];
-        let mut seen = vec![false; m.triangle_count()];
-        seen[300] = true;
-        let mut i = 0;
-        while order.len() < 200 {
-            for &n in dual.row(order[i] as usize) {
-                if !seen[n as usize] {
-                    seen[n as usize] = true;
-                    order.push(n);
-                }
-            }
-            i += 1;
-        }
         // Cluster 0 holds the first 127 triangles but the 10th, a hole: triangle-full. Every other
         // triangle is taken, so the hole is a free region of one triangle, enclosed.
         let (c, hole) = (0u32, order[10]);
@@ -1168,36 +1152,12 @@ mod tests {
 
     #[test]
     fn an_orphan_by_the_front_is_taken_for_triangles_given_back_at_the_open_front() {
-        let m = generate::terrain(24, 5);
-        let vt = vertex_triangles(&m);
-        let dual = dual_graph(&m, &vt);
+        let (m, dual, order) = terrain_and_order();
         let limits = Limits::new(255, 126).unwrap();
-        let mut order = vec![300u32];
-        let mut seen = vec![false; m.triangle_count()];
-        seen[300] = true;
-        let mut i = 0;
-        while order.len() < 200 {
-            for &n in dual.row(order[i] as usize) {
-                if !seen[n as usize] {
-                    seen[n as usize] = true;
-                    order.push(n);
-                }
-            }
-            i += 1;
-        }
         // Cluster 0 is the triangle-full ball of the first 126; the next triangle is enclosed by
         // it and by another cluster's triangles; the rest of the mesh is free (the open front).
         let (c, orphan) = (0u32, order[126]);
-        let mut labels = vec![FREE; m.triangle_count()];
-        let mut grown: Vec<u32> = order[..126].to_vec();
-        for &t in &grown {
-            labels[t as usize] = c;
-        }
-        for &n in dual.row(orphan as usize) {
-            if labels[n as usize] == FREE {
-                labels[n as usize] = 7;
-            }
-        }
+        let (mut labels, mut grown) = ball_and_orphan(&m, &dual, &order[..126], orphan);
         let mut o = Orphans::new(m.vertex_count(), m.triangle_count());
         let regions = o.regions(&dual, 63, c, &[orphan], &labels);
         assert_eq!(regions, vec![vec![orphan]]);
@@ -1240,16 +1200,7 @@ mod tests {
             })
             .unwrap();
         let limits = Limits::new(verts.len() as u32, 255).unwrap();
-        let mut labels = vec![FREE; m.triangle_count()];
-        let mut grown = ball.to_vec();
-        for &t in &grown {
-            labels[t as usize] = c;
-        }
-        for &n in dual.row(orphan as usize) {
-            if labels[n as usize] == FREE {
-                labels[n as usize] = 7;
-            }
-        }
+        let (mut labels, mut grown) = ball_and_orphan(&m, &dual, ball, orphan);
         let mut o = Orphans::new(m.vertex_count(), m.triangle_count());
         let regions = o.regions(&dual, 63, c, &[orphan], &labels);
         assert_eq!(regions, vec![vec![orphan]]);
@@ -1274,6 +1225,42 @@ mod tests {
             pieces_per_cluster(&dual, &labels_only(&labels, c), 1),
             vec![1]
         );
+    }
+
+    /// The terrain test mesh, its dual graph, and 200 triangles in breadth-first order from
+    /// triangle 300 (every prefix edge-connected).
+    fn terrain_and_order() -> (Mesh, Csr, Vec<u32>) {
+        let m = generate::terrain(24, 5);
+        let dual = dual_graph(&m, &vertex_triangles(&m));
+        let mut order = vec![300u32];
+        let mut seen = vec![false; m.triangle_count()];
+        seen[300] = true;
+        let mut i = 0;
+        while order.len() < 200 {
+            for &n in dual.row(order[i] as usize) {
+                if !seen[n as usize] {
+                    seen[n as usize] = true;
+                    order.push(n);
+                }
+            }
+            i += 1;
+        }
+        (m, dual, order)
+    }
+
+    /// Labels with `ball` as cluster 0 and `orphan` enclosed by it and by another cluster's
+    /// triangles (7), the rest of the mesh free (the open front); and the ball as `grown`.
+    fn ball_and_orphan(m: &Mesh, dual: &Csr, ball: &[u32], orphan: u32) -> (Vec<u32>, Vec<u32>) {
+        let mut labels = vec![FREE; m.triangle_count()];
+        for &t in ball {
+            labels[t as usize] = 0;
+        }
+        for &n in dual.row(orphan as usize) {
+            if labels[n as usize] == FREE {
+                labels[n as usize] = 7;
+            }
+        }
+        (labels, ball.to_vec())
     }
 
     /// `labels` with cluster `c` as 0 and every other triangle as `UNREACHED` (one cluster to
