@@ -591,6 +591,42 @@ impl Orphans {
         }
     }
 
+    /// Starts an attempt: distinct vertices of the orphans `take`, of the cluster `grown`, and of
+    /// both; `vcount` then holds each vertex's uses in `grown`. Returns (attempt stamp, orphan
+    /// vertices, cluster vertices, shared vertices).
+    fn count_vertices(
+        &mut self,
+        mesh: &Mesh,
+        grown: &[u32],
+        take: &[u32],
+    ) -> (u32, usize, usize, usize) {
+        self.attempt += 1;
+        let a = self.attempt;
+        let mut orphan_v = 0usize;
+        for &t in take {
+            for v in mesh.triangle(t as usize) {
+                if self.ostamp[v as usize] != a {
+                    self.ostamp[v as usize] = a;
+                    orphan_v += 1;
+                }
+            }
+        }
+        let (mut nv, mut shared) = (0usize, 0usize);
+        for &t in grown {
+            for v in mesh.triangle(t as usize) {
+                let vi = v as usize;
+                if self.vstamp[vi] != a {
+                    self.vstamp[vi] = a;
+                    self.vcount[vi] = 0;
+                    nv += 1;
+                    shared += usize::from(self.ostamp[vi] == a);
+                }
+                self.vcount[vi] += 1;
+            }
+        }
+        (a, orphan_v, nv, shared)
+    }
+
     /// Finds the orphans among the free regions of `frontier` (cluster `c`'s free neighbours)
     /// and absorbs those that fit, largest first (then by the triangle the search started from),
     /// by the last-grown rule, then each one left by the front rule; `grown` is the cluster in
@@ -655,8 +691,6 @@ impl Orphans {
         r: &[u32],
         labels: &mut [u32],
     ) -> Option<Vec<u32>> {
-        self.attempt += 1;
-        let a = self.attempt;
         let check = c + 1;
         let rid = self.region[r[0] as usize];
         let in_r = |stamp: &[u32], region: &[u32], t: u32| {
@@ -669,29 +703,7 @@ impl Orphans {
         let open_free = |stamp: &[u32], region: &[u32], t: u32| {
             labels[t as usize] == FREE && (stamp[t as usize] != check || region[t as usize] == OPEN)
         };
-        // Vertex counts as in `prefix`.
-        let mut orphan_v = 0usize;
-        for &t in r {
-            for v in mesh.triangle(t as usize) {
-                if self.ostamp[v as usize] != a {
-                    self.ostamp[v as usize] = a;
-                    orphan_v += 1;
-                }
-            }
-        }
-        let (mut nv, mut shared) = (0usize, 0usize);
-        for &t in grown.iter() {
-            for v in mesh.triangle(t as usize) {
-                let vi = v as usize;
-                if self.vstamp[vi] != a {
-                    self.vstamp[vi] = a;
-                    self.vcount[vi] = 0;
-                    nv += 1;
-                    shared += usize::from(self.ostamp[vi] == a);
-                }
-                self.vcount[vi] += 1;
-            }
-        }
+        let (a, orphan_v, mut nv, mut shared) = self.count_vertices(mesh, grown, r);
         let (max_v, max_t) = (limits.max_vertices as usize, limits.max_triangles as usize);
         // Breadth-first from the cluster's triangles on the open front; `tseen` marks visited.
         let mut queue: Vec<u32> = Vec::new();
@@ -844,31 +856,7 @@ impl Orphans {
         take: &[u32],
         labels: &[u32],
     ) -> Option<usize> {
-        self.attempt += 1;
-        let a = self.attempt;
-        // Distinct vertices of the orphans, of the prefix, and of both.
-        let mut orphan_v = 0usize;
-        for &t in take {
-            for v in mesh.triangle(t as usize) {
-                if self.ostamp[v as usize] != a {
-                    self.ostamp[v as usize] = a;
-                    orphan_v += 1;
-                }
-            }
-        }
-        let (mut nv, mut shared) = (0usize, 0usize);
-        for &t in grown {
-            for v in mesh.triangle(t as usize) {
-                let vi = v as usize;
-                if self.vstamp[vi] != a {
-                    self.vstamp[vi] = a;
-                    self.vcount[vi] = 0;
-                    nv += 1;
-                    shared += usize::from(self.ostamp[vi] == a);
-                }
-                self.vcount[vi] += 1;
-            }
-        }
+        let (a, orphan_v, mut nv, mut shared) = self.count_vertices(mesh, grown, take);
         // Edges from each orphan into the prefix.
         let mut ids: Vec<u32> = take.iter().map(|&t| self.region[t as usize]).collect();
         ids.sort_unstable();
