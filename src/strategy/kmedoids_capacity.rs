@@ -11,8 +11,8 @@
 //!    the frontier triangle that adds the fewest vertices, then the most enclosed one, then
 //!    ([`Grow`]) the one nearest the cluster's running centroid, or the one fewest hops from the
 //!    seed. The next seed is the deepest free triangle (hop distance from its piece's root,
-//!    `seed_order`), so the free triangles stay one shrinking ball and the neurons' branches are
-//!    clustered from their tips inwards. Step 1b (`Orphans`): a cluster that stops takes the small
+//!    `seed_order`), so in the first growth the free triangles stay one shrinking ball and the
+//!    neurons' branches are clustered from their tips inwards. Step 1b (`Orphans`): a cluster that stops takes the small
 //!    enclosed free regions next to it, giving back triangles at its growth front to make room.
 //! 2. [`medoids_and_distances`]: the paper's medoid of each cluster (smallest sum of in-cluster
 //!    hop distances, ties to the lowest id), all members' sums at once by bitset reachability,
@@ -27,8 +27,8 @@
 //!    to the medoid) falls; the best clustering seen is kept. They run only where at least a
 //!    third of the clusters are light (`worth_a_round`): on surfaces the first round adds
 //!    clusters (regions grown all at once leave gaps no cluster has room for) and was always
-//!    rejected, at a third of the run time; since step 1b only a thin-tube neuron still opens
-//!    the gate.
+//!    rejected, at a third of the run time; with step 1b and the deepest-first seeds no shared
+//!    mesh opens the gate (the neurons at 64/126, 64/84 and 128/128 included).
 //!
 //! Where it differs from the paper (§3): the paper's k is fixed by ceil(T / max_triangles) and
 //! grows by one per overflow with a global re-run each; here k comes out of the capacity-bounded
@@ -194,10 +194,10 @@ pub fn cluster_with(
 /// closes. Measured (64/126, 64/84, 128/128; ten shared and six generated meshes) before step 1b:
 /// rounds were accepted only on the neurons (40-55 % light, 3-4 rounds, a fifth fewer clusters);
 /// every other mesh (at most 29 % light) rejected the first round, which cost a third of the run
-/// (the 14 M-triangle dragon: 6.8 s of 23 s). Step 1b leaves fewer light clusters: the gate now
-/// opens with centre growth only on neuron 722817260 at 128/128 (5 rounds; with hops growth also
-/// on it at 64/126); rounds forced on at 64/126 and 64/84 (last-grown rule only) were all
-/// rejected.
+/// (the 14 M-triangle dragon: 6.8 s of 23 s). Step 1b leaves fewer light clusters: with the
+/// corner-first seeds the gate then opened with centre growth only on neuron 722817260 at 128/128
+/// (5 rounds), and rounds forced on at 64/126 and 64/84 were all rejected; with the deepest-first
+/// seeds ([`seed_order`]) it opens on neither neuron at 64/126, 64/84 or 128/128.
 fn worth_a_round(labels: &[u32], k: usize, limits: Limits) -> bool {
     let mut tris = vec![0u32; k];
     for &l in labels {
@@ -361,9 +361,11 @@ fn finish(
 
 /// The seed order: in each edge-connected piece (pieces by their lowest triangle id), the
 /// breadth-first order from that triangle, reversed, so the deepest free triangle seeds next.
+/// Within a depth the order follows the neighbour order of `dual`'s rows, which the GPU's dual
+/// graph reproduces exactly, so both paths seed alike.
 ///
-/// Why deepest first: the free triangles then stay a ball around the piece's root that shrinks
-/// from its far side, so a cluster grown from the deepest free triangle rarely cuts a free region
+/// Why deepest first: in the first growth the free triangles then stay a ball around the piece's
+/// root that shrinks from its far side, so a cluster grown from the deepest free triangle rarely cuts a free region
 /// off from the rest (an orphan a later seed would turn into a small cluster). On a tree of tubes
 /// (the neurons) the clusters start at the branch tips and meet towards the root, as in the
 /// bottom-up partition of a tree (Kundu and Misra, SIAM J. Comput. 6(1), 1977), where the tip
@@ -543,8 +545,8 @@ pub fn seed_clusters(
 /// The given-back triangles are free again (later seeds reach them); each rule gives back at most
 /// half of the cluster as it stands when the rule runs. Measured with the seed order before
 /// [`seed_order`] (corners first) on the ten shared and six generated meshes, mean count over
-/// meshoptimizer's at 64/126, 64/84 and 128/128: 1.135, 1.141, 1.166 without step 1b; 1.090, 1.115, 1.113 with the last-grown rule alone; 1.074, 1.097, 1.102
-/// with the front rule after it (the front rule alone: 1.101, 1.093, 1.099). Spheres grow a few
+/// meshoptimizer's at 64/126, 64/84 and 128/128: 1.135, 1.141, 1.166 without step 1b; 1.090,
+/// 1.115, 1.113 with the last-grown rule alone; 1.074, 1.097, 1.102 with the front rule after it (the front rule alone: 1.101, 1.093, 1.099). Spheres grow a few
 /// percent, still under meshoptimizer's. Absorbing only what fits without giving back changed
 /// nothing; giving back at most a quarter, or no more than the orphans hold, gained less than
 /// half; re-growing the cluster with the orphans preferred was no better on average.
@@ -625,7 +627,8 @@ impl Orphans {
     /// Finds the orphans among the free regions of `frontier` (cluster `c`'s free neighbours)
     /// and absorbs those that fit, largest first (then by the triangle the search started from),
     /// by the last-grown rule, then each one left by the front rule; `grown` is the cluster in
-    /// growth order, updated. Returns the triangles given back.
+    /// growth order, updated. Returns the triangles given back (the seed order reaches them
+    /// anyway; the tests check them).
     #[allow(clippy::too_many_arguments)]
     fn absorb(
         &mut self,
