@@ -12,8 +12,9 @@
 //!    ([`Grow`]) the one nearest the cluster's running centroid, or the one fewest hops from the
 //!    seed. The next seed is the deepest free triangle (hop distance from its piece's root,
 //!    `seed_order`), so in the first growth the free triangles stay one shrinking ball and the
-//!    neurons' branches are clustered from their tips inwards. Step 1b (`Orphans`): a cluster that stops takes the small
-//!    enclosed free regions next to it, giving back triangles at its growth front to make room.
+//!    neurons' branches are clustered from their tips inwards. Step 1b (`Orphans`): a cluster
+//!    that stops takes the small enclosed free regions next to it, giving back triangles at its
+//!    growth front to make room.
 //! 2. [`medoids_and_distances`]: the paper's medoid of each cluster (smallest sum of in-cluster
 //!    hop distances, ties to the lowest id), all members' sums at once by bitset reachability,
 //!    and every member's distance to it from the same local graph.
@@ -365,15 +366,16 @@ fn finish(
 /// graph reproduces exactly, so both paths seed alike.
 ///
 /// Why deepest first: in the first growth the free triangles then stay a ball around the piece's
-/// root that shrinks from its far side, so a cluster grown from the deepest free triangle rarely cuts a free region
-/// off from the rest (an orphan a later seed would turn into a small cluster). On a tree of tubes
-/// (the neurons) the clusters start at the branch tips and meet towards the root, as in the
-/// bottom-up partition of a tree (Kundu and Misra, SIAM J. Comput. 6(1), 1977), where the tip
-/// remainders a sweep leaves behind are what the count loses. Measured (mean count over
-/// meshoptimizer's, ten shared and six generated meshes, 64/126, 64/84, 128/128): 1.074, 1.097,
-/// 1.102 with the seed order before it (the free frontier triangle with the most taken neighbours,
-/// else the next free one in Morton order); 1.045, 1.050, 1.051 with it. The dragon's run takes
-/// about 15 % longer (the breadth-first pass, and clusters grown further apart in memory).
+/// root that shrinks from its far side, so a cluster grown from the deepest free triangle rarely
+/// cuts a free region off from the rest (an orphan a later seed would turn into a small
+/// cluster). On a tree of tubes (the neurons) the clusters start at the branch tips and meet
+/// towards the root, as in the bottom-up partition of a tree (Kundu and Misra, SIAM J. Comput.
+/// 6(1), 1977), where the tip remainders a sweep leaves behind are what the count loses. Measured
+/// (mean count over meshoptimizer's, ten shared and six generated meshes, 64/126, 64/84,
+/// 128/128): 1.074, 1.097, 1.102 with the seed order before it (the free frontier triangle with
+/// the most taken neighbours, else the next free one in Morton order); 1.045, 1.050, 1.051 with
+/// it. The dragon's run takes about 15 % longer (the breadth-first pass, and clusters grown
+/// further apart in memory).
 fn seed_order(dual: &Csr) -> Vec<u32> {
     let n = dual.rows();
     let mut seen = vec![false; n];
@@ -546,8 +548,9 @@ pub fn seed_clusters(
 /// half of the cluster as it stands when the rule runs. Measured with the seed order before
 /// [`seed_order`] (corners first) on the ten shared and six generated meshes, mean count over
 /// meshoptimizer's at 64/126, 64/84 and 128/128: 1.135, 1.141, 1.166 without step 1b; 1.090,
-/// 1.115, 1.113 with the last-grown rule alone; 1.074, 1.097, 1.102 with the front rule after it (the front rule alone: 1.101, 1.093, 1.099). Spheres grow a few
-/// percent, still under meshoptimizer's. Absorbing only what fits without giving back changed
+/// 1.115, 1.113 with the last-grown rule alone; 1.074, 1.097, 1.102 with the front rule after it
+/// (the front rule alone: 1.101, 1.093, 1.099). Spheres grow a few percent, still under
+/// meshoptimizer's. Absorbing only what fits without giving back changed
 /// nothing; giving back at most a quarter, or no more than the orphans hold, gained less than
 /// half; re-growing the cluster with the orphans preferred was no better on average.
 struct Orphans {
