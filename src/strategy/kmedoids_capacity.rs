@@ -627,6 +627,19 @@ impl Orphans {
         (a, orphan_v, nv, shared)
     }
 
+    /// Takes triangle `u` out of the counts of attempt `a` (from [`Orphans::count_vertices`]):
+    /// a vertex no kept triangle uses any more leaves `nv`, and `shared` if the orphans use it.
+    fn release(&mut self, mesh: &Mesh, a: u32, u: u32, nv: &mut usize, shared: &mut usize) {
+        for v in mesh.triangle(u as usize) {
+            let vi = v as usize;
+            self.vcount[vi] -= 1;
+            if self.vcount[vi] == 0 {
+                *nv -= 1;
+                *shared -= usize::from(self.ostamp[vi] == a);
+            }
+        }
+    }
+
     /// Finds the orphans among the free regions of `frontier` (cluster `c`'s free neighbours)
     /// and absorbs those that fit, largest first (then by the triangle the search started from),
     /// by the last-grown rule, then each one left by the front rule; `grown` is the cluster in
@@ -732,14 +745,7 @@ impl Orphans {
             let u = queue[i];
             i += 1;
             removed += 1;
-            for v in mesh.triangle(u as usize) {
-                let vi = v as usize;
-                self.vcount[vi] -= 1;
-                if self.vcount[vi] == 0 {
-                    nv -= 1;
-                    shared -= usize::from(self.ostamp[vi] == a);
-                }
-            }
+            self.release(mesh, a, u, &mut nv, &mut shared);
             for &n in dual.row(u as usize) {
                 if labels[n as usize] == c
                     && self.tseen[n as usize] != a
@@ -890,14 +896,7 @@ impl Orphans {
             // Give back the last-grown triangle.
             n -= 1;
             let u = grown[n];
-            for v in mesh.triangle(u as usize) {
-                let vi = v as usize;
-                self.vcount[vi] -= 1;
-                if self.vcount[vi] == 0 {
-                    nv -= 1;
-                    shared -= usize::from(self.ostamp[vi] == a);
-                }
-            }
+            self.release(mesh, a, u, &mut nv, &mut shared);
             for &m in dual.row(u as usize) {
                 if let Some(i) = slot(&self.stamp, &self.region, m) {
                     touch[i] -= 1;
