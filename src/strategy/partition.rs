@@ -10,20 +10,22 @@
 //! The steps, on the state of `+refine` (`refine::state`: labels, counts, move journal):
 //! 1. **Start**: the input strategy's meshlets (meshoptimizer's for `partition`), then the
 //!    vertex-gain boundary moves of `+refine` step 1. This state is kept as the fallback.
-//! 2. **Global re-partition** ([`Config::lloyd_iterations`]): balanced geodesic Lloyd over the
-//!    dual graph at the same count or a little below it (the drops below). Seeds are the triangles nearest each cell's centroid; a
-//!    multi-source Dijkstra over centroid distances assigns every triangle; each cell's distance
-//!    carries an additive weight that grows with its vertex count over the limit
-//!    ([`Config::balance_step`]), so cells head for equal vertex counts (a power diagram on the
-//!    surface). [`Config::drops`]: the first attempt leaves out the seeds of the emptiest 0.3 % of
-//!    the cells, so the repair and packing start from fewer cells (one probe run at 64/126: igea
-//!    2769 meshlets against 2775 without, pycortex 3178 against 3185); only when the repair
-//!    fails even with splits does the next attempt keep every seed. A repair that succeeds (with
-//!    or without splits) or stops early ends the attempts (measured on the shared and stress
-//!    meshes: after an early stop the attempt with every seed stopped early too, and after a
-//!    repair with splits it packed to no fewer meshlets). The Dijkstra settles one band of
-//!    distances at a time ([`Config::band`]) in triangle order: its pops otherwise jump across
-//!    the whole mesh, and on igea it took 0.7x meshoptimizer's whole build in cache misses.
+//! 2. **Global re-partition** ([`Config::lloyd_iterations`]): balanced geodesic Lloyd over the dual
+//!    graph at the same count or a little below it (the drops below). Seeds are the triangles
+//!    nearest each cell's centroid; a multi-source Dijkstra over centroid distances assigns every
+//!    triangle; each cell's distance carries an additive weight that grows with its vertex count
+//!    over the limit ([`Config::balance_step`]), so cells head for equal vertex counts (a power
+//!    diagram on the surface). [`Config::drops`]: the first attempt leaves out the seeds of the
+//!    emptiest 0.3 % of the cells (at least one), so the repair and packing start from fewer cells
+//!    (one probe run at 64/126: igea 2769 meshlets against 2775 without, pycortex 3178 against
+//!    3185; with at least one, fandisk 133 and cad-part-400 102 where 0.3 % rounded to none and
+//!    left 134 and 103; more than 0.3 %, see [`Config::default`]); only when the repair fails even
+//!    with splits does the next attempt keep every seed. A repair that succeeds (with or without
+//!    splits) or stops early ends the attempts (measured on the shared and stress meshes: after an
+//!    early stop the attempt with every seed stopped early too, and after a repair with splits it
+//!    packed to no fewer meshlets). The Dijkstra settles one band of distances at a time
+//!    ([`Config::band`]) in triangle order: its pops otherwise jump across the whole mesh, and on
+//!    igea it took 0.7x meshoptimizer's whole build in cache misses.
 //! 3. **Boundary moves without the limits**: the same vertex-gain moves with the limits lifted,
 //!    which shortens the Voronoi cells' ragged boundaries. Cells may now be over the vertex limit.
 //! 4. **Repair**: every cell over a limit sheds triangles along an ejection chain: the shortest
@@ -80,10 +82,10 @@ pub struct Config {
     /// Step 4: ejection chains one over-full cell may start before it is split.
     pub chains_per_meshlet: u32,
     /// Step 2: re-partitions to try in turn, each with the seeds of this share of the cells (the
-    /// emptiest) left out, largest first, until one is repaired (with or without splits) or a
-    /// repair stops early (its failures far beyond what fewer dropped seeds could take). A
-    /// dropped seed of a cell that is a whole mesh piece drops nothing: no other seed reaches the
-    /// piece, so it keeps its cell.
+    /// emptiest; at least one where the share is above 0) left out, largest first, until one is
+    /// repaired (with or without splits) or a repair stops early (its failures far beyond what
+    /// fewer dropped seeds could take). A dropped seed of a cell that is a whole mesh piece drops
+    /// nothing: no other seed reaches the piece, so it keeps its cell.
     pub drops: &'static [f64],
     /// Step 4: cells the repair may split off over-full cells that no chain fixes. With splits
     /// the re-partition is kept only when, packed, it ends with fewer meshlets than the packed
@@ -229,7 +231,10 @@ pub fn partition_with_stats(
         for &drop in config.drops {
             // Near the hard bound every cell is needed: drop at most a quarter of the slack.
             let slack = s.part.live - floor;
-            let dropped = ((drop * s.part.live as f64).round() as usize).min(slack / 4);
+            // At least one where any is asked for: under 167 cells 0.3 % rounds to none, and
+            // fandisk (134 at 64/126) lost one meshlet only with one seed dropped.
+            let share = (drop * s.part.live as f64).round() as usize;
+            let dropped = if drop > 0.0 { share.max(1) } else { 0 }.min(slack / 4);
             if tried.contains(&dropped) {
                 continue;
             }
@@ -1020,6 +1025,33 @@ mod tests {
         }
         let (_, st) = partition_with_stats(&mesh, &input, Limits::DEFAULT, split_all);
         assert!(st.splits > 0, "{st:?}");
+    }
+
+    #[test]
+    fn a_small_input_drops_at_least_one_seed() {
+        // cad-part-400 at 64/126: meshoptimizer's 112 meshlets, where 0.3 % of the seeds rounds
+        // to none. One dropped seed packs to fewer meshlets than keeping every seed.
+        let mesh = generate::named("cad-part-400").unwrap();
+        let input = build("meshopt", &mesh, Limits::DEFAULT);
+        assert!(
+            (0.003 * input.len() as f64).round() < 1.0,
+            "{}",
+            input.len()
+        );
+        let every_seed = Config {
+            drops: &[0.0],
+            ..Config::default()
+        };
+        let kept = partition(&mesh, &input, Limits::DEFAULT, every_seed);
+        let (out, st) = partition_with_stats(&mesh, &input, Limits::DEFAULT, Config::default());
+        validate(&mesh, &out, Limits::DEFAULT).unwrap();
+        assert!(st.repartitioned, "{st:?}");
+        assert!(
+            out.len() < kept.len(),
+            "{} against {}",
+            out.len(),
+            kept.len()
+        );
     }
 
     #[test]
