@@ -247,42 +247,53 @@ fn circumsphere4(s: &[DVec3]) -> Option<(DVec3, f64)> {
     Some((a + off, off.length_squared()))
 }
 
-/// The normal cone of a triangle set, conservative after rounding to f32.
-fn normal_cone(tris: &[[DVec3; 3]], sphere: Sphere) -> Cone {
-    let mut normals = Vec::with_capacity(tris.len());
-    let mut planes = Vec::with_capacity(tris.len());
-    for t in tris {
-        let n = (t[1] - t[0]).cross(t[2] - t[0]);
-        let len = n.length();
-        // Zero area: no normal, no fragments, nothing to cull or protect.
-        if len > 0.0 && len.is_finite() {
-            let n = n / len;
-            normals.push(n);
-            planes.push((t[0], n));
-        }
-    }
+/// Unit normal of a counter-clockwise triangle; `None` at zero area (no fragments: nothing to
+/// cull or protect, so cones leave such a triangle out).
+pub fn triangle_normal(t: &[DVec3; 3]) -> Option<DVec3> {
+    let n = (t[1] - t[0]).cross(t[2] - t[0]);
+    let len = n.length();
+    (len > 0.0 && len.is_finite()).then(|| n / len)
+}
+
+/// The backface cone of unit `normals`: its axis as stored (rounded to f32) and its cutoff, or
+/// `None` where no cone can cull (no normals, or normals over (almost) a half-space). The axis is
+/// the centre of the normals' smallest enclosing sphere, which maximises the smallest dot product
+/// with them. Shared by [`compute_bounds`] and the strategies that keep meshlets cullable.
+pub fn cone_axis(normals: &[DVec3]) -> Option<(DVec3, f64)> {
     if normals.is_empty() {
-        return Cone::NEVER;
+        return None;
     }
-    let (c, _) = min_sphere(&normals);
+    let (c, _) = min_sphere(normals);
     if c.length() < 1e-9 {
-        return Cone::NEVER;
+        return None;
     }
-    let axis = c.normalize();
-    let axis_f = fvec(axis);
-    let axis_d = dvec(axis_f); // test against the axis as stored
+    let axis_d = dvec(fvec(c.normalize())); // test against the axis as stored
     let mindp = normals
         .iter()
         .map(|n| n.dot(axis_d))
         .fold(f64::INFINITY, f64::min);
     if mindp <= 1e-3 {
         // Normals spread over (almost) a half-space: no viewpoint sees only back faces reliably.
-        return Cone::NEVER;
+        return None;
     }
     let cutoff = (1.0 - mindp * mindp).max(0.0).sqrt() + CUTOFF_MARGIN;
-    if cutoff >= 1.0 {
-        return Cone::NEVER;
+    (cutoff < 1.0).then_some((axis_d, cutoff))
+}
+
+/// The normal cone of a triangle set, conservative after rounding to f32.
+fn normal_cone(tris: &[[DVec3; 3]], sphere: Sphere) -> Cone {
+    let mut normals = Vec::with_capacity(tris.len());
+    let mut planes = Vec::with_capacity(tris.len());
+    for t in tris {
+        if let Some(n) = triangle_normal(t) {
+            normals.push(n);
+            planes.push((t[0], n));
+        }
     }
+    let Some((axis_d, cutoff)) = cone_axis(&normals) else {
+        return Cone::NEVER;
+    };
+    let axis_f = fvec(axis_d);
     // Push the apex back from the sphere centre along -axis until it is behind every plane:
     // dot(p_i - apex, n_i) >= 0 for all i, i.e. t >= dot(center - p_i, n_i) / dot(axis, n_i).
     let center = dvec(sphere.center);
