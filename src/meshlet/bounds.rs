@@ -356,6 +356,27 @@ mod tests {
     }
 
     #[test]
+    fn cone_axis_needs_the_normals_inside_a_half_space() {
+        // Normals 60 degrees apart around +z: a cone along +z, cutoff sin(60 deg) plus the margin.
+        let (s, c) = (60f64.to_radians().sin(), 60f64.to_radians().cos());
+        let tilted = [DVec3::new(s, 0.0, c), DVec3::new(-s, 0.0, c)];
+        let (axis, cutoff) = cone_axis(&tilted).expect("a cone");
+        assert!((axis - DVec3::Z).length() < 1e-6, "{axis}");
+        // The widest normal's dot with the axis is cos 60; the cutoff sqrt(1 - cos^2) is sin 60.
+        assert!((cutoff - s).abs() < 1e-4, "{cutoff}");
+        // Opposite normals, normals over a whole half-space, and none: no cone.
+        assert_eq!(cone_axis(&[DVec3::Z, -DVec3::Z]), None);
+        assert_eq!(cone_axis(&[DVec3::X, DVec3::Y, -DVec3::X]), None);
+        assert_eq!(cone_axis(&[]), None);
+        // A zero-area triangle has no normal; a counter-clockwise one in the xy plane faces +z.
+        assert_eq!(triangle_normal(&[DVec3::ZERO, DVec3::X, DVec3::X]), None);
+        assert_eq!(
+            triangle_normal(&[DVec3::ZERO, DVec3::X, DVec3::Y]),
+            Some(DVec3::Z)
+        );
+    }
+
+    #[test]
     fn cone_of_a_flat_patch_culls_from_behind_only() {
         let tris = [
             [DVec3::ZERO, DVec3::X, DVec3::Y],
