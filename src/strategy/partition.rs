@@ -48,8 +48,9 @@
 //!    neighbour's cone away, a quarter of the cell at most, and is rolled back unless it ends
 //!    cullable. Measured at
 //!    64/126: the bunny keeps 2 non-cullable meshlets instead of 3 (meshoptimizer: 2), pycortex
-//!    868 instead of 982 (meshoptimizer: 1265); igea's one is not fixed (meshoptimizer: 0). About
-//!    5 % more time on pycortex (982 such cells), none measurable on the bunny.
+//!    868 instead of 982 (meshoptimizer: 1265); igea's one is not fixed (meshoptimizer: 0). Time
+//!    (`partition_with_stats` alone, 3 interleaved runs): pycortex 335-350 ms -> 420-448 ms, its
+//!    982 cells to repair; the dragon within the noise.
 //!
 //! An input already at the hard bound ceil(T / max triangles) is returned as it is: no step can
 //! remove a meshlet there, and the moves only cost time and the input's shapes.
@@ -365,36 +366,55 @@ fn repartition(
     packed
 }
 
-/// Step 7's view of the cones: every triangle's unit normal (`None` at zero area), as
-/// `meshlet::bounds` computes it, and the bounds' own cone test, so a cell found cullable here
-/// gets a cone there (up to rounding right at the test's thresholds: the bounds see the normals
-/// in another order).
-struct Cones {
-    normal: Vec<Option<DVec3>>,
+/// Step 7's view of the cones: triangle normals and the cone test as `meshlet::bounds` computes
+/// them, so a cell found cullable here gets a cone there (up to rounding right at the test's
+/// thresholds: the bounds see the normals in another order).
+struct Cones<'a> {
+    mesh: &'a Mesh,
 }
 
-impl Cones {
-    fn new(mesh: &Mesh) -> Self {
-        let normal = (0..mesh.triangle_count())
-            .map(|t| {
-                let p = mesh
-                    .triangle(t)
-                    .map(|v| DVec3::from(mesh.positions[v as usize].map(f64::from)));
-                triangle_normal(&p)
-            })
-            .collect();
-        Self { normal }
+/// Smallest dot product of every normal with the mean normal at which a cell passes without the
+/// exact test: the bounds' axis maximises the smallest dot product, and their test asks for more
+/// than about 0.0045 (cutoff sqrt(1 - d^2) plus its margin under 1), so this is sure. It spares
+/// the smallest-sphere search on most cells (step 7 checks every cell: 5-10 % of the dragon's
+/// partition time without it).
+const SURELY_CULLABLE_DOT: f64 = 0.01;
+
+impl Cones<'_> {
+    /// Unit normal of triangle `t`, `None` at zero area.
+    fn normal(&self, t: u32) -> Option<DVec3> {
+        let p = self
+            .mesh
+            .triangle(t as usize)
+            .map(|v| DVec3::from(self.mesh.positions[v as usize].map(f64::from)));
+        triangle_normal(&p)
     }
 
-    /// Whether cell `m`'s cone can cull. Its normals in triangle order, so the answer does not
-    /// depend on the order moves left the members in.
-    fn culls(&self, s: &Search, m: u32) -> bool {
-        let mut tris = s.part.members[m as usize].clone();
-        tris.sort_unstable();
-        let normals: Vec<DVec3> = tris
+    /// The mean unit normal of cell `m` (zero where it has none).
+    fn mean(&self, s: &Search, m: u32) -> DVec3 {
+        s.part.members[m as usize]
             .iter()
-            .filter_map(|&t| self.normal[t as usize])
-            .collect();
+            .filter_map(|&t| self.normal(t))
+            .sum::<DVec3>()
+            .normalize_or_zero()
+    }
+
+    /// Whether cell `m`'s cone can cull. The exact test reads its normals in triangle order, so
+    /// the answer does not depend on the order moves left the members in.
+    fn culls(&self, s: &Search, m: u32) -> bool {
+        let members = &s.part.members[m as usize];
+        let mean = self.mean(s, m);
+        let sure = mean != DVec3::ZERO
+            && members
+                .iter()
+                .filter_map(|&t| self.normal(t))
+                .all(|n| n.dot(mean) > SURELY_CULLABLE_DOT);
+        if sure {
+            return true;
+        }
+        let mut tris = members.clone();
+        tris.sort_unstable();
+        let normals: Vec<DVec3> = tris.iter().filter_map(|&t| self.normal(t)).collect();
         cone_axis(&normals).is_some()
     }
 
@@ -402,7 +422,7 @@ impl Cones {
     fn has_normals(&self, s: &Search, m: u32) -> bool {
         s.part.members[m as usize]
             .iter()
-            .any(|&t| self.normal[t as usize].is_some())
+            .any(|&t| self.normal(t).is_some())
     }
 }
 
@@ -415,14 +435,7 @@ fn cone_repair(s: &mut Search) -> usize {
     // Candidates tried per step: the most opposed triangles are usually inside the cell or on a
     // full neighbour's border, so a few more than one.
     const TRIES: usize = 8;
-    let cones = Cones::new(s.part.mesh);
-    let mean = |s: &Search, m: u32| -> DVec3 {
-        s.part.members[m as usize]
-            .iter()
-            .filter_map(|&t| cones.normal[t as usize])
-            .sum::<DVec3>()
-            .normalize_or_zero()
-    };
+    let cones = Cones { mesh: s.part.mesh };
     let mut fixed = 0;
     for m in 0..s.part.tcount.len() as u32 {
         // Under 4 triangles the budget below is 0.
@@ -433,18 +446,20 @@ fn cone_repair(s: &mut Search) -> usize {
         let mut budget = s.part.tcount[m as usize] / 4;
         while budget > 0 && !cones.culls(s, m) {
             budget -= 1;
-            let axis = mean(s, m);
+            let axis = cones.mean(s, m);
             let mut worst: Vec<(f64, u32)> = s.part.members[m as usize]
                 .iter()
-                .filter_map(|&t| cones.normal[t as usize].map(|n| (n.dot(axis), t)))
+                .filter_map(|&t| cones.normal(t).map(|n| (n.dot(axis), t)))
                 .collect();
             worst.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             let mut moved = false;
             for &(_, t) in worst.iter().take(TRIES) {
                 let (nb, n) = s.part.neighbour_labels(t);
-                let nt = cones.normal[t as usize].expect("a normal");
-                let mut to: Vec<(f64, u32)> =
-                    nb[..n].iter().map(|&b| (-nt.dot(mean(s, b)), b)).collect();
+                let nt = cones.normal(t).expect("a normal");
+                let mut to: Vec<(f64, u32)> = nb[..n]
+                    .iter()
+                    .map(|&b| (-nt.dot(cones.mean(s, b)), b))
+                    .collect();
                 to.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 for (_, b) in to {
                     let add = s.part.added(t, b);
