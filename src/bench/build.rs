@@ -630,7 +630,7 @@ fn write_presets(s: &mut String, rows: &[Row], preset_rows: &[Row], cfg: &Config
          radius. non-cullable = meshlets whose normal cone cannot cull, `partition` / `meshopt` (the cullable \
          fraction can drop by 1/meshlets when the count drops and the non-cullable ones stay). time = \
          `partition` over `meshopt`'s build time (the `partition` time includes meshoptimizer's build). The \
-         stress meshes (`cad-part-*`, `strut-lattice`) are generated in-tree (`gen:` names).\n"
+         stress meshes (`cad-part-*`, `strut-lattice`, `terrain-80`) are generated in-tree (`gen:` names).\n"
     );
     let mut presets: Vec<Limits> = vec![cfg.limits];
     for r in preset_rows {

@@ -29,9 +29,9 @@ use std::time::Duration;
 /// Build, measure and compare meshlets (triangle clusters for GPU mesh shaders).
 ///
 /// Meshes: PLY (ASCII/binary), OBJ, glTF 2.0 (.gltf/.glb), each optionally zstd-compressed (.zst);
-/// `gen:NAME` generates one instead (cad-part-128, cad-part-400, strut-lattice: the stress meshes;
-/// noisy-sphere, knot-tube, terrain). Strategies: nvidia, nvidia+tipsify, greedy, bsphere,
-/// bsphere-coherent, bsphere-parallel, kmedoids (capacity-aware), kmedoids-flat, kmedoids-paper,
+/// `gen:NAME` generates one instead (cad-part-128, cad-part-400, strut-lattice, terrain-80: the
+/// stress meshes; noisy-sphere, knot-tube, terrain). Strategies: nvidia, nvidia+tipsify, greedy,
+/// bsphere, bsphere-coherent, bsphere-parallel, kmedoids (capacity-aware), kmedoids-flat, kmedoids-paper,
 /// kmedoids-local, compact, meshopt, meshopt-scan, meshopt-spatial, qem ("all" = all but the slow kmedoids-paper); any of
 /// them followed by "+refine" (e.g. meshopt+refine) refines its output to fewer meshlets
 /// ("+refine-fast": one cheap round; "+refine-max": with simulated annealing, the fewest).

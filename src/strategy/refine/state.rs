@@ -522,6 +522,50 @@ impl Scratch {
         })
     }
 
+    /// A sufficient test of [`Self::stays_connected`] that never leaves `t`'s one-ring: whether
+    /// `t`'s same-meshlet neighbours are joined without `t` through the meshlet's triangles around
+    /// `t`'s corners. False can be wrong (a detour outside the ring), true cannot; it costs a few
+    /// dozen steps where the fill walks the whole meshlet to find that `t` is a bridge.
+    pub(crate) fn stays_connected_locally(&mut self, part: &Partition, t: u32) -> bool {
+        let own = part.label[t as usize];
+        let targets: Vec<u32> = part
+            .dual
+            .row(t as usize)
+            .iter()
+            .copied()
+            .filter(|&u| part.label[u as usize] == own)
+            .collect();
+        if targets.len() <= 1 {
+            return true;
+        }
+        // The ring is marked with one epoch, the fill with the next.
+        let ring = self.new_epoch();
+        for x in distinct(part.mesh.triangle(t as usize)) {
+            for &u in part.vt.row(x as usize) {
+                if part.label[u as usize] == own {
+                    self.seen[u as usize] = ring;
+                }
+            }
+        }
+        self.seen[t as usize] = 0;
+        let fill = self.new_epoch();
+        self.seen[targets[0] as usize] = fill;
+        self.piece.clear();
+        self.piece.push(targets[0]);
+        let mut i = 0;
+        while i < self.piece.len() {
+            let w = self.piece[i];
+            i += 1;
+            for &z in part.dual.row(w as usize) {
+                if self.seen[z as usize] == ring {
+                    self.seen[z as usize] = fill;
+                    self.piece.push(z);
+                }
+            }
+        }
+        targets.iter().all(|&x| self.seen[x as usize] == fill)
+    }
+
     /// Whether meshlet `m` is one edge-connected piece.
     pub(crate) fn is_connected(&mut self, part: &Partition, m: u32) -> bool {
         let members = &part.members[m as usize];
@@ -593,6 +637,11 @@ impl<'a> Search<'a> {
         self.scratch.stays_connected(&self.part, t)
     }
 
+    /// [`Scratch::stays_connected_locally`] on the partition.
+    pub(crate) fn stays_connected_locally(&mut self, t: u32) -> bool {
+        self.scratch.stays_connected_locally(&self.part, t)
+    }
+
     /// [`Scratch::is_connected`] on the partition.
     pub(crate) fn is_connected(&mut self, m: u32) -> bool {
         self.scratch.is_connected(&self.part, m)
@@ -608,6 +657,27 @@ mod tests {
     /// Every connectivity query goes through the one flood fill: on a partition with meshlets in
     /// pieces (triangles dealt out by index), the pieces split each meshlet, `is_connected` agrees
     /// with them, and `stays_connected` agrees with the piece count once `t` is moved out.
+    #[test]
+    fn the_local_test_never_claims_what_the_fill_denies() {
+        // Meshlets of rows of 7 triangles, cut into pieces: plenty of bridges and detours.
+        let mesh = generate::terrain(12, 3);
+        let vt = vertex_triangles(&mesh);
+        let dual = dual_graph(&mesh, &vt);
+        let label: Vec<u32> = (0..mesh.triangle_count() as u32)
+            .map(|t| t / 7 % 9)
+            .collect();
+        let mut s = Search::new(&mesh, &vt, &dual, label, 9, Limits::DEFAULT);
+        let (mut yes, mut no) = (0, 0);
+        for t in 0..mesh.triangle_count() as u32 {
+            let local = s.stays_connected_locally(t);
+            let fill = s.stays_connected(t);
+            assert!(!local || fill, "triangle {t}: locally joined, but a bridge");
+            yes += (local && fill) as usize;
+            no += (!fill) as usize;
+        }
+        assert!(yes > 0 && no > 0, "{yes} joined, {no} bridges");
+    }
+
     #[test]
     fn the_flood_fill_answers_every_connectivity_question() {
         let mesh = generate::terrain(12, 3);
