@@ -1,7 +1,8 @@
 //! Every strategy on the generated stress meshes (CAD-like parts with 128- and 400-segment fan
-//! caps, a thin-strut lattice joined only through vertices) x the three limit presets: each output
-//! validated, never below the triangle bound, and identical on 1 and 4 threads. The shared real
-//! meshes have neither hubs of valence 400 nor vertex-only joints; claims must hold on both.
+//! caps, a thin-strut lattice joined only through vertices, an open terrain) x the three limit
+//! presets, and `partition` also at 128/128: each output validated, never below the triangle
+//! bound, and identical on 1 and 4 threads. The shared real meshes have neither hubs of valence
+//! 400 nor vertex-only joints; claims must hold on both.
 
 mod common;
 

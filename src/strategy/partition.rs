@@ -23,9 +23,9 @@
 //!    attempts, tried only when the repair fails even with splits; a repair that succeeds (with or
 //!    without splits) or stops early ends the attempts (measured on the shared and stress meshes:
 //!    after an early stop the attempt with every seed stopped early too, and after a repair with
-//!    splits it packed to no fewer meshlets). The default makes one attempt: a second with every
-//!    seed ran only on the two neurons at 64/126 and was never kept, at a third of their time.
-//!    The Dijkstra settles one band of distances at a time
+//!    splits it packed to no fewer meshlets). The default's second attempt, with every seed, ran
+//!    only on the two neurons at 64/126 and was not kept there (a third of their time), but a
+//!    smooth sphere keeps it, so it stays. The Dijkstra settles one band of distances at a time
 //!    ([`Config::band`]) in triangle order: its pops otherwise jump across the whole mesh, and on
 //!    igea it took 0.7x meshoptimizer's whole build in cache misses.
 //! 3. **Boundary moves without the limits**: the same vertex-gain moves with the limits lifted,
@@ -74,7 +74,7 @@
 //! Determinism: one thread, a fixed order everywhere, ties broken by index; the heap's keys are
 //! (distance bits, triangle, cell). The output depends neither on the thread count nor the run.
 
-use super::refine::moves::Rank;
+use super::refine::moves::{Rank, SSE_EPS};
 use super::refine::state::{labels_of, vertex_counts, Search};
 use super::Strategy;
 use crate::adjacency::{dual_graph, vertex_triangles};
@@ -122,9 +122,9 @@ pub struct Config {
     /// opposed boundary triangles to neighbours until their cone can cull (a quarter of the cell
     /// at most; rolled back where that is not enough).
     pub cone_repair: bool,
-    /// Step 6, after the single moves: exchanges of boundary triangles between neighbouring
-    /// cells that lower the spread where the receiver is full (rounder meshlets where the
-    /// triangle limit binds, as at 64/84).
+    /// Step 6, after the single moves (so only with [`Self::round_off`]): exchanges of boundary
+    /// triangles between neighbouring cells that lower the spread where the receiver is full
+    /// (rounder meshlets where the triangle limit binds, as at 64/84).
     pub swaps: bool,
 }
 
@@ -144,7 +144,7 @@ impl Default for Config {
             balance_step: 0.05,
             chains_per_meshlet: 64,
             max_splits: 4,
-            drops: &[0.003],
+            drops: &[0.003, 0.0],
             max_failures: 3,
             chains_per_triangle: 2,
             round_off: true,
@@ -524,8 +524,6 @@ fn cone_repair(s: &mut Search) -> usize {
 /// and single moves find no room). A work queue in triangle order revisits the triangles around
 /// each exchange. Returns the exchanges made.
 fn swaps(s: &mut Search) -> usize {
-    // Spread gains below this count as none, as in the single moves.
-    const EPS: f64 = 1e-12;
     let (max_v, max_t) = (s.part.limits.max_vertices, s.part.limits.max_triangles);
     let n_tris = s.part.label.len();
     let mut queued = vec![true; n_tris];
@@ -546,7 +544,7 @@ fn swaps(s: &mut Search) -> usize {
                 continue;
             }
             let d1 = s.part.sse_delta(t, a, b);
-            if d1 >= -EPS {
+            if d1 >= -SSE_EPS {
                 continue;
             }
             // Triangles of `b` around `t` with an edge into `a` other than through `t`, ranked
@@ -563,7 +561,7 @@ fn swaps(s: &mut Search) -> usize {
                         continue;
                     }
                     let total = d1 + p.sse_delta(u, b, a);
-                    if total < -EPS {
+                    if total < -SSE_EPS {
                         cand.push((total, u));
                     }
                 }
@@ -580,7 +578,11 @@ fn swaps(s: &mut Search) -> usize {
             }
             cand.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
             for &(total, u) in &cand {
-                if total >= -EPS || !s.stays_connected_locally(u) {
+                // Sorted: no later candidate gains either.
+                if total >= -SSE_EPS {
+                    break;
+                }
+                if !s.stays_connected_locally(u) {
                     continue;
                 }
                 s.part.apply(u, a);

@@ -12,7 +12,7 @@ use std::collections::VecDeque;
 
 /// Hartigan gains below this (relative to the mesh scale: the features are scale-free) count as
 /// no gain.
-const SSE_EPS: f64 = 1e-12;
+pub(crate) const SSE_EPS: f64 = 1e-12;
 
 /// Which objective a boundary move must lower first.
 #[derive(Clone, Copy, PartialEq, Eq)]
