@@ -444,6 +444,17 @@ pub(crate) struct Scratch {
     piece: Vec<u32>,
 }
 
+/// The edge neighbours of `t` in its own meshlet: what must stay joined when `t` leaves.
+fn same_meshlet_neighbours(part: &Partition, t: u32) -> Vec<u32> {
+    let own = part.label[t as usize];
+    part.dual
+        .row(t as usize)
+        .iter()
+        .copied()
+        .filter(|&u| part.label[u as usize] == own)
+        .collect()
+}
+
 impl Scratch {
     /// Buffers for a mesh of `triangles` triangles and `vertices` vertices.
     pub(crate) fn new(triangles: usize, vertices: usize) -> Self {
@@ -499,14 +510,7 @@ impl Scratch {
     /// Whether removing `t` leaves its meshlet's edge-connected piece around `t` in one piece:
     /// a fill from one of `t`'s same-meshlet neighbours, walled at `t`, reaches the others.
     pub(crate) fn stays_connected(&mut self, part: &Partition, t: u32) -> bool {
-        let own = part.label[t as usize];
-        let targets: Vec<u32> = part
-            .dual
-            .row(t as usize)
-            .iter()
-            .copied()
-            .filter(|&u| part.label[u as usize] == own)
-            .collect();
+        let targets = same_meshlet_neighbours(part, t);
         if targets.len() <= 1 {
             return true;
         }
@@ -529,13 +533,7 @@ impl Scratch {
     /// dozen steps where the fill walks the whole meshlet to find that `t` is a bridge.
     pub(crate) fn stays_connected_locally(&mut self, part: &Partition, t: u32) -> bool {
         let own = part.label[t as usize];
-        let targets: Vec<u32> = part
-            .dual
-            .row(t as usize)
-            .iter()
-            .copied()
-            .filter(|&u| part.label[u as usize] == own)
-            .collect();
+        let targets = same_meshlet_neighbours(part, t);
         if targets.len() <= 1 {
             return true;
         }
