@@ -49,9 +49,9 @@
 //!    neighbour and one of the neighbour's comes back, where that lowers the spread. Measured
 //!    (one run, mean radius over meshoptimizer's): at 64/84 the bunny 1.003 -> 0.970, igea 1.017
 //!    -> 0.982, pycortex 1.086 -> 1.044, cad-part-400 1.846 -> 1.779; at 128/128 cad-part-400
-//!    1.962 -> 1.907; at 64/126 only the motorbike has full cells (its duplicated triangles),
-//!    0.994 -> 0.987. Counts are unchanged; the cost is about a quarter more partition time on
-//!    the bunny and igea at 64/84, two fifths on the motorbike at 64/126.
+//!    1.962 -> 1.907; at 64/126 few cells are full (the motorbike's duplicated triangles, the
+//!    neurons' tubes), the motorbike 0.994 -> 0.987. Counts are unchanged; the cost is about a
+//!    quarter more partition time on the bunny and igea at 64/84, two fifths on the motorbike.
 //! 7. **Cones** ([`Config::cone_repair`]): a cell whose normals spread over (almost) a half-space
 //!    has no backface cone (`meshlet::bounds::cone_axis`, the bounds' own test). It hands the
 //!    boundary triangles most opposed to its mean normal to neighbours, never taking a
