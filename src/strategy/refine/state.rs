@@ -10,8 +10,9 @@
 //! [`Scratch`] holds the epoch-stamped buffers of the queries (a buffer is cleared by bumping the
 //! epoch, not by a pass over it), with the one flood fill ([`Scratch::flood`]) that every exact
 //! connectivity question goes through, and a one-ring shortcut
-//! ([`Scratch::stays_connected_locally`]) that may answer no where a detour exists. [`Search`] pairs the two for the steps in the sibling
-//! files; which objective the boundary moves rank first is their parameter, not state.
+//! ([`Scratch::stays_connected_locally`]) that may answer no where a detour exists. [`Search`]
+//! pairs the two for the steps in the sibling files; which objective the boundary moves rank
+//! first is their parameter, not state.
 
 use crate::adjacency::Csr;
 use crate::mesh::Mesh;
@@ -672,15 +673,7 @@ mod tests {
             let fill = s.stays_connected(t);
             assert!(!local || fill, "triangle {t}: locally joined, but a bridge");
             // Only triangles with two or more neighbours in their meshlet need a search.
-            let own = s.part.label[t as usize];
-            let searched = s
-                .part
-                .dual
-                .row(t as usize)
-                .iter()
-                .filter(|&&u| s.part.label[u as usize] == own)
-                .count()
-                >= 2;
+            let searched = same_meshlet_neighbours(&s.part, t).len() >= 2;
             yes += (local && searched) as usize;
             no += (!fill) as usize;
         }
