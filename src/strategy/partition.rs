@@ -526,14 +526,14 @@ fn cone_repair(s: &mut Search) -> usize {
 fn swaps(s: &mut Search) -> usize {
     let (max_v, max_t) = (s.part.limits.max_vertices, s.part.limits.max_triangles);
     let n_tris = s.part.label.len();
-    let mut queued = vec![true; n_tris];
     let mut work: VecDeque<u32> = (0..n_tris as u32).collect();
+    s.scratch.queued.fill(true);
     // Every exchange lowers the spread; the cap is only a guard.
     let mut budget = 4 * n_tris;
     let mut made = 0;
     let mut cand: Vec<(f64, u32)> = Vec::new();
     while let Some(t) = work.pop_front() {
-        queued[t as usize] = false;
+        s.scratch.queued[t as usize] = false;
         let a = s.part.label[t as usize];
         let (nb, n) = s.part.neighbour_labels(t);
         let mut partner = None;
@@ -605,16 +605,12 @@ fn swaps(s: &mut Search) -> usize {
         if budget == 0 {
             break;
         }
-        for moved in [t, u] {
-            for x in distinct(s.part.mesh.triangle(moved as usize)) {
-                for &w in s.part.vt.row(x as usize) {
-                    if !queued[w as usize] {
-                        queued[w as usize] = true;
-                        work.push_back(w);
-                    }
-                }
-            }
-        }
+        s.queue_around(t, &mut work);
+        s.queue_around(u, &mut work);
+    }
+    // The queue's marks are shared with the boundary moves: leave none behind.
+    for t in work {
+        s.scratch.queued[t as usize] = false;
     }
     made
 }

@@ -85,17 +85,23 @@ impl Search<'_> {
             if budget == 0 {
                 break;
             }
-            for v in distinct(self.part.mesh.triangle(t as usize)) {
-                for &u in self.part.vt.row(v as usize) {
-                    if !self.scratch.queued[u as usize] {
-                        self.scratch.queued[u as usize] = true;
-                        work.push_back(u);
-                    }
-                }
-            }
+            self.queue_around(t, &mut work);
         }
         for t in work {
             self.scratch.queued[t as usize] = false;
+        }
+    }
+
+    /// Queues every triangle sharing a vertex with `t` that is not queued yet (their gains may
+    /// have changed with `t`'s move); `scratch.queued` marks the queue's members.
+    pub(crate) fn queue_around(&mut self, t: u32, work: &mut VecDeque<u32>) {
+        for v in distinct(self.part.mesh.triangle(t as usize)) {
+            for &u in self.part.vt.row(v as usize) {
+                if !self.scratch.queued[u as usize] {
+                    self.scratch.queued[u as usize] = true;
+                    work.push_back(u);
+                }
+            }
         }
     }
 
