@@ -3,13 +3,15 @@
 #   scripts/checksums.sh BINARY OUT_DIR [MESH_DIR]
 # writes OUT_DIR/sums.txt (sha256 per output) and OUT_DIR/log.txt. Compare two runs with `diff`.
 # Covers every strategy but kmedoids-paper (its time budget makes the output depend on the machine),
-# +refine on every mesh, +refine-max on the meshes under 50k triangles, LOD files (meshopt on every
-# mesh, kmedoids on the small ones) and every compressed format.
+# +refine-fast, +refine and +partition on every mesh, +refine-max on the meshes under 50k triangles,
+# the ordering passes, the glTF export, LOD files (meshopt and kmedoids on every mesh) and every
+# compressed format.
 set -euo pipefail
 bin=$(realpath "$1"); out=$2; meshes=${3:-../shared/meshes}
 mkdir -p "$out/files"; out=$(realpath "$out"); : > "$out/log.txt"
 strategies="nvidia nvidia+tipsify greedy greedy-paper bsphere bsphere-paper bsphere-coherent bsphere-parallel
-  kmedoids compact meshopt meshopt-scan meshopt-spatial qem meshopt+refine greedy+refine-fast"
+  kmedoids kmedoids-flat compact meshopt meshopt-scan meshopt-spatial qem partition greedy+partition
+  meshopt+refine meshopt+refine-fast greedy+refine-fast"
 formats="meshopt ts ts-compact ix ix-compact sc sc-compact gi gi-compact"
 run() { echo "+ $*" >> "$out/log.txt"; "$bin" -q "$@" >> "$out/log.txt" 2>&1; }
 for m in "$meshes"/*.ply.zst; do
@@ -18,8 +20,9 @@ for m in "$meshes"/*.ply.zst; do
   for s in $strategies; do run build -s "$s" -o "$f.build.$s.mlt" "$m"; done
   if [ "$small" = 1 ]; then run build -s meshopt+refine-max -o "$f.build.meshopt+refine-max.mlt" "$m"; fi
   run build -s meshopt --local-order --meshlet-order triangles -o "$f.build.meshopt-ordered.mlt" "$m"
+  run export -s kmedoids -o "$f.export.kmedoids.glb" "$m"
   run lod -o "$f.lod.meshopt.lod" "$m"
-  if [ "$small" = 1 ]; then run lod -s kmedoids -o "$f.lod.kmedoids.lod" "$m"; fi
+  run lod -s kmedoids -o "$f.lod.kmedoids.lod" "$m"
   for c in $formats; do run compress -f "$c" -o "$f.compress.$c.bin" "$m"; done
   run compress -f laced-wires -s qem -l 64/84 -o "$f.compress.laced-wires.bin" "$m"
 done
