@@ -23,9 +23,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let gpu = Gpu::new()?;
     println!("device: {}", gpu.describe());
     let t = Instant::now();
-    let cpu = kmedoids::cluster(&mesh, limits, &cfg);
+    let cpu = kmedoids::cluster(&mesh, limits, kmedoids::Mode::Flat, &cfg);
     let cpu_s = t.elapsed().as_secs_f64();
-    let run = gpu_kmedoids::cluster(&gpu, &mesh, limits, &cfg)?;
+    let run = gpu_kmedoids::cluster_flat(&gpu, &mesh, limits, &cfg)?;
     let g = &run.clustering;
     validate(&mesh, &g.meshlets, limits)?;
 
@@ -44,14 +44,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         run.bfs_rounds,
     );
 
-    let cap = kmedoids::Config {
-        mode: kmedoids::Mode::Capacity,
-        ..cfg
-    };
     let t = Instant::now();
-    let cpu = kmedoids::cluster(&mesh, limits, &cap);
+    let cpu = kmedoids::cluster(&mesh, limits, kmedoids::Mode::Capacity, &cfg);
     let cpu_s = t.elapsed().as_secs_f64();
-    let run = gpu_kmedoids::cluster_capacity(&gpu, &mesh, limits, &cap)?;
+    let run = gpu_kmedoids::cluster_capacity(&gpu, &mesh, limits, &cfg)?;
     let g = &run.clustering;
     validate(&mesh, &g.meshlets, limits)?;
     assert_eq!(g.medoids, cpu.medoids, "capacity medoids");

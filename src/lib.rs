@@ -70,6 +70,7 @@ pub mod atomic;
 pub mod bench;
 #[cfg(feature = "tool")]
 pub mod cli;
+pub mod common;
 pub mod compress;
 #[cfg(feature = "tool")]
 pub mod fuzz;

@@ -51,8 +51,8 @@ fn assign_both(
 ) -> (Vec<u32>, meshletlab::gpu::capacity::AssignStats) {
     let dual =
         meshletlab::adjacency::dual_graph(mesh, &meshletlab::adjacency::vertex_triangles(mesh));
-    let mut cpu = vec![u32::MAX; mesh.triangle_count()];
-    meshletlab::strategy::kmedoids_capacity::assign_capacity(
+    let mut cpu = vec![meshletlab::common::NONE; mesh.triangle_count()];
+    meshletlab::strategy::kmedoids::capacity::assign_capacity(
         mesh, &dual, limits, medoids, &mut cpu,
     );
     let (g, stats) =
@@ -116,7 +116,8 @@ fn deep_assignment_spans_several_submissions() {
     // submission records (the host reads the frontier sizes and records more).
     let m = strip(2000);
     let limits = Limits::new(256, 256).unwrap();
-    let cpu = meshletlab::strategy::kmedoids::cluster(&m, limits, &Default::default());
+    let flat = meshletlab::strategy::kmedoids::Mode::Flat;
+    let cpu = meshletlab::strategy::kmedoids::cluster(&m, limits, flat, &Default::default());
     let depth = cpu.distances.iter().max().copied().unwrap();
     assert!(
         depth > 64,
@@ -125,7 +126,7 @@ fn deep_assignment_spans_several_submissions() {
     let gpu = gpu();
     assert_parity(&gpu, "strip", &m, limits);
     // The GPU run itself needed the extra submissions, and still agrees with the CPU.
-    let g = meshletlab::gpu::kmedoids::cluster(&gpu, &m, limits, &Default::default()).unwrap();
+    let g = meshletlab::gpu::kmedoids::cluster_flat(&gpu, &m, limits, &Default::default()).unwrap();
     assert!(
         g.deep_submissions > 0,
         "no assignment went deeper than one submission records"
@@ -165,8 +166,8 @@ fn same_output_on_every_run() {
     let gpu = gpu();
     let m = generate::knot_tube(160, 12, 5);
     let cfg = Default::default();
-    let a = meshletlab::gpu::kmedoids::cluster(&gpu, &m, Limits::DEFAULT, &cfg).unwrap();
-    let b = meshletlab::gpu::kmedoids::cluster(&gpu, &m, Limits::DEFAULT, &cfg).unwrap();
+    let a = meshletlab::gpu::kmedoids::cluster_flat(&gpu, &m, Limits::DEFAULT, &cfg).unwrap();
+    let b = meshletlab::gpu::kmedoids::cluster_flat(&gpu, &m, Limits::DEFAULT, &cfg).unwrap();
     assert_eq!(a.clustering.labels, b.clustering.labels);
     assert_eq!(a.clustering.meshlets, b.clustering.meshlets);
     assert!(a.timing.kernel > 0.0);
@@ -184,20 +185,6 @@ fn stressed_meshes_agree_and_stay_conservative() {
             "{name}: no cone culled anything, so nothing was checked"
         );
     }
-}
-
-#[test]
-fn paper_mode_is_refused_with_a_clear_error() {
-    let gpu = gpu();
-    let cfg = meshletlab::strategy::kmedoids::Config {
-        mode: meshletlab::strategy::kmedoids::Mode::Paper,
-        ..Default::default()
-    };
-    let e =
-        meshletlab::gpu::kmedoids::cluster(&gpu, &generate::terrain(4, 1), Limits::DEFAULT, &cfg)
-            .err()
-            .expect("paper mode is CPU-only");
-    assert!(e.to_string().contains("paper mode"), "{e}");
 }
 
 #[test]

@@ -24,7 +24,7 @@ struct Params { t: u32, k: u32, d: u32, slot: u32, max_v: u32, max_t: u32 }
 @group(0) @binding(4) var<storage, read_write> labels: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read_write> dist: array<atomic<u32>>;
 @group(0) @binding(6) var<storage, read> medoids: array<u32>;
-// Shared with kmedoids.wgsl: [0, 8) its counters, [8, 8 + RING) frontier sizes by level.
+// Shared with update.wgsl: [0, 8) its counters, [8, 8 + RING) frontier sizes by level.
 @group(0) @binding(7) var<storage, read_write> counters: array<atomic<u32>>;
 // Two frontier lists of T entries each: level d's at (d % 2) * T.
 @group(0) @binding(8) var<storage, read_write> frontier: array<u32>;

@@ -15,7 +15,7 @@ struct Params { t: u32, k: u32, d: u32, slot: u32, max_v: u32, max_t: u32 }
 @group(0) @binding(2) var<storage, read> mem_items: array<u32>;
 @group(0) @binding(3) var<storage, read> labels: array<u32>;
 @group(0) @binding(4) var<storage, read> dist: array<u32>;
-// [2k, 3k) distinct vertices, [3k, 4k) farthest member (the layout of kmedoids.wgsl's result).
+// [2k, 3k) distinct vertices, [3k, 4k) farthest member (the layout of update.wgsl's result).
 @group(0) @binding(5) var<storage, read_write> result: array<u32>;
 @group(0) @binding(6) var<storage, read> idx_a: array<u32>;
 @group(0) @binding(7) var<storage, read> idx_b: array<u32>;

@@ -1,171 +1,15 @@
-//! Mesh connectivity as flat CSR arrays: vertex -> triangles, the edge table, and the triangle dual
-//! graph (edge-adjacent triangles).
+//! Mesh connectivity as flat CSR arrays: the triangle dual graph (edge-adjacent triangles), its
+//! per-side flags and its edge-connected pieces, built on the mesh's edges (vertex -> triangles and
+//! the edge table live in `mesh::edges`, one room down, and are re-exported here).
 //!
 //! Everything here is deterministic: rows are sorted by triangle id, edges by (min, max) vertex id,
 //! whatever the thread count. The GPU adjacency kernels mirror these arrays exactly.
 
+pub use crate::common::Csr;
+use crate::common::NONE;
+use crate::mesh::edges::for_each_vertex_sides;
+pub use crate::mesh::edges::{vertex_triangles, EdgeTable, NO_EDGE};
 use crate::mesh::Mesh;
-
-/// Compressed sparse rows: row `r` is `items[offsets[r]..offsets[r + 1]]`.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct Csr {
-    /// Row starts; `offsets.len() == rows + 1`.
-    pub offsets: Vec<u32>,
-    /// Concatenated rows.
-    pub items: Vec<u32>,
-}
-
-impl Csr {
-    /// Number of rows.
-    pub fn rows(&self) -> usize {
-        self.offsets.len().saturating_sub(1)
-    }
-
-    /// Row `r`.
-    #[inline]
-    pub fn row(&self, r: usize) -> &[u32] {
-        &self.items[self.offsets[r] as usize..self.offsets[r + 1] as usize]
-    }
-
-    /// Builds a CSR from (row, item) pairs by count, prefix sum and scatter; pairs keep their input
-    /// order within a row, so sorted input gives sorted rows.
-    pub fn from_pairs(rows: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> Self {
-        let mut offsets = vec![0u32; rows + 1];
-        for (r, _) in pairs.clone() {
-            offsets[r as usize + 1] += 1;
-        }
-        for i in 0..rows {
-            offsets[i + 1] += offsets[i];
-        }
-        let mut cursor = offsets.clone();
-        let mut items = vec![0u32; offsets[rows] as usize];
-        for (r, it) in pairs {
-            let c = &mut cursor[r as usize];
-            items[*c as usize] = it;
-            *c += 1;
-        }
-        Self { offsets, items }
-    }
-}
-
-/// Vertex -> incident triangles (each row in ascending triangle order; a degenerate triangle that
-/// uses a vertex twice is listed once).
-pub fn vertex_triangles(mesh: &Mesh) -> Csr {
-    // Count, prefix sum, scatter in triangle order (so rows come out sorted).
-    let n = mesh.vertex_count();
-    let mut offsets = vec![0u32; n + 1];
-    let distinct = |t: usize| {
-        let [a, b, c] = mesh.triangle(t);
-        [
-            Some(a),
-            (b != a).then_some(b),
-            (c != a && c != b).then_some(c),
-        ]
-    };
-    for t in 0..mesh.triangle_count() {
-        for v in distinct(t).into_iter().flatten() {
-            offsets[v as usize + 1] += 1;
-        }
-    }
-    for i in 0..n {
-        offsets[i + 1] += offsets[i];
-    }
-    let mut cursor = offsets.clone();
-    let mut items = vec![0u32; offsets[n] as usize];
-    for t in 0..mesh.triangle_count() {
-        for v in distinct(t).into_iter().flatten() {
-            items[cursor[v as usize] as usize] = t as u32;
-            cursor[v as usize] += 1;
-        }
-    }
-    Csr { offsets, items }
-}
-
-/// Undirected edges of the mesh and the triangles on each.
-#[derive(Clone, Debug, Default)]
-pub struct EdgeTable {
-    /// Unique edges as (min, max) vertex pairs, sorted.
-    pub edges: Vec<[u32; 2]>,
-    /// Edge -> triangles that have it as a side, ascending; a row of 1 is a boundary edge, more than
-    /// 2 is non-manifold.
-    pub faces: Csr,
-    /// Edge id of side `i` of triangle `t` (vertices `i` and `(i + 1) % 3`) at `3 * t + i`;
-    /// `u32::MAX` for a collapsed side whose two vertices are the same.
-    pub side_edge: Vec<u32>,
-}
-
-/// Calls `f(a, sides)` for every vertex `a` with the triangle sides whose smaller vertex is `a`, as
-/// `(other vertex, side)` pairs sorted ascending (side = 3 * triangle + corner; collapsed sides
-/// skipped). Runs of equal other vertex are the sides on one edge. Shared by the edge table and the
-/// dual graph so both see edges in the same deterministic order.
-fn for_each_vertex_sides(mesh: &Mesh, vt: &Csr, mut f: impl FnMut(u32, &[(u32, u32)])) {
-    let idx = &mesh.indices;
-    let mut local: Vec<(u32, u32)> = Vec::new();
-    for a in 0..mesh.vertex_count() as u32 {
-        local.clear();
-        for &t in vt.row(a as usize) {
-            for s in 0..3 {
-                let side = 3 * t as usize + s;
-                let (x, y) = (idx[side], idx[3 * t as usize + (s + 1) % 3]);
-                if x != y && x.min(y) == a {
-                    local.push((x.max(y), side as u32));
-                }
-            }
-        }
-        local.sort_unstable();
-        f(a, &local);
-    }
-}
-
-/// Sentinel in [`EdgeTable::side_edge`] for a side with two equal vertices.
-pub const NO_EDGE: u32 = u32::MAX;
-
-impl EdgeTable {
-    /// Builds the edge table without a global sort: sides are grouped by their smaller vertex through
-    /// the vertex -> triangle CSR, and only each vertex's few sides are sorted. Edges therefore come
-    /// out sorted by (min, max) and each edge's triangles in ascending order.
-    pub fn new(mesh: &Mesh) -> Self {
-        Self::with_vertex_triangles(mesh, &vertex_triangles(mesh))
-    }
-
-    /// As [`EdgeTable::new`], reusing the mesh's [`vertex_triangles`].
-    ///
-    /// Serial: a parallel version over vertex blocks (stitched in order) showed no clear gain on 2
-    /// cores in back-to-back runs on a noisy machine, so the simpler code stays.
-    pub fn with_vertex_triangles(mesh: &Mesh, vt: &Csr) -> Self {
-        let idx = &mesh.indices;
-        let mut edges = Vec::with_capacity(idx.len() / 2);
-        let mut side_edge = vec![NO_EDGE; idx.len()];
-        let mut offsets = Vec::with_capacity(idx.len() / 2 + 1);
-        let mut items = Vec::with_capacity(idx.len());
-        offsets.push(0u32);
-        for_each_vertex_sides(mesh, vt, |a, local| {
-            for (i, &(b, side)) in local.iter().enumerate() {
-                if i == 0 || local[i - 1].0 != b {
-                    if i > 0 {
-                        offsets.push(items.len() as u32);
-                    }
-                    edges.push([a, b]);
-                }
-                side_edge[side as usize] = edges.len() as u32 - 1;
-                items.push(side / 3);
-            }
-            if !local.is_empty() {
-                offsets.push(items.len() as u32);
-            }
-        });
-        Self {
-            edges,
-            faces: Csr { offsets, items },
-            side_edge,
-        }
-    }
-
-    /// Number of triangle sides on edge `e`.
-    pub fn valence(&self, e: usize) -> usize {
-        self.faces.row(e).len()
-    }
-}
 
 /// The triangle dual graph: triangle -> edge-adjacent triangles, each row sorted, without duplicates
 /// or self-loops. Non-manifold edges connect all their triangles pairwise. `vt` must be
@@ -176,7 +20,6 @@ impl EdgeTable {
 /// need no merging. Only non-manifold runs go through a side list. (Intersecting the two vertex rows
 /// of each edge was measured slower: 8.5 against 7.0 ms on the bunny.)
 pub fn dual_graph(mesh: &Mesh, vt: &Csr) -> Csr {
-    const NONE: u32 = u32::MAX;
     let idx = &mesh.indices;
     let t_count = mesh.triangle_count();
     let mut slot = vec![NONE; idx.len()];
@@ -244,6 +87,61 @@ pub fn side_flags(mesh: &Mesh, edges: &EdgeTable) -> Vec<u32> {
                     _ => f,
                 },
             })
+        })
+        .collect()
+}
+
+/// Edge-connected piece of each triangle: labels `0..pieces`, numbered in order of each piece's
+/// lowest triangle. Every "is it in one piece" question in the crate is answered from these labels
+/// (of the whole dual graph, or of a subgraph given as its own CSR).
+pub fn pieces(dual: &Csr) -> Vec<u32> {
+    let mut piece = vec![NONE; dual.rows()];
+    let mut stack = Vec::new();
+    let mut next = 0;
+    for s in 0..dual.rows() {
+        if piece[s] != NONE {
+            continue;
+        }
+        piece[s] = next;
+        stack.push(s as u32);
+        while let Some(u) = stack.pop() {
+            for &v in dual.row(u as usize) {
+                if piece[v as usize] == NONE {
+                    piece[v as usize] = next;
+                    stack.push(v);
+                }
+            }
+        }
+        next += 1;
+    }
+    piece
+}
+
+/// Per cluster of `labels` (ids below `k`, every triangle labelled): how many edge-connected pieces
+/// its triangles form, and how many pieces of the whole mesh they lie in. A cluster is connected
+/// wherever the mesh is when the two are equal (a mesh joined only at vertices, like a strut
+/// lattice, cannot give every full cluster one piece).
+pub fn cluster_pieces(dual: &Csr, labels: &[u32], k: usize) -> Vec<(usize, usize)> {
+    let mesh = pieces(dual);
+    let same = Csr::from_pairs(
+        dual.rows(),
+        (0..dual.rows() as u32).flat_map(|t| {
+            dual.row(t as usize)
+                .iter()
+                .filter(move |&&u| labels[u as usize] == labels[t as usize])
+                .map(move |&u| (t, u))
+        }),
+    );
+    let own = pieces(&same);
+    let mut per: Vec<Vec<(u32, u32)>> = vec![Vec::new(); k];
+    for (t, &l) in labels.iter().enumerate() {
+        per[l as usize].push((own[t], mesh[t]));
+    }
+    per.into_iter()
+        .map(|p| {
+            let count =
+                |f: fn(&(u32, u32)) -> u32| crate::common::sorted(p.iter().map(f).collect()).len();
+            (count(|x| x.0), count(|x| x.1))
         })
         .collect()
 }

@@ -18,7 +18,7 @@ use crate::gpu::{self, timed as secs, Gpu, Profile};
 use crate::mesh::{self, subdivide::subdivide, Mesh};
 use crate::meshlet::{Limits, Meshlets};
 use crate::strategy::kmedoids::{cluster, Config as KConfig, Mode};
-use crate::strategy::{self, parallel};
+use crate::strategy::{self, grow};
 use anyhow::{bail, Context, Result};
 use indicatif::ProgressBar;
 use std::fmt::Write as _;
@@ -184,8 +184,8 @@ pub fn run(cfg: &Config) -> Result<()> {
     // then cached on disk); a small mesh through every timed path keeps that out of the tables.
     let warm = mesh::generate::terrain(24, 1);
     gpu::adjacency::adjacency(&g, &warm)?;
-    gpu::kmedoids::cluster(&g, &warm, cfg.limits, &KConfig::default())?;
-    gpu::grow::grow(&g, &warm, cfg.limits, parallel::DEFAULT_SPACING)?;
+    gpu::kmedoids::cluster_flat(&g, &warm, cfg.limits, &KConfig::default())?;
+    gpu::grow::grow(&g, &warm, cfg.limits, grow::DEFAULT_SPACING)?;
     // The bandwidths the physical limits are taken at (64 MiB copied on the GPU, 256 MiB on the
     // host; medians).
     say("measuring memory bandwidth".into());
@@ -242,17 +242,17 @@ pub fn run(cfg: &Config) -> Result<()> {
             .with_context(|| format!("{name}: parallel grower"))?;
         drop(dual);
         pb.set_message(format!("{name} ({t} triangles): k-medoids, rayon"));
-        let (cr, km_rayon) = secs(|| cluster(m, cfg.limits, &kc));
+        let (cr, km_rayon) = secs(|| cluster(m, cfg.limits, Mode::Flat, &kc));
         let km_cpu1 = if t <= cfg.one_thread_max {
             pb.set_message(format!("{name} ({t} triangles): k-medoids, one thread"));
-            Some(secs(|| one.install(|| cluster(m, cfg.limits, &kc))).1)
+            Some(secs(|| one.install(|| cluster(m, cfg.limits, Mode::Flat, &kc))).1)
         } else {
             None
         };
         let km_gpu = if t <= cfg.kmedoids_gpu_max.min(cfg.flat_gpu_max) {
             pb.set_message(format!("{name} ({t} triangles): k-medoids, GPU"));
             let before = g.profile();
-            let r = gpu::kmedoids::cluster(&g, m, cfg.limits, &kc)?;
+            let r = gpu::kmedoids::cluster_flat(&g, m, cfg.limits, &kc)?;
             if r.clustering.labels != cr.labels || r.clustering.meshlets != cr.meshlets {
                 bail!("{name}: GPU k-medoids differs from the CPU's");
             }
@@ -289,20 +289,17 @@ pub fn run(cfg: &Config) -> Result<()> {
         let profile = if km_gpu.is_some() && profiled {
             Some(profile_run(
                 "k-medoids",
-                &|| gpu::kmedoids::cluster(&g, m, cfg.limits, &kc),
+                &|| gpu::kmedoids::cluster_flat(&g, m, cfg.limits, &kc),
                 &cr.labels,
             )?)
         } else {
             None
         };
         pb.set_message(format!("{name} ({t} triangles): kmedoids (capacity-aware)"));
-        let capc = KConfig {
-            mode: Mode::Capacity,
-            ..kc
-        };
-        let (cap_r, cap_rayon) = secs(|| cluster(m, cfg.limits, &capc));
+        let capc = kc;
+        let (cap_r, cap_rayon) = secs(|| cluster(m, cfg.limits, Mode::Capacity, &capc));
         let cap_cpu1 = (t <= cfg.one_thread_max)
-            .then(|| secs(|| one.install(|| cluster(m, cfg.limits, &capc))).1);
+            .then(|| secs(|| one.install(|| cluster(m, cfg.limits, Mode::Capacity, &capc))).1);
         let cap_gpu = if t <= cfg.kmedoids_gpu_max {
             let r = gpu::kmedoids::cluster_capacity(&g, m, cfg.limits, &capc)?;
             if r.clustering.labels != cap_r.labels || r.clustering.meshlets != cap_r.meshlets {
@@ -358,8 +355,8 @@ pub fn run(cfg: &Config) -> Result<()> {
             max_iterations: it,
             ..kc
         };
-        let (cpu, cs) = secs(|| cluster(bunny, cfg.limits, &c));
-        let gr = gpu::kmedoids::cluster(&g, bunny, cfg.limits, &c)?;
+        let (cpu, cs) = secs(|| cluster(bunny, cfg.limits, Mode::Flat, &c));
+        let gr = gpu::kmedoids::cluster_flat(&g, bunny, cfg.limits, &c)?;
         if gr.clustering.initial_mean_distance != cpu.initial_mean_distance {
             bail!("bunny, {it} iterations: GPU objective differs from the CPU's");
         }
@@ -376,7 +373,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     let bunny_dual = dual_graph(bunny, &vertex_triangles(bunny));
     let mut sweep = Sweep::new();
     for spacing in [1.0, 2.0, 4.0, 8.0] {
-        let (cpu, cs) = secs(|| parallel::grow(bunny, &bunny_dual, cfg.limits, spacing));
+        let (cpu, cs) = secs(|| grow::grow(bunny, &bunny_dual, cfg.limits, spacing));
         let gr = gpu::grow::grow(&g, bunny, cfg.limits, spacing)?;
         if gr.owner != cpu.owner || gr.order != cpu.order {
             bail!("bunny, spacing {spacing}: GPU grower differs from the CPU's");
@@ -415,11 +412,11 @@ fn growers(
         let (ml, secs_) = secs(|| s.build(m, limits));
         out.push(GrowRow::new(name, &ml, secs_, None));
     }
-    let sp = parallel::DEFAULT_SPACING;
-    let (cpu, cs) = secs(|| parallel::grow(m, dual, limits, sp));
+    let sp = grow::DEFAULT_SPACING;
+    let (cpu, cs) = secs(|| grow::grow(m, dual, limits, sp));
     let depth = Some((cpu.waves, cpu.rounds));
     if small {
-        let c1 = secs(|| one.install(|| parallel::grow(m, dual, limits, sp))).1;
+        let c1 = secs(|| one.install(|| grow::grow(m, dual, limits, sp))).1;
         out.push(GrowRow::new(
             "bsphere-parallel, CPU 1 thread",
             &cpu.meshlets,
@@ -791,7 +788,7 @@ fn write(
         md,
         "\n## Parallel clustering: bsphere-parallel against the serial growers and meshoptimizer\n"
     )?;
-    writeln!(md, "Many meshlets grow at once (grid seeds, one GPU workgroup per meshlet scoring its border by the bsphere rule, conflicts by `atomicMin` claims; see `src/strategy/parallel.rs`). GPU and CPU give identical claims, orders and meshlets (checked). Seed spacing {}. Waves and rounds are the parallel depth: every round is two dispatches over all meshlets of the wave.\n", parallel::DEFAULT_SPACING)?;
+    writeln!(md, "Many meshlets grow at once (grid seeds, one GPU workgroup per meshlet scoring its border by the bsphere rule, conflicts by `atomicMin` claims; see `src/strategy/grow.rs`). GPU and CPU give identical claims, orders and meshlets (checked). Seed spacing {}. Waves and rounds are the parallel depth: every round is two dispatches over all meshlets of the wave.\n", grow::DEFAULT_SPACING)?;
     writeln!(md, "| mesh | strategy | meshlets | triangles/meshlet | vertices/meshlet | waves / rounds | s |")?;
     writeln!(md, "|---|---|---:|---:|---:|---:|---:|")?;
     for r in rows {

@@ -13,8 +13,7 @@ use super::table::{
 use super::{machine_note, plot, today, Common};
 use crate::mesh;
 use crate::meshlet::{bounds, validate, Limits, Metrics};
-use crate::strategy::kmedoids::{cluster, Clustering, Config as KConfig, Mode};
-use crate::strategy::kmedoids_capacity::Grow;
+use crate::strategy::kmedoids::{cluster, Clustering, Config as KConfig, Grow, Mode};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt::Write as _;
@@ -104,46 +103,9 @@ struct Run {
 /// pieces as the mesh pieces they touch. (The `connected` metric asks for one piece, which a mesh
 /// joined only through vertices, like the strut lattice, does not allow at full fill.)
 fn connected_where_mesh_is(m: &mesh::Mesh, labels: &[u32], k: usize) -> f64 {
-    let vt = crate::adjacency::vertex_triangles(m);
-    let dual = crate::adjacency::dual_graph(m, &vt);
-    let t = labels.len();
-    // Union-find twice: over every dual edge (mesh pieces), over same-cluster edges (cluster pieces).
-    fn root(p: &mut [u32], mut x: u32) -> u32 {
-        while p[x as usize] != x {
-            p[x as usize] = p[p[x as usize] as usize];
-            x = p[x as usize];
-        }
-        x
-    }
-    let (mut mesh_p, mut clus_p): (Vec<u32>, Vec<u32>) =
-        ((0..t as u32).collect(), (0..t as u32).collect());
-    for a in 0..t {
-        for &b in dual.row(a) {
-            let (ra, rb) = (root(&mut mesh_p, a as u32), root(&mut mesh_p, b));
-            mesh_p[ra.max(rb) as usize] = ra.min(rb);
-            if labels[a] == labels[b as usize] {
-                let (ra, rb) = (root(&mut clus_p, a as u32), root(&mut clus_p, b));
-                clus_p[ra.max(rb) as usize] = ra.min(rb);
-            }
-        }
-    }
-    let mut pieces: Vec<Vec<(u32, u32)>> = vec![Vec::new(); k];
-    for x in 0..t {
-        let (rm, rc) = (root(&mut mesh_p, x as u32), root(&mut clus_p, x as u32));
-        pieces[labels[x] as usize].push((rm, rc));
-    }
-    let ok = pieces
-        .iter_mut()
-        .filter(|p| {
-            let mut mesh: Vec<u32> = p.iter().map(|x| x.0).collect();
-            let mut own: Vec<u32> = p.iter().map(|x| x.1).collect();
-            mesh.sort_unstable();
-            mesh.dedup();
-            own.sort_unstable();
-            own.dedup();
-            mesh.len() == own.len()
-        })
-        .count();
+    let dual = crate::adjacency::dual_graph(m, &crate::adjacency::vertex_triangles(m));
+    let pieces = crate::adjacency::cluster_pieces(&dual, labels, k);
+    let ok = pieces.iter().filter(|(own, mesh)| own == mesh).count();
     ok as f64 / k.max(1) as f64
 }
 
@@ -170,15 +132,20 @@ impl Method {
         }
     }
 
+    fn mode(self) -> Mode {
+        match self {
+            Method::Default | Method::Hops => Mode::Capacity,
+            Method::Flat => Mode::Flat,
+            Method::Paper => Mode::Paper,
+        }
+    }
+
     fn config(self) -> KConfig {
-        let (mode, grow) = match self {
-            Method::Default => (Mode::Capacity, Grow::Centre),
-            Method::Hops => (Mode::Capacity, Grow::Hops),
-            Method::Flat => (Mode::Fast, Grow::Centre),
-            Method::Paper => (Mode::Paper, Grow::Centre),
+        let grow = match self {
+            Method::Hops => Grow::Hops,
+            _ => Grow::Centre,
         };
         KConfig {
-            mode,
             grow,
             ..KConfig::default()
         }
@@ -188,11 +155,12 @@ impl Method {
 fn run_one(
     m: &mesh::Mesh,
     limits: Limits,
+    method: Method,
     cfg: KConfig,
     name: &str,
 ) -> Result<(f64, Clustering, Metrics)> {
     let t0 = Instant::now();
-    let c = cluster(m, limits, &cfg);
+    let c = cluster(m, limits, method.mode(), &cfg);
     let secs = t0.elapsed().as_secs_f64();
     validate(m, &c.meshlets, limits)
         .with_context(|| format!("{name}: k-medoids produced invalid meshlets"))?;
@@ -510,7 +478,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             mo_times.push(s);
             mo_out = Some(out);
             let kc = Method::Default.config();
-            let (s, c) = timed(1, || cluster(m, cfg.limits, &kc));
+            let (s, c) = timed(1, || cluster(m, cfg.limits, Mode::Capacity, &kc));
             km_times.push(s);
             km_out = Some(c);
         }
@@ -530,11 +498,13 @@ pub fn run(cfg: &Config) -> Result<()> {
             };
             let (seconds, c) = match (mode, km_out.take()) {
                 (Method::Default, Some(c)) => (super::median(&km_times), c),
-                _ => timed(1, || cluster(m, cfg.limits, &kc)),
+                _ => timed(1, || cluster(m, cfg.limits, mode.mode(), &kc)),
             };
             let seconds_1t = (mode != Method::Paper && t <= cfg.one_thread_max)
                 .then(|| {
-                    let (s, one) = timed(1, || one_thread(|| cluster(m, cfg.limits, &kc)));
+                    let (s, one) = timed(1, || {
+                        one_thread(|| cluster(m, cfg.limits, mode.mode(), &kc))
+                    });
                     // Determinism, checked where it is cheap to: one thread = the pool.
                     (one.labels == c.labels && one.medoids == c.medoids)
                         .then_some(s)
@@ -589,7 +559,7 @@ pub fn run(cfg: &Config) -> Result<()> {
                 max_iterations: it,
                 ..method.config()
             };
-            let (seconds, c, metrics) = run_one(sm, cfg.limits, kc, cfg.sweep_mesh())?;
+            let (seconds, c, metrics) = run_one(sm, cfg.limits, method, kc, cfg.sweep_mesh())?;
             sweep.push(SweepRow {
                 mode: method,
                 threshold: 0.0,
@@ -608,7 +578,8 @@ pub fn run(cfg: &Config) -> Result<()> {
                 shift_threshold: th,
                 ..Method::Flat.config()
             };
-            let (seconds, c, metrics) = run_one(sm, cfg.limits, kc, cfg.sweep_mesh())?;
+            let (seconds, c, metrics) =
+                run_one(sm, cfg.limits, Method::Flat, kc, cfg.sweep_mesh())?;
             sweep.push(SweepRow {
                 mode: Method::Flat,
                 threshold: th,

@@ -73,8 +73,8 @@ pub struct StrategyArgs {
     pub kmedoids_threshold: f64,
     /// kmedoids: what a growing cluster prefers among equally cheap triangles: `centre` (nearest its
     /// centroid: smaller spheres) or `hops` (fewest hops from its seed: fewer meshlets).
-    #[arg(long, default_value = "centre", value_parser = clap::value_parser!(strategy::kmedoids_capacity::Grow))]
-    pub kmedoids_grow: strategy::kmedoids_capacity::Grow,
+    #[arg(long, default_value = "centre", value_parser = clap::value_parser!(strategy::kmedoids::Grow))]
+    pub kmedoids_grow: strategy::kmedoids::Grow,
     /// kmedoids-paper: seconds before the remaining splits are done the fast way.
     #[arg(long, default_value_t = 300.0)]
     pub paper_budget: f64,

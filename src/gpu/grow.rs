@@ -1,6 +1,6 @@
 //! The parallel bounding-sphere grower on the GPU (`wgsl/grow.wgsl`): bsphere candidate scoring for
 //! many meshlets at once, one workgroup per meshlet, conflicts by atomic claims. Step for step the
-//! CPU reference [`crate::strategy::parallel::grow`], with identical owners, orders, wave and round
+//! CPU reference [`crate::strategy::grow::grow`], with identical owners, orders, wave and round
 //! counts and meshlets.
 //!
 //! Host traffic: per wave the seed count (one word) and per 8 growth or component rounds their
@@ -11,7 +11,7 @@ use super::scan::ScanJob;
 use super::{binding_set, param_block, timed, wgsl, Batch, Gpu, GpuError, Kernels, Scan, PART};
 use crate::mesh::Mesh;
 use crate::meshlet::{Limits, Meshlets};
-use crate::strategy::parallel::{assemble, Setup};
+use crate::strategy::grow::{assemble, Setup};
 use std::time::Instant;
 
 param_block! {
@@ -121,7 +121,7 @@ impl WaveBuffers {
 }
 
 /// Runs the parallel grower on the GPU with seed spacing `spacing` (see
-/// [`crate::strategy::parallel::DEFAULT_SPACING`]).
+/// [`crate::strategy::grow::DEFAULT_SPACING`]).
 pub fn grow(gpu: &Gpu, mesh: &Mesh, limits: Limits, spacing: f64) -> Result<GpuGrowth, GpuError> {
     let start = Instant::now();
     let t = mesh.triangle_count();

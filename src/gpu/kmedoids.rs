@@ -1,6 +1,8 @@
-//! k-medoids on the GPU (`wgsl/kmedoids.wgsl`), step for step the CPU reference
-//! [`crate::strategy::kmedoids::cluster`] in fast mode, with identical medoids, labels, distances,
-//! iteration and split counts and meshlets.
+//! The k-medoids family on the GPU: [`cluster_flat`] runs `kmedoids-flat` step for step as its CPU
+//! reference ([`crate::strategy::kmedoids::flat`]) with `wgsl/assign.wgsl`, `wgsl/update.wgsl` and
+//! `wgsl/split.wgsl`, with identical medoids, labels, distances, iteration and split counts and
+//! meshlets; [`cluster_capacity`] runs the default `kmedoids`
+//! ([`crate::strategy::kmedoids::capacity`]) with its parallel steps as kernels.
 //!
 //! The loop is driven from the host, but the per-triangle data (dual graph, labels, distances,
 //! members) stays on the GPU. One iteration (medoid update, then assignment) is one submission and
@@ -18,14 +20,14 @@ use super::{binding_set, param_block, timed, wgsl, Batch, Gpu, GpuError, Kernels
 use crate::adjacency::Csr;
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
-use crate::strategy::kmedoids::{
-    add_component_medoids, cluster_size, initial_medoids, overflowing_from_counts, pack,
-    split_choice, Clustering, Config, Mode,
-};
+use crate::strategy::kmedoids::capacity::{assign_capacity, cluster_with};
+use crate::strategy::kmedoids::flat::{add_component_medoids, cluster_size, initial_medoids};
+use crate::strategy::kmedoids::split::{overflowing_from_counts, split_choice};
+use crate::strategy::kmedoids::{pack, Clustering, Config, Mode};
 use std::time::Instant;
 
 param_block! {
-    /// `struct Params` of the k-medoids family: `wgsl/kmedoids.wgsl`, `assign.wgsl` and
+    /// `struct Params` of the k-medoids family: `wgsl/update.wgsl`, `assign.wgsl` and
     /// `split.wgsl` (one dispatch's parameters serve all three).
     pub struct Params {
         /// Triangles.
@@ -44,7 +46,7 @@ param_block! {
 }
 
 binding_set! {
-    /// The storage buffers of `wgsl/kmedoids.wgsl` (the medoid update), in binding order.
+    /// The storage buffers of `wgsl/update.wgsl` (the medoid update), in binding order.
     pub struct UpdateBuffers {
         /// Dual-graph offsets.
         dual_off: Read,
@@ -128,7 +130,7 @@ binding_set! {
 /// Frontier-size counters (a ring in `wgsl/assign.wgsl`, after 8 update counters).
 const RING: usize = 64;
 const SIZES: usize = 8;
-/// Update counters (see `wgsl/kmedoids.wgsl`): shift sum, medoids changed, one-thread updates,
+/// Update counters (see `wgsl/update.wgsl`): shift sum, medoids changed, one-thread updates,
 /// updates skipped as unchanged.
 const SHIFT: usize = 0;
 const CHANGED: usize = 1;
@@ -240,7 +242,7 @@ impl Modules {
             update: Kernels::with_constants::<UpdateBuffers>(
                 gpu,
                 "kmedoids",
-                wgsl!("kmedoids.wgsl"),
+                wgsl!("update.wgsl"),
                 UPDATE_ENTRIES,
                 &[("UW", uw)],
             ),
@@ -267,9 +269,9 @@ impl Modules {
     }
 }
 
-/// Capacity-aware k-medoids (the default `kmedoids`, [`crate::strategy::kmedoids_capacity`])
+/// Capacity-aware k-medoids (the default `kmedoids`, [`crate::strategy::kmedoids::capacity`])
 /// with the GPU running its parallel steps: the adjacency, every medoid update (one workgroup
-/// per cluster: the `update` kernel of `wgsl/kmedoids.wgsl` with every cluster marked changed)
+/// per cluster: the `update` kernel of `wgsl/update.wgsl` with every cluster marked changed)
 /// and the capacity-aware assignment ([`super::capacity`], level by level to the fixed point that
 /// equals the CPU's sequential order; it runs only where the CPU's would, in the rounds that
 /// `worth_a_round` allows). The seeding growth, the merges and the packing are
@@ -281,11 +283,6 @@ pub fn cluster_capacity(
     limits: Limits,
     cfg: &Config,
 ) -> Result<GpuClustering, GpuError> {
-    if cfg.mode != Mode::Capacity {
-        return Err(GpuError::Unsupported(
-            "cluster_capacity runs capacity mode (kmedoids); kmedoids-flat is gpu::kmedoids::cluster",
-        ));
-    }
     let start = Instant::now();
     let (adj, adj_timing) = adjacency(gpu, mesh)?;
     let (host, read_s) = timed(|| adj.read(gpu));
@@ -298,7 +295,7 @@ pub fn cluster_capacity(
     // Built on the first round: most meshes run none (`worth_a_round`), and its kernels and three
     // per-triangle buffers would cost them for nothing.
     let mut cap: Option<super::capacity::CapacityAssign> = None;
-    let g = crate::strategy::kmedoids_capacity::cluster_with(
+    let g = cluster_with(
         mesh,
         &host.dual,
         &host.vertex_triangles,
@@ -321,9 +318,7 @@ pub fn cluster_capacity(
             }
             if !super::capacity::CapacityAssign::fits(medoids.len(), limits) {
                 // Cluster lists beyond one binding: the CPU step, whose labels are the same.
-                crate::strategy::kmedoids_capacity::assign_capacity(
-                    mesh, &host.dual, limits, medoids, labels,
-                );
+                assign_capacity(mesh, &host.dual, limits, medoids, labels);
                 return;
             }
             let cap = cap.get_or_insert_with(|| {
@@ -370,18 +365,13 @@ fn adjacency(gpu: &Gpu, mesh: &Mesh) -> Result<(DeviceAdjacency, Timing), GpuErr
     AdjacencyKernels::new(gpu).build(gpu, mesh)
 }
 
-/// Runs fast-mode k-medoids on the GPU.
-pub fn cluster(
+/// Runs the flat k-medoids (`kmedoids-flat`) on the GPU; `cfg`'s flat settings apply.
+pub fn cluster_flat(
     gpu: &Gpu,
     mesh: &Mesh,
     limits: Limits,
     cfg: &Config,
 ) -> Result<GpuClustering, GpuError> {
-    if cfg.mode != Mode::Fast {
-        return Err(GpuError::Unsupported(
-            "the GPU runs fast-mode k-medoids; paper mode is CPU-only",
-        ));
-    }
     let start = Instant::now();
     let t = mesh.triangle_count();
     let (adj, adj_timing) = adjacency(gpu, mesh)?;
@@ -389,7 +379,7 @@ pub fn cluster(
     let (family, scan) = modules.family();
     let mut run = Run::new(gpu, family, scan, &adj, limits, adj_timing)?;
 
-    let mut medoids = initial_medoids(mesh, cluster_size(limits, Mode::Fast));
+    let mut medoids = initial_medoids(mesh, cluster_size(limits, Mode::Flat));
     let mut host_dual: Option<Csr> = None;
     loop {
         run.upload_medoids(&medoids)?;

@@ -9,7 +9,7 @@ use crate::adjacency::{dual_graph, side_flags, vertex_triangles, EdgeTable};
 use crate::lod::flat::{select, Flat, Query};
 use crate::mesh::Mesh;
 use crate::meshlet::{validate, Limits, Meshlets};
-use crate::strategy::kmedoids::{self, Config};
+use crate::strategy::kmedoids::{self, Config, Mode};
 
 /// One comparison.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -119,11 +119,11 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
             first_difference("side flags", &host.side_flags, &flags),
         ],
     ));
-    // k-medoids.
+    // The flat k-medoids.
     let cfg = Config::default();
-    let (km, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, &cfg));
+    let (km, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, Mode::Flat, &cfg));
     let cpu = &km;
-    let (g, gpu_s) = timed(|| super::kmedoids::cluster(gpu, mesh, limits, &cfg));
+    let (g, gpu_s) = timed(|| super::kmedoids::cluster_flat(gpu, mesh, limits, &cfg));
     let g = g?.clustering;
     let counts = |c: &kmedoids::Clustering| {
         [
@@ -163,12 +163,8 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
         .collect(),
     ));
     // Capacity-aware k-medoids (the default): host growth, GPU adjacency and medoid updates.
-    let cap = Config {
-        mode: kmedoids::Mode::Capacity,
-        ..Config::default()
-    };
-    let (c_cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, &cap));
-    let (c_gpu, gpu_s) = timed(|| super::kmedoids::cluster_capacity(gpu, mesh, limits, &cap));
+    let (c_cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, Mode::Capacity, &cfg));
+    let (c_gpu, gpu_s) = timed(|| super::kmedoids::cluster_capacity(gpu, mesh, limits, &cfg));
     let c_gpu = c_gpu?.clustering;
     out.push(check(
         "k-medoids (capacity-aware, the default): medoids, labels, distances, iterations, meshlets",
@@ -198,14 +194,8 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
     // rounds it tries (none on most surfaces) and keeps its result only when a round is accepted,
     // so the whole-run check above can miss a difference here.
     let (a_cpu, cpu_s) = timed(|| {
-        let mut l = vec![u32::MAX; mesh.triangle_count()];
-        crate::strategy::kmedoids_capacity::assign_capacity(
-            mesh,
-            &dual,
-            limits,
-            &c_cpu.medoids,
-            &mut l,
-        );
+        let mut l = vec![crate::common::NONE; mesh.triangle_count()];
+        kmedoids::capacity::assign_capacity(mesh, &dual, limits, &c_cpu.medoids, &mut l);
         l
     });
     let (a_gpu, gpu_s) = timed(|| super::capacity::assign(gpu, mesh, limits, &c_cpu.medoids));
@@ -238,8 +228,8 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
         ],
     ));
     // The parallel grower (bsphere scoring per meshlet, atomic claims).
-    let spacing = crate::strategy::parallel::DEFAULT_SPACING;
-    let (cpu, cpu_s) = timed(|| crate::strategy::parallel::grow(mesh, &dual, limits, spacing));
+    let spacing = crate::strategy::grow::DEFAULT_SPACING;
+    let (cpu, cpu_s) = timed(|| crate::strategy::grow::grow(mesh, &dual, limits, spacing));
     let (g, gpu_s) = timed(|| super::grow::grow(gpu, mesh, limits, spacing));
     let g = g?;
     out.push(check(

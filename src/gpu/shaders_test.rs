@@ -141,7 +141,7 @@ fn every_module_matches_its_rust_interface() {
         interface::<capacity::Params, capacity::Buffers>("capacity.wgsl"),
         interface::<copy::Params, copy::Buffers>("copy.wgsl"),
         interface::<grow::Params, grow::Buffers>("grow.wgsl"),
-        interface::<kmedoids::Params, kmedoids::UpdateBuffers>("kmedoids.wgsl"),
+        interface::<kmedoids::Params, kmedoids::UpdateBuffers>("update.wgsl"),
         interface::<kmedoids::Params, kmedoids::AssignBuffers>("assign.wgsl"),
         interface::<kmedoids::Params, kmedoids::SplitBuffers>("split.wgsl"),
         interface::<scan::Params, scan::Buffers>("scan.wgsl"),

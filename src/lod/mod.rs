@@ -112,7 +112,7 @@ pub struct LodInfo {
 }
 
 /// `LodInfo::group` of a root.
-pub const NO_GROUP: u32 = u32::MAX;
+pub const NO_GROUP: u32 = crate::common::NONE;
 
 /// One level: its meshlets (the existing model, global vertex indices) and their LOD data.
 #[derive(Clone, Debug, PartialEq)]

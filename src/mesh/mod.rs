@@ -5,6 +5,7 @@
 //! positions, indices in range, at least one triangle. Degenerate and duplicated triangles and
 //! non-manifold edges are legal; [`MeshStats`] counts them.
 
+pub mod edges;
 mod error;
 pub mod generate;
 pub mod gltf_io;
@@ -14,6 +15,7 @@ mod obj;
 pub mod ply;
 mod stats;
 pub mod subdivide;
+pub mod tipsify;
 
 pub use error::{MeshError, MeshErrorKind};
 pub use load::{

@@ -1,7 +1,7 @@
 //! Topology and quality counts of a mesh: what `meshletlab stats` shows before any meshlet is built.
 
+use super::edges::EdgeTable;
 use super::Mesh;
-use crate::adjacency::EdgeTable;
 use serde::Serialize;
 
 /// Counts that describe a mesh's size, defects and topology. None of these defects are errors: every

@@ -2,8 +2,8 @@
 //! triangles on that edge, so the output keeps the input's topology (boundaries, non-manifold edges,
 //! components). Multi-million-triangle test inputs come from subdividing a real mesh.
 
+use super::edges::{EdgeTable, NO_EDGE};
 use super::Mesh;
-use crate::adjacency::{EdgeTable, NO_EDGE};
 
 /// Subdivides `levels` times (x4 triangles per level). Fails if the result would not fit u32 indices.
 pub fn subdivide(mesh: &Mesh, levels: u32) -> Result<Mesh, String> {

@@ -3,7 +3,7 @@
 
 use super::{Limits, Meshlet, Meshlets};
 
-const UNSET: u32 = u32::MAX;
+const UNSET: u32 = crate::common::NONE;
 
 /// Builds a [`Meshlets`] collection triangle by triangle. Local vertex numbers are assigned in
 /// first-use order.

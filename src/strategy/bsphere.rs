@@ -99,13 +99,13 @@ struct Cand {
 
 /// `Cand::gen` of a placed triangle: the hot loops test it there instead of in `used` (one
 /// random read per neighbour instead of two).
-const PLACED: u32 = u32::MAX;
+const PLACED: u32 = crate::common::NONE;
 
 /// `Cand::gen` before a triangle is first touched (no meshlet has this number).
 const UNTOUCHED: u32 = u32::MAX - 1;
 
 /// `Cand::slot` of a triangle that is not on the border.
-const NOT_ON_BORDER: u32 = u32::MAX;
+const NOT_ON_BORDER: u32 = crate::common::NONE;
 
 /// Border lists: `bsphere`'s candidates are kept on one list per (score - 2, new vertices), i.e.
 /// `2 * (score - 2) + new` with score 2..=4 and new 0..=1, so that the best score that fits is

@@ -7,24 +7,21 @@
 mod bsphere;
 mod compact;
 mod greedy;
+pub mod grow;
 pub mod kmedoids;
-pub mod kmedoids_capacity;
-pub mod kmedoids_local;
 mod meshopt;
 mod nvidia;
-pub mod parallel;
 pub mod partition;
 pub mod qem;
 pub mod refine;
-pub mod tipsify;
 
 pub use self::meshopt::{Meshopt, MeshoptScan, MeshoptSpatial};
 pub use bsphere::{BoundingSphere, BoundingSpherePaper};
 pub use compact::Compact;
 pub use greedy::{Greedy, GreedyPaper};
+pub use grow::ParallelGrower;
 pub use kmedoids::KMedoids;
 pub use nvidia::Nvidia;
-pub use parallel::ParallelGrower;
 
 use crate::mesh::Mesh;
 use crate::meshlet::order::{optimize_triangle_order, order_meshlets, MeshletOrder};
@@ -50,7 +47,7 @@ pub struct Options {
     pub cache_size: u32,
     /// meshoptimizer's spatial builder fill weight (>= 0): fuller clusters vs. SAH quality.
     pub fill_weight: f32,
-    /// k-medoids settings (the mode is set by the strategy name).
+    /// k-medoids tunables (the method itself, [`kmedoids::Mode`], comes from the strategy name).
     pub kmedoids: kmedoids::Config,
     /// Reorder triangles inside each meshlet for vertex reuse (any strategy).
     pub local_order: bool,
@@ -130,7 +127,6 @@ pub const NAMES: &[&str] = &[
     "kmedoids",
     "kmedoids-flat",
     "kmedoids-paper",
-    "kmedoids-local",
     "compact",
     "meshopt",
     "meshopt-scan",
@@ -266,12 +262,10 @@ pub enum Kind {
     /// [`KMedoids`], capacity-aware (clusters grown to the limits, nothing split): `kmedoids`.
     Kmedoids,
     /// [`KMedoids`], flat: nearest-medoid assignment, overflowing clusters split and the mesh
-    /// re-clustered (the default before issue 32; what the GPU kernels run): `kmedoids-flat`.
+    /// re-clustered (what the GPU's flat kernels run): `kmedoids-flat`.
     KmedoidsFlat,
     /// [`KMedoids`] as the paper runs it (slow by design): `kmedoids-paper`.
     KmedoidsPaper,
-    /// [`KMedoids`] with local splits (no global re-run): `kmedoids-local`.
-    KmedoidsLocal,
     /// [`Compact`]: `compact`.
     Compact,
     /// [`Meshopt`] (meshoptimizer's `build_meshlets`): `meshopt`.
@@ -288,7 +282,7 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in [`NAMES`] (table) order.
-    pub const ALL: [Kind; 18] = [
+    pub const ALL: [Kind; 17] = [
         Kind::Nvidia,
         Kind::NvidiaTipsify,
         Kind::Greedy,
@@ -300,7 +294,6 @@ impl Kind {
         Kind::Kmedoids,
         Kind::KmedoidsFlat,
         Kind::KmedoidsPaper,
-        Kind::KmedoidsLocal,
         Kind::Compact,
         Kind::Meshopt,
         Kind::MeshoptScan,
@@ -323,10 +316,8 @@ impl Kind {
     /// [`with_order`], not here).
     pub fn strategy(self, opts: &Options) -> Box<dyn Strategy> {
         let kmedoids = |mode| KMedoids {
-            config: kmedoids::Config {
-                mode,
-                ..opts.kmedoids
-            },
+            mode,
+            config: opts.kmedoids,
         };
         match self {
             Kind::Nvidia => Box::new(Nvidia {
@@ -343,12 +334,11 @@ impl Kind {
             Kind::BspherePaper => Box::new(BoundingSpherePaper),
             Kind::BsphereCoherent => Box::new(BoundingSphere { coherent: true }),
             Kind::BsphereParallel => Box::new(ParallelGrower {
-                spacing: parallel::DEFAULT_SPACING,
+                spacing: grow::DEFAULT_SPACING,
             }),
             Kind::Kmedoids => Box::new(kmedoids(kmedoids::Mode::Capacity)),
-            Kind::KmedoidsFlat => Box::new(kmedoids(kmedoids::Mode::Fast)),
+            Kind::KmedoidsFlat => Box::new(kmedoids(kmedoids::Mode::Flat)),
             Kind::KmedoidsPaper => Box::new(kmedoids(kmedoids::Mode::Paper)),
-            Kind::KmedoidsLocal => Box::new(kmedoids(kmedoids::Mode::Local)),
             Kind::Compact => Box::new(Compact),
             Kind::Meshopt => Box::new(Meshopt {
                 cone_weight: opts.cone_weight,

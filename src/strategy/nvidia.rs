@@ -3,7 +3,8 @@
 //! meshlet; when it would exceed the vertex or triangle limit, close the meshlet and start a new one.
 //! Its quality depends entirely on the input order, hence the optional tipsify reordering first.
 
-use super::{tipsify, Strategy};
+use super::Strategy;
+use crate::mesh::tipsify;
 use crate::mesh::Mesh;
 use crate::meshlet::{Limits, MeshletBuilder, Meshlets};
 

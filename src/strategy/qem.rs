@@ -22,6 +22,7 @@
 
 use super::{Limits, Meshlets, Strategy};
 use crate::adjacency::{dual_graph, vertex_triangles};
+use crate::common::union_len;
 use crate::mesh::Mesh;
 use glam::DVec3;
 use std::cmp::Reverse;
@@ -48,7 +49,7 @@ impl Strategy for Qem {
         let owner = cluster(mesh, limits);
         let order: Vec<u32> = (0..owner.len() as u32).collect();
         let count = owner.iter().map(|&o| o as usize + 1).max().unwrap_or(0);
-        super::parallel::assemble(mesh, &owner, &order, count, limits)
+        super::grow::assemble(mesh, &owner, &order, count, limits)
     }
 }
 
@@ -140,23 +141,6 @@ fn find(parent: &mut [u32], mut x: u32) -> u32 {
         x = p;
     }
     x
-}
-
-/// Size of the union of two sorted, duplicate-free lists.
-pub(crate) fn union_len(a: &[u32], b: &[u32]) -> usize {
-    let (mut i, mut j, mut n) = (0, 0, 0);
-    while i < a.len() && j < b.len() {
-        match a[i].cmp(&b[j]) {
-            std::cmp::Ordering::Less => i += 1,
-            std::cmp::Ordering::Greater => j += 1,
-            std::cmp::Ordering::Equal => {
-                i += 1;
-                j += 1;
-            }
-        }
-        n += 1;
-    }
-    n + (a.len() - i) + (b.len() - j)
 }
 
 fn union(a: &[u32], b: &[u32]) -> Vec<u32> {

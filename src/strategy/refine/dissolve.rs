@@ -8,7 +8,7 @@
 
 use super::state::{Partition, Search};
 use super::Stats;
-use crate::strategy::parallel::distinct;
+use crate::common::distinct;
 
 impl Search<'_> {
     /// Tries every live meshlet as a victim, emptiest first, until a whole round removes none or

@@ -7,7 +7,7 @@
 //! the same moves round the meshlets off, which opens moves that vertex-first ranking never sees.
 
 use super::state::Search;
-use crate::strategy::parallel::distinct;
+use crate::common::distinct;
 use std::collections::VecDeque;
 
 /// Hartigan gains below this (relative to the mesh scale: the features are scale-free) count as

@@ -15,9 +15,9 @@
 //! first is their parameter, not state.
 
 use crate::adjacency::Csr;
+use crate::common::{distinct, NONE};
 use crate::mesh::Mesh;
 use crate::meshlet::{canonical, Limits, MeshletBuilder, Meshlets};
-use crate::strategy::parallel::distinct;
 
 /// Per-triangle features whose spread (sum of squared distances to the meshlet mean) is the third
 /// objective: the centroid, scaled to unit RMS spread in the input, and the unit normal.
@@ -33,7 +33,6 @@ const NORMAL_WEIGHT: f64 = 0.3;
 /// Duplicated triangles are matched in order; a valid partition labels every triangle once.
 /// Also returns the mesh triangles in meshlet order.
 pub(crate) fn labels_of(mesh: &Mesh, vt: &Csr, ml: &Meshlets) -> (Vec<u32>, Vec<u32>) {
-    const NONE: u32 = u32::MAX;
     let mut labels = vec![NONE; mesh.triangle_count()];
     let mut seq = Vec::with_capacity(mesh.triangle_count());
     for m in 0..ml.len() {

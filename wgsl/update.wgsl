@@ -1,5 +1,5 @@
-// k-medoids on the triangle dual graph, mirroring src/strategy/kmedoids.rs step by step (assign,
-// the multi-source BFS, is wgsl/assign.wgsl):
+// The medoid update of k-medoids on the triangle dual graph, mirroring src/strategy/kmedoids/update.rs
+// step by step (the assignment, a multi-source BFS, is wgsl/assign.wgsl):
 //   dirty_clear, medoid_index, dirty_mark    clusters whose members changed since the last update
 //                                            (the CPU's UpdateCache: the others keep their medoid)
 //   mem_clear, mem_count, scan, mem_scatter  members of each cluster (CSR)

@@ -24,6 +24,7 @@
 
 use super::Strategy;
 use crate::adjacency::{dual_graph, vertex_triangles, Csr};
+use crate::common::NONE;
 use crate::mesh::Mesh;
 use crate::meshlet::{Limits, MeshletBuilder, Meshlets};
 use rayon::prelude::*;
@@ -56,8 +57,6 @@ impl Strategy for ParallelGrower {
 /// (fewer, fuller meshlets, more waves and rounds). `bench gpu` sweeps it (results/gpu.md).
 pub const DEFAULT_SPACING: f64 = 4.0;
 
-/// "No triangle / no meshlet".
-pub const NONE: u32 = u32::MAX;
 /// Largest quantised coordinate (15 bits): squared distances of three axes fit a u32.
 pub const QMAX: u32 = 32_767;
 /// Most grid cells (two u32 each on the GPU: 64 MiB).

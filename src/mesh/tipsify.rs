@@ -4,7 +4,7 @@
 //! cache after its remaining triangles are emitted; dead ends fall back to recently used vertices,
 //! then to the next vertex in input order.
 
-use crate::adjacency::vertex_triangles;
+use super::edges::vertex_triangles;
 use crate::mesh::Mesh;
 
 /// The tipsify triangle order: a permutation of `0..triangle_count`.

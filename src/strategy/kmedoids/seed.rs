@@ -1,364 +1,14 @@
-//! Capacity-aware k-medoids (the default `kmedoids`): clusters are grown to the limits instead of
-//! being split until they fit.
-//!
-//! The flat method ([`super::kmedoids`], `kmedoids-flat`) assigns every triangle to its nearest
-//! medoid with no regard to the limits, then splits overflowing clusters and re-runs the whole
-//! mesh; Voronoi cells split until they fit come out part-filled (0.49-0.83 vertex fill, 1.25-2x
-//! meshoptimizer's count) and two thirds of the iterations are global re-runs
-//! (../shared/notes/kmedoids-scale.md). Here the limits are part of the assignment:
-//!
-//! 1. [`seed_clusters`]: one cluster at a time grows from a seed while both limits hold, taking
-//!    the frontier triangle that adds the fewest vertices, then the most enclosed one, then
-//!    ([`Grow`]) the one nearest the cluster's running centroid, or the one fewest hops from the
-//!    seed. The next seed is the deepest free triangle (hop distance from its piece's root,
-//!    `seed_order`), so in the first growth the free triangles stay one shrinking ball and the
-//!    neurons' branches are clustered from their tips inwards. Step 1b (`Orphans`): a cluster
-//!    that stops takes the small enclosed free regions next to it, giving back triangles at its
-//!    growth front to make room.
-//! 2. [`medoids_and_distances`]: the paper's medoid of each cluster (smallest sum of in-cluster
-//!    hop distances, ties to the lowest id), all members' sums at once by bitset reachability,
-//!    and every member's distance to it from the same local graph.
-//! 3. [`assign_capacity`]: a level-synchronous multi-source BFS from all medoids at once in which
-//!    a triangle joins the nearest medoid *whose cluster still has room* (ties to the lower
-//!    cluster). Triangles no cluster has room for are grown into new clusters as in step 1.
-//! 4. `merge_neighbours` (shared with `kmedoids-local`): neighbouring clusters whose union fits
-//!    are merged, smallest first; then clusters that share no vertex with any other (whole small
-//!    pieces of the mesh) join the nearest cluster whose union fits.
-//! 5. Steps 2-4 repeat while the cluster count does not grow and the objective (mean hop distance
-//!    to the medoid) falls; the best clustering seen is kept. They run only where at least a
-//!    third of the clusters are light (`worth_a_round`): on surfaces the first round adds
-//!    clusters (regions grown all at once leave gaps no cluster has room for) and was always
-//!    rejected, at a third of the run time; with step 1b and the deepest-first seeds no shared
-//!    mesh opens the gate (the neurons at 64/126, 64/84 and 128/128 included).
-//!
-//! Where it differs from the paper (§3): the paper's k is fixed by ceil(T / max_triangles) and
-//! grows by one per overflow with a global re-run each; here k comes out of the capacity-bounded
-//! growth, no cluster ever overflows, and nothing is split. The medoid is the paper's. Every
-//! cluster is edge-connected (it grows across edges) and the merge keeps it so wherever the mesh
-//! is. Determinism: the growth and the merge are sequential in a fixed order; the medoid update is a
-//! parallel map. The same input gives the same output for any thread count.
-//!
-//! On the GPU (`gpu::kmedoids::cluster_capacity`) the adjacency, the medoid updates (step 2,
-//! parallel per cluster) and the capacity-aware assignment (step 3: every cluster walks a level at
-//! once, repeated to the fixed point that equals the sequential order, `wgsl/capacity.wgsl`; only
-//! in the rounds step 5 runs) run as kernels and the rest on the host between them, through
-//! [`cluster_with`]; the output is identical.
+//! Seeding growth (step 1 of the capacity-aware method) and the orphans a finished cluster
+//! encloses (step 1b): clusters grown one at a time to the limits from the deepest free triangle.
 
-#[cfg(test)]
-use super::kmedoids::UNREACHED;
-use super::kmedoids::{members, LocalGraph};
-use super::kmedoids_local::{
-    member_distances, merge_neighbours, refresh_distances, renumber, Pieces,
-};
-use crate::adjacency::Csr;
+use crate::common::{Csr, NONE};
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
-use rayon::prelude::*;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
-/// Free triangle (not yet in a cluster).
-const FREE: u32 = u32::MAX;
-
-/// What a capacity-aware run produced.
-pub struct Grown {
-    /// Medoid of each cluster, ascending.
-    pub medoids: Vec<u32>,
-    /// Cluster of each triangle.
-    pub labels: Vec<u32>,
-    /// Hop distance of each triangle to its medoid inside its cluster.
-    pub distances: Vec<u32>,
-    /// Re-assignment rounds tried (capacity-aware assignments run; 0 where `worth_a_round` found
-    /// too few light clusters for a round to pay).
-    pub iterations: u32,
-}
-
-/// Runs steps 1-5 with at most `max_iterations` update/assign rounds (none where
-/// `worth_a_round` says they cannot pay).
-pub fn cluster(
-    mesh: &Mesh,
-    dual: &Csr,
-    vt: &Csr,
-    limits: Limits,
-    grow: Grow,
-    max_iterations: u32,
-) -> Grown {
-    cluster_with(
-        mesh,
-        dual,
-        vt,
-        limits,
-        grow,
-        max_iterations,
-        &mut |labels, medoids| medoids_and_distances(dual, labels, medoids.len()),
-        &mut |medoids, labels| assign_capacity(mesh, dual, limits, medoids, labels),
-    )
-}
-
-/// The paper's medoid of every cluster: `(labels, any member of each cluster) -> (medoids, each
-/// triangle's hop distance to its new medoid if computed)`, same cluster order.
-/// [`medoids_and_distances`] on the CPU; the GPU's `update` kernel in
-/// `gpu::kmedoids::cluster_capacity` (no distances: the host finds them). Both are exact, so the
-/// results are identical.
-pub type MedoidUpdate<'a> = dyn FnMut(&[u32], &[u32]) -> (Vec<u32>, Option<Vec<u32>>) + 'a;
-
-/// Step 2 on the CPU: each of the `k` clusters' paper medoid (as [`super::kmedoids::update`]
-/// finds it) and every member's distance to it, from one local graph per cluster (a separate
-/// update and distance pass built each twice).
-pub fn medoids_and_distances(dual: &Csr, labels: &[u32], k: usize) -> (Vec<u32>, Option<Vec<u32>>) {
-    let mem = members(labels, k);
-    let rows: Vec<(u32, Vec<u32>)> = (0..k)
-        .into_par_iter()
-        .map(|c| {
-            let m = mem.row(c);
-            let sub = LocalGraph::new(dual, labels, c as u32, m);
-            let best = sub.medoid_index();
-            (m[best], member_distances(&sub, best))
-        })
-        .collect();
-    let mut distances = vec![0; labels.len()];
-    for (c, (_, d)) in rows.iter().enumerate() {
-        for (&t, &x) in mem.row(c).iter().zip(d) {
-            distances[t as usize] = x;
-        }
-    }
-    (rows.into_iter().map(|r| r.0).collect(), Some(distances))
-}
-
-/// Step 3, the capacity-aware assignment: `(medoids, labels all FREE) -> labels`.
-/// [`assign_capacity`] on the CPU; `gpu::capacity::CapacityAssign` on the GPU, with identical
-/// labels.
-pub type Assign<'a> = dyn FnMut(&[u32], &mut [u32]) + 'a;
-
-/// [`cluster`] with the medoid update (step 2) and the capacity-aware assignment (step 3)
-/// supplied: the steps that run on the GPU there.
-#[allow(clippy::too_many_arguments)]
-pub fn cluster_with(
-    mesh: &Mesh,
-    dual: &Csr,
-    vt: &Csr,
-    limits: Limits,
-    grow: Grow,
-    max_iterations: u32,
-    medoids_of: &mut MedoidUpdate<'_>,
-    assign: &mut Assign<'_>,
-) -> Grown {
-    let order = seed_order(dual);
-    let pieces = Pieces::new(dual, vt);
-    // Steps 1 and 4 over the free triangles of `labels`, clusters numbered on from `medoids`.
-    let grow_and_merge = |labels: &mut Vec<u32>, medoids: &mut Vec<u32>| {
-        seed_clusters(mesh, dual, limits, grow, &order, labels, medoids);
-        merge_neighbours(mesh, dual, vt, &pieces, limits, medoids, labels);
-        pack_pieces(mesh, vt, limits, medoids, labels);
-    };
-    let mut labels = vec![FREE; mesh.triangle_count()];
-    let mut medoids = Vec::new();
-    grow_and_merge(&mut labels, &mut medoids);
-    let mut best = finish(dual, medoids, labels, medoids_of);
-    let mut iterations = 0;
-    let rounds = if worth_a_round(&best.1, best.0.len(), limits) {
-        max_iterations
-    } else {
-        0
-    };
-    for _ in 0..rounds {
-        iterations += 1;
-        // `best`'s medoids are already the paper's medoids of its clusters (step 2 is `finish`).
-        let mut labels = vec![FREE; mesh.triangle_count()];
-        let mut medoids = best.0.clone();
-        assign(&medoids, &mut labels);
-        // Triangles no cluster had room for start new clusters, grown as in the seeding.
-        grow_and_merge(&mut labels, &mut medoids);
-        if medoids.len() > best.0.len() {
-            // More clusters: rejected before the exact medoids are paid for.
-            break;
-        }
-        let next = finish(dual, medoids, labels, medoids_of);
-        let better = (next.0.len(), objective(&next.2)) < (best.0.len(), objective(&best.2));
-        if !better {
-            break;
-        }
-        best = next;
-    }
-    let (medoids, labels, distances) = best;
-    Grown {
-        medoids,
-        labels,
-        distances,
-        iterations,
-    }
-}
-
-/// Whether steps 2-4 may pay for themselves: at least a third of the `k` clusters are light
-/// (at most half the triangle limit). Light clusters are what a re-assignment can absorb; where
-/// fewer are light, growing all clusters at once from their medoids leaves more gaps than it
-/// closes. Measured (64/126, 64/84, 128/128; ten shared and six generated meshes) before step 1b:
-/// rounds were accepted only on the neurons (40-55 % light, 3-4 rounds, a fifth fewer clusters);
-/// every other mesh (at most 29 % light) rejected the first round, which cost a third of the run
-/// (the 14 M-triangle dragon: 6.8 s of 23 s). Step 1b leaves fewer light clusters: with the
-/// corner-first seeds the gate then opened with centre growth only on neuron 722817260 at 128/128
-/// (5 rounds), and rounds forced on at 64/126 and 64/84 were all rejected; with the deepest-first
-/// seeds ([`seed_order`]) it opens on neither neuron at 64/126, 64/84 or 128/128.
-fn worth_a_round(labels: &[u32], k: usize, limits: Limits) -> bool {
-    let mut tris = vec![0u32; k];
-    for &l in labels {
-        tris[l as usize] += 1;
-    }
-    let light = tris
-        .iter()
-        .filter(|&&n| 2 * n <= limits.max_triangles)
-        .count();
-    3 * light >= k
-}
-
-/// Sum of hop distances to the medoids (the objective, unnormalised so it compares exactly).
-fn objective(distances: &[u32]) -> u64 {
-    distances.iter().map(|&d| d as u64).sum()
-}
-
-/// Step 4b: a cluster that shares no vertex with any other holds whole mesh pieces (a piece
-/// smaller than a meshlet: the neurons' 63 four-triangle markers), which [`merge_neighbours`]
-/// cannot see. Smallest first (then the lower id), each joins the cluster with the nearest
-/// centroid among those near it in Morton order whose union fits. The union is edge-connected
-/// wherever the mesh is: its pieces are the two clusters' pieces. Sequential, so deterministic.
-fn pack_pieces(mesh: &Mesh, vt: &Csr, limits: Limits, medoids: &mut Vec<u32>, labels: &mut [u32]) {
-    // How far along the Morton order a cluster looks for a partner (either side).
-    const WINDOW: usize = 32;
-    let k = medoids.len();
-    let mut isolated = vec![true; k];
-    for v in 0..vt.rows() {
-        let row = vt.row(v);
-        if let Some(&first) = row.first() {
-            let l = labels[first as usize];
-            if row.iter().any(|&t| labels[t as usize] != l) {
-                for &t in row {
-                    isolated[labels[t as usize] as usize] = false;
-                }
-            }
-        }
-    }
-    if !isolated.contains(&true) {
-        return;
-    }
-    let mem = members(labels, k);
-    let mut tris: Vec<usize> = (0..k).map(|c| mem.row(c).len()).collect();
-    // Distinct vertices, counted only for the clusters a test reads (few: most partners fail the
-    // triangle test), `usize::MAX` until then.
-    let mut verts = vec![usize::MAX; k];
-    let count_verts = |verts: &mut [usize], c: usize| {
-        if verts[c] == usize::MAX {
-            let mut v: Vec<u32> = mem
-                .row(c)
-                .iter()
-                .flat_map(|&t| mesh.triangle(t as usize))
-                .collect();
-            v.sort_unstable();
-            v.dedup();
-            verts[c] = v.len();
-        }
-    };
-    let mut centre: Vec<glam::Vec3> = (0..k)
-        .into_par_iter()
-        .map(|c| {
-            mem.row(c)
-                .iter()
-                .map(|&t| centroid(mesh, t))
-                .sum::<glam::Vec3>()
-                / mem.row(c).len() as f32
-        })
-        .collect();
-    let (lo, hi) = mesh.bounding_box();
-    let scale = (hi - lo).max_element().max(f32::MIN_POSITIVE);
-    let mut by_code: Vec<(u64, u32)> = (0..k as u32)
-        .map(|c| {
-            let q = ((centre[c as usize] - lo) / scale * 1023.0)
-                .clamp(glam::Vec3::ZERO, glam::Vec3::splat(1023.0));
-            (
-                super::kmedoids::morton3(q.x as u32, q.y as u32, q.z as u32),
-                c,
-            )
-        })
-        .collect();
-    by_code.sort_unstable();
-    let mut at = vec![0usize; k];
-    for (i, &(_, c)) in by_code.iter().enumerate() {
-        at[c as usize] = i;
-    }
-    let mut into: Vec<u32> = (0..k as u32).collect();
-    let mut order: Vec<u32> = (0..k as u32).filter(|&c| isolated[c as usize]).collect();
-    order.sort_unstable_by_key(|&c| (tris[c as usize], c));
-    for a in order {
-        let ai = a as usize;
-        let lo_i = at[ai].saturating_sub(WINDOW);
-        let hi_i = (at[ai] + WINDOW + 1).min(k);
-        count_verts(&mut verts, ai);
-        // The nearest centroid (then the lower id) among partners whose union fits; vertices are
-        // counted only for those that pass the triangle test.
-        let mut best: Option<(f32, u32)> = None;
-        for &(_, b) in &by_code[lo_i..hi_i] {
-            let bi = b as usize;
-            if b == a || into[bi] != b || tris[ai] + tris[bi] > limits.max_triangles as usize {
-                continue;
-            }
-            count_verts(&mut verts, bi);
-            if verts[ai] + verts[bi] > limits.max_vertices as usize {
-                continue;
-            }
-            let d = (centre[bi] - centre[ai]).length_squared();
-            if best.is_none_or(|(bd, bb)| d.total_cmp(&bd).then(b.cmp(&bb)).is_lt()) {
-                best = Some((d, b));
-            }
-        }
-        let best = best.map(|(_, b)| b);
-        if let Some(b) = best {
-            let bi = b as usize;
-            into[ai] = b;
-            centre[bi] = (centre[bi] * tris[bi] as f32 + centre[ai] * tris[ai] as f32)
-                / (tris[ai] + tris[bi]) as f32;
-            tris[bi] += tris[ai];
-            verts[bi] += verts[ai];
-        }
-    }
-    // `into` is one step deep: an isolated cluster that took others joins nobody afterwards only
-    // if it was processed first; follow the chain to be safe.
-    let find = |mut c: u32| {
-        while into[c as usize] != c {
-            c = into[c as usize];
-        }
-        c
-    };
-    let survivors: Vec<u32> = (0..k as u32).filter(|&c| into[c as usize] == c).collect();
-    if survivors.len() == k {
-        return;
-    }
-    let mut new_id = vec![u32::MAX; k];
-    for (i, &c) in survivors.iter().enumerate() {
-        new_id[c as usize] = i as u32;
-    }
-    for l in labels.iter_mut() {
-        *l = new_id[find(*l) as usize];
-    }
-    *medoids = survivors.iter().map(|&c| medoids[c as usize]).collect();
-}
-
-/// Medoids made exact (the paper's, in their final clusters), clusters numbered by ascending
-/// medoid, and in-cluster distances.
-fn finish(
-    dual: &Csr,
-    medoids: Vec<u32>,
-    mut labels: Vec<u32>,
-    medoids_of: &mut MedoidUpdate<'_>,
-) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
-    let (mut medoids, distances) = medoids_of(&labels, &medoids);
-    // Renumbering changes cluster ids, not a triangle's distance to its medoid.
-    renumber(&mut medoids, &mut labels);
-    let distances = distances.unwrap_or_else(|| {
-        let mut d = vec![0; labels.len()];
-        refresh_distances(dual, &medoids, &labels, &mut d);
-        d
-    });
-    (medoids, labels, distances)
-}
+/// Label of a triangle in no cluster yet.
+pub(crate) const FREE: u32 = NONE;
 
 /// The seed order: in each edge-connected piece (pieces by their lowest triangle id), the
 /// breadth-first order from that triangle, reversed, so the deepest free triangle seeds next.
@@ -376,7 +26,7 @@ fn finish(
 /// the most taken neighbours, else the next free one in Morton order); 1.045, 1.050, 1.051 with
 /// it. The dragon's run takes about 15 % longer (the breadth-first pass, and clusters grown
 /// further apart in memory).
-fn seed_order(dual: &Csr) -> Vec<u32> {
+pub(crate) fn seed_order(dual: &Csr) -> Vec<u32> {
     let n = dual.rows();
     let mut seen = vec![false; n];
     let mut order: Vec<u32> = Vec::with_capacity(n);
@@ -574,7 +224,7 @@ struct Orphans {
 }
 
 /// [`Orphans::region`] of a free triangle whose region is larger than an orphan.
-const OPEN: u32 = u32::MAX;
+const OPEN: u32 = NONE;
 
 impl Orphans {
     fn new(vertices: usize, triangles: usize) -> Self {
@@ -906,7 +556,7 @@ impl Orphans {
     }
 }
 
-fn centroid(mesh: &Mesh, t: u32) -> glam::Vec3 {
+pub(crate) fn centroid(mesh: &Mesh, t: u32) -> glam::Vec3 {
     mesh.triangle(t as usize)
         .iter()
         .map(|&v| mesh.position(v))
@@ -947,157 +597,11 @@ impl std::str::FromStr for Grow {
 /// the cluster grows, so a key is re-checked when it is popped and pushed back if it changed.
 type Key = (u8, u8, u32, u32, u32);
 
-/// Step 3: capacity-aware assignment. Level by level from all `medoids` at once, each cluster in
-/// ascending id takes the free neighbours of its last level (ascending) that fit its limits; so a
-/// triangle joins the nearest medoid with room, ties to the lower cluster. Triangles no cluster
-/// reaches with room stay free.
-pub fn assign_capacity(
-    mesh: &Mesh,
-    dual: &Csr,
-    limits: Limits,
-    medoids: &[u32],
-    labels: &mut [u32],
-) {
-    let (max_v, max_t) = (limits.max_vertices as usize, limits.max_triangles as usize);
-    let k = medoids.len();
-    let mut verts: Vec<Vec<u32>> = vec![Vec::with_capacity(max_v); k];
-    let mut count = vec![0usize; k];
-    let mut frontier: Vec<(u32, u32)> = Vec::new();
-    for (c, &m) in medoids.iter().enumerate() {
-        labels[m as usize] = c as u32;
-        count[c] = 1;
-        verts[c].extend(mesh.triangle(m as usize));
-        frontier.push((c as u32, m));
-    }
-    let mut candidates: Vec<(u32, u32)> = Vec::new();
-    while !frontier.is_empty() {
-        candidates.clear();
-        for &(c, t) in &frontier {
-            if count[c as usize] >= max_t {
-                continue;
-            }
-            for &n in dual.row(t as usize) {
-                if labels[n as usize] == FREE {
-                    candidates.push((c, n));
-                }
-            }
-        }
-        candidates.sort_unstable();
-        candidates.dedup();
-        frontier.clear();
-        for &(c, t) in &candidates {
-            let ci = c as usize;
-            if labels[t as usize] != FREE || count[ci] >= max_t {
-                continue;
-            }
-            let tri = mesh.triangle(t as usize);
-            let new = tri.iter().filter(|v| !verts[ci].contains(v)).count();
-            if verts[ci].len() + new > max_v {
-                continue;
-            }
-            for v in tri {
-                if !verts[ci].contains(&v) {
-                    verts[ci].push(v);
-                }
-            }
-            labels[t as usize] = c;
-            count[ci] += 1;
-            frontier.push((c, t));
-        }
-    }
-}
-
-/// Edge-connected pieces per cluster (test helper shared with the strategy tests).
-#[cfg(test)]
-fn pieces_per_cluster(dual: &Csr, labels: &[u32], k: usize) -> Vec<usize> {
-    let mem = members(labels, k);
-    (0..k)
-        .map(|c| {
-            let m = mem.row(c);
-            let sub = LocalGraph::new(dual, labels, c as u32, m);
-            let mut seen = vec![false; m.len()];
-            let mut n = 0;
-            for s in 0..m.len() {
-                if seen[s] {
-                    continue;
-                }
-                n += 1;
-                let mut stack = vec![s];
-                seen[s] = true;
-                while let Some(u) = stack.pop() {
-                    for &v in sub.row(u) {
-                        if !seen[v as usize] {
-                            seen[v as usize] = true;
-                            stack.push(v as usize);
-                        }
-                    }
-                }
-            }
-            n
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::adjacency::{dual_graph, vertex_triangles};
+    use crate::adjacency::{cluster_pieces, dual_graph, vertex_triangles};
     use crate::mesh::generate;
-    use crate::meshlet::{validate, MeshletBuilder};
-
-    #[test]
-    fn clusters_fit_are_connected_and_do_not_depend_on_threads() {
-        let meshes = [
-            generate::knot_tube(120, 12, 3),
-            generate::terrain(24, 5),
-            generate::cad_part(128, 1),
-        ];
-        for m in &meshes {
-            for (limits, grow) in [
-                (Limits::new(64, 126).unwrap(), Grow::Centre),
-                (Limits::new(32, 40).unwrap(), Grow::Centre),
-                (Limits::new(64, 126).unwrap(), Grow::Hops),
-            ] {
-                let vt = vertex_triangles(m);
-                let dual = dual_graph(m, &vt);
-                let a = crate::test_pool(1).install(|| cluster(m, &dual, &vt, limits, grow, 4));
-                let b = crate::test_pool(4).install(|| cluster(m, &dual, &vt, limits, grow, 4));
-                assert_eq!(
-                    (&a.medoids, &a.labels, &a.distances),
-                    (&b.medoids, &b.labels, &b.distances)
-                );
-                assert!(a
-                    .labels
-                    .iter()
-                    .all(|&l| l != UNREACHED && (l as usize) < a.medoids.len()));
-                // Every cluster fits the limits: one meshlet each.
-                let mem = members(&a.labels, a.medoids.len());
-                let mut builder = MeshletBuilder::new(m.vertex_count(), limits);
-                for c in 0..a.medoids.len() {
-                    for &t in mem.row(c) {
-                        assert!(
-                            builder.fits(m.triangle(t as usize)),
-                            "cluster {c} overflows"
-                        );
-                        builder.push(m.triangle(t as usize));
-                    }
-                    builder.flush();
-                }
-                let out = builder.finish();
-                validate(m, &out, limits).unwrap();
-                assert_eq!(out.len(), a.medoids.len());
-                // These meshes are one edge-connected piece, so every cluster is one piece too.
-                assert!(pieces_per_cluster(&dual, &a.labels, a.medoids.len())
-                    .iter()
-                    .all(|&p| p == 1));
-                // Medoids are members, at distance 0.
-                for (c, &md) in a.medoids.iter().enumerate() {
-                    assert_eq!(a.labels[md as usize], c as u32);
-                    assert_eq!(a.distances[md as usize], 0);
-                }
-            }
-        }
-    }
 
     #[test]
     fn a_full_cluster_takes_the_hole_it_encloses_and_gives_back_its_last_triangle() {
@@ -1169,10 +673,7 @@ mod tests {
             .filter(|&t| labels[t as usize] == c)
             .collect();
         assert_eq!(members.len(), 126);
-        assert_eq!(
-            pieces_per_cluster(&dual, &labels_only(&labels, c), 1),
-            vec![1]
-        );
+        assert_eq!(one_piece(&dual, &labels, c), (1, 1));
         // The same with the vertex limit binding: the ball holds exactly the limit, and the
         // orphan (the first triangle after the ball with a vertex outside it) adds a vertex.
         let ball = &order[..126];
@@ -1209,10 +710,7 @@ mod tests {
             now.len()
         );
         assert_eq!(grown.len(), 127 - shed.len());
-        assert_eq!(
-            pieces_per_cluster(&dual, &labels_only(&labels, c), 1),
-            vec![1]
-        );
+        assert_eq!(one_piece(&dual, &labels, c), (1, 1));
     }
 
     /// The terrain test mesh, its dual graph, and 200 triangles in breadth-first order from
@@ -1251,51 +749,9 @@ mod tests {
         (labels, ball.to_vec())
     }
 
-    /// `labels` with cluster `c` as 0 and every other triangle as `UNREACHED` (one cluster to
-    /// count pieces of).
-    fn labels_only(labels: &[u32], c: u32) -> Vec<u32> {
-        labels
-            .iter()
-            .map(|&l| if l == c { 0 } else { UNREACHED })
-            .collect()
-    }
-
-    #[test]
-    fn rounds_run_only_where_a_third_of_the_clusters_are_light() {
-        let limits = Limits::new(64, 126).unwrap();
-        let labels = |sizes: &[usize]| -> Vec<u32> {
-            sizes
-                .iter()
-                .enumerate()
-                .flat_map(|(c, &n)| std::iter::repeat_n(c as u32, n))
-                .collect()
-        };
-        // 63 triangles is light (at most half of 126), 64 is not.
-        assert!(worth_a_round(&labels(&[63, 64, 126]), 3, limits));
-        assert!(!worth_a_round(&labels(&[63, 64, 64, 126]), 4, limits));
-        assert!(worth_a_round(&labels(&[1, 2, 64, 64, 126]), 5, limits));
-        // A closed surface grows nearly full clusters: no round runs.
-        let m = generate::noisy_sphere(4, 0.2, 7);
-        let vt = vertex_triangles(&m);
-        let dual = dual_graph(&m, &vt);
-        assert_eq!(
-            cluster(&m, &dual, &vt, limits, Grow::Centre, 16).iterations,
-            0
-        );
-        // A tube of three-vertex rings fills 32 vertices with about 60 triangles, so every
-        // cluster is light at 32/126: rounds run, and the result is the same on any thread count.
-        let m = generate::knot_tube(400, 3, 5);
-        let vt = vertex_triangles(&m);
-        let dual = dual_graph(&m, &vt);
-        let limits = Limits::new(32, 126).unwrap();
-        let run = |threads| {
-            crate::test_pool(threads).install(|| cluster(&m, &dual, &vt, limits, Grow::Centre, 16))
-        };
-        let (a, b) = (run(1), run(3));
-        assert!(a.iterations > 0);
-        assert_eq!(
-            (&a.medoids, &a.labels, &a.distances, a.iterations),
-            (&b.medoids, &b.labels, &b.distances, b.iterations)
-        );
+    /// Cluster `c`'s (own pieces, mesh pieces), every other triangle counted as a second cluster.
+    fn one_piece(dual: &Csr, labels: &[u32], c: u32) -> (usize, usize) {
+        let two: Vec<u32> = labels.iter().map(|&l| (l != c) as u32).collect();
+        cluster_pieces(dual, &two, 2)[0]
     }
 }
