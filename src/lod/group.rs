@@ -83,11 +83,11 @@ pub(crate) fn kmedoids(vertices: usize, clusters: &[Cluster], size: usize) -> Ve
     let scale = (0..3)
         .map(|a| hi[a] - lo[a])
         .fold(f32::MIN_POSITIVE, f32::max);
-    let q = |c: &Cluster, a: usize| ((c.bounds.center[a] - lo[a]) / scale * 2_097_151.0) as u64;
+    let q = |c: &Cluster, a: usize| ((c.bounds.center[a] - lo[a]) / scale * 2_097_151.0) as u32;
     let mut order: Vec<(u64, usize)> = clusters
         .iter()
         .enumerate()
-        .map(|(i, c)| (super::morton(q(c, 0), q(c, 1), q(c, 2)), i))
+        .map(|(i, c)| (crate::common::morton3(q(c, 0), q(c, 1), q(c, 2)), i))
         .collect();
     order.sort_unstable();
     let k = n.div_ceil(size.max(1));

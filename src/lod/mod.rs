@@ -549,7 +549,7 @@ fn level_zero(mesh: &Mesh, strategy: &dyn Strategy, limits: Limits, chunk: usize
             let [a, b, c] = mesh.triangle(t as usize);
             let p = |v: u32| glam::Vec3::from_array(mesh.positions[v as usize]);
             let q = ((p(a) + p(b) + p(c)) / 3.0 - lo) / scale * 2_097_151.0;
-            (morton(q.x as u64, q.y as u64, q.z as u64), t)
+            (crate::common::morton3(q.x as u32, q.y as u32, q.z as u32), t)
         })
         .collect();
     order.par_sort_unstable();
@@ -571,19 +571,6 @@ fn level_zero(mesh: &Mesh, strategy: &dyn Strategy, limits: Limits, chunk: usize
         push_meshlet(&mut ml, m);
     }
     ml
-}
-
-/// Interleaves the low 21 bits of x, y and z.
-fn morton(x: u64, y: u64, z: u64) -> u64 {
-    fn spread(mut v: u64) -> u64 {
-        v &= 0x1f_ffff;
-        v = (v | v << 32) & 0x1f_0000_0000_ffff;
-        v = (v | v << 16) & 0x1f_0000_ff00_00ff;
-        v = (v | v << 8) & 0x100f_00f0_0f00_f00f;
-        v = (v | v << 4) & 0x10c3_0c30_c30c_30c3;
-        (v | v << 2) & 0x1249_2492_4924_9249
-    }
-    spread(x) | spread(y) << 1 | spread(z) << 2
 }
 
 /// Appends one meshlet made by [`local_meshlet`].
