@@ -82,5 +82,30 @@ fn main() {
         println!(
             "cargo:warning=glslangValidator not found: the mesh-shader render pass is disabled (run `make setup`)"
         );
+        watch_for_compiler();
+    } else if let Some(found) = find_in_path("glslangValidator") {
+        // A new compiler version recompiles the shaders.
+        println!("cargo:rerun-if-changed={}", found.display());
     }
+}
+
+/// Without the compiler the shader files are empty placeholders, and nothing in the crate changes
+/// when `make setup` installs it later, so cargo would keep the broken build. Installing a program
+/// adds an entry to a directory on PATH, which changes that directory's modification time: watching
+/// every PATH directory reruns this script (and compiles the shaders) on the first build after the
+/// compiler appears, with no file touched by hand. Watched only while the compiler is missing.
+fn watch_for_compiler() {
+    println!("cargo:rerun-if-env-changed=PATH");
+    for dir in std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default()) {
+        if dir.is_dir() {
+            println!("cargo:rerun-if-changed={}", dir.display());
+        }
+    }
+}
+
+/// The first `name` on PATH, as the shell would run it.
+fn find_in_path(name: &str) -> Option<PathBuf> {
+    std::env::split_paths(&std::env::var_os("PATH")?)
+        .map(|dir| dir.join(name))
+        .find(|p| p.is_file())
 }

@@ -3,25 +3,51 @@
 //!
 //! # Building meshlets
 //!
-//! **In:** a [`mesh::Mesh`]: f32 positions and a u32 triangle list, counter-clockwise. Load one
-//! from a file with [`mesh::load`] (PLY, OBJ, glTF/GLB, optionally zstd-compressed) or hand over
-//! the arrays an engine holds with [`mesh::Mesh::from_slices`] / [`mesh::Mesh::from_strided`];
-//! every constructor validates (finite positions, indices in range, at least one triangle) and
-//! returns a typed [`mesh::MeshError`] that names the source.
+//! **In:** a [`mesh::Mesh`]: positions only (f32 x 3) and a u32 triangle list, counter-clockwise;
+//! normals, UVs and other attributes are not read (a strategy that wants normals computes them from
+//! the triangles, and an engine keeps its own vertex attributes, which the meshlets index). Load one
+//! from a file with [`mesh::load`] (PLY, OBJ, glTF/GLB, STL, optionally zstd-compressed) or hand
+//! over the arrays an engine holds with [`mesh::Mesh::from_slices`] /
+//! [`mesh::Mesh::from_strided`]; every constructor validates (finite positions, indices in range,
+//! at least one triangle) and returns a typed [`mesh::MeshError`] that names the source.
 //!
 //! **Out:** [`meshlet::Meshlets`], flat arrays as a mesh shader reads them: per meshlet a
 //! [`meshlet::Meshlet`] (offsets and counts), the global vertex indices it uses, and three u8
 //! local corners per triangle. Every triangle lands in exactly one meshlet;
-//! [`meshlet::validate`] checks that and the limits. Bounds (sphere, normal cone) come from
-//! [`meshlet::bounds::compute_bounds`], quality figures from [`meshlet::Metrics`].
+//! [`meshlet::validate`] checks that and the limits.
 //!
-//! **Strategies** are chosen by type ([`strategy::Kind`]) or by name ([`strategy::by_name`]):
-//! meshoptimizer 1.3's builders (the peer), the JCGT paper's greedy, bounding-sphere and
-//! k-medoids strategies, ours (`compact`, `qem`, the parallel grower) and `+refine`, which
-//! refines any of them to fewer meshlets.
+//! **Limits:** at most 256 vertices and 256 triangles per meshlet ([`meshlet::Limits`]; a typed
+//! [`meshlet::LimitsError`] otherwise); meshes up to u32 indices. `laced-wires` compression takes
+//! at most 64 vertices per meshlet.
 //!
-//! **Limits:** at most 256 vertices and 256 triangles per meshlet ([`meshlet::Limits`]); meshes
-//! up to u32 indices. `laced-wires` compression takes at most 64 vertices per meshlet.
+//! # Which strategy
+//!
+//! Chosen by type ([`strategy::Kind`]) or by name ([`strategy::by_name`]); the measured trade-offs
+//! are in `results/strategies.md` and `results/kmedoids.md` (`meshletlab bench build`,
+//! `meshletlab bench kmedoids`).
+//!
+//! | need | strategy | what it costs |
+//! |---|---|---|
+//! | speed, the usual choice | [`Kind::Meshopt`](strategy::Kind::Meshopt) (`meshopt`, meshoptimizer 1.3) | the reference point |
+//! | fewest meshlets at interactive build times | [`Kind::Partition`](strategy::Kind::Partition) (`partition`): meshoptimizer's meshlets re-partitioned and packed | a few times meshoptimizer's time |
+//! | smallest spheres at meshoptimizer's count | [`Kind::Kmedoids`](strategy::Kind::Kmedoids) (`kmedoids`, capacity-aware k-medoids) | about meshoptimizer's time |
+//! | fewest meshlets, offline | `meshopt+refine` or `meshopt+refine-max` ([`strategy::Kind::refined`]) | tens of times meshoptimizer's time |
+//! | clustering on the GPU | `kmedoids-flat` (every step a kernel, `gpu::kmedoids::cluster_flat`) | more meshlets |
+//! | the JCGT paper's strategies, for comparison | `greedy`, `bsphere`, `kmedoids-paper`, `nvidia` | |
+//!
+//! # After building
+//!
+//! - **Order**: [`meshlet::order::optimize_triangle_order`] reorders triangles inside each meshlet
+//!   for vertex reuse, [`meshlet::order::order_meshlets`] orders the meshlets (or ask for both
+//!   through [`strategy::Options`] and [`strategy::with_order`]).
+//! - **Bounds** for culling: [`meshlet::bounds::compute_bounds`] (sphere and normal cone per
+//!   meshlet); quality figures from [`meshlet::Metrics`].
+//! - **Upload**: [`meshlet::descriptor::pack`] packs the meshlets in one of the four descriptor
+//!   layouts the mesh-shader pass reads ([`meshlet::descriptor::Format`]: split task and mesh
+//!   descriptors, NVIDIA's two 128-bit layouts, or self-contained blocks); the GLSL that reads
+//!   them is `glsl/descriptors.glsl`. [`compress`] encodes them smaller.
+//! - **Level of detail**: [`lod::build`] makes the cluster-LOD DAG and [`lod::select`] the cut
+//!   for a view (below).
 //!
 //! **Determinism:** every strategy, the LOD build and every codec give the same bytes for the same
 //! input on every run and any thread count (rayon parallelises some steps; results never depend
@@ -38,22 +64,41 @@
 //! let mesh = Mesh::from_slices(&positions, &indices, "quad")?;
 //!
 //! let limits = Limits::new(64, 126)?; // the JCGT paper's setting
-//! let meshlets = Kind::Meshopt.strategy(&Options::default()).build(&mesh, limits);
+//! let meshlets = Kind::Partition.strategy(&Options::default()).build(&mesh, limits);
 //! validate(&mesh, &meshlets, limits)?;
 //! assert_eq!(meshlets.len(), 1);
 //! assert_eq!(meshlets.triangle_count(), 2);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
-//! More in `examples/`: writing a meshlet file, an LOD DAG and a cut for a camera, laced-wire
-//! compression, and k-medoids on the GPU beside the CPU.
+//! A level-of-detail DAG and the cut a camera needs, at a one-pixel error threshold:
+//!
+//! ```
+//! use meshletlab::lod::{self, select};
+//! use meshletlab::meshlet::Limits;
+//! use meshletlab::strategy::{Kind, Options};
+//!
+//! let mesh = meshletlab::mesh::generate::noisy_sphere(3, 0.2, 1);
+//! let strategy = Kind::Meshopt.strategy(&Options::default());
+//! let dag = lod::build(&mesh, strategy.as_ref(), Limits::DEFAULT, &lod::Config::default());
+//! // 1080 pixels high, 60 degrees vertical field of view, a one-pixel error, from 10 units away.
+//! let view = select::View::new(glam::Vec3::new(0.0, 0.0, 10.0), 1080.0, 60f32.to_radians(), 1.0);
+//! let cut = select::select(&dag, &view, 0);
+//! select::check_cut(&dag, &cut, 0)?; // one meshlet on every path: no crack, no overlap
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! More in `examples/`: writing a meshlet file, an LOD DAG and its cuts for several cameras,
+//! laced-wire compression, and k-medoids on the GPU beside the CPU.
 //!
 //! # Modules
 //!
-//! Data flows one way: [`mesh`] (load, validate, generate) -> [`adjacency`] -> [`strategy`] ->
-//! [`meshlet`] (model, validator, bounds, metrics, files) -> [`lod`] / [`compress`] -> `gpu` /
-//! `render` -> `bench` results; `fuzz` feeds mutated files to every reader. [`atomic`] writes
-//! every output file through a temporary file.
+//! Data flows one way, and no module imports one later in this list: [`common`] (shared helpers)
+//! -> [`mesh`] (load, validate, generate, edges) -> [`adjacency`] (dual graph) -> [`meshlet`]
+//! (model, validator, bounds, metrics, order, files) -> [`strategy`] -> [`lod`] / [`compress`] ->
+//! `gpu` / `render` -> `bench` results and the `cli`; `fuzz` feeds mutated files to every reader.
+//! [`atomic`] writes every output file through a temporary file. Background on the methods is in
+//! `docs/`.
 //!
 //! # Cargo features
 //!

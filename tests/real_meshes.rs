@@ -58,7 +58,7 @@ fn every_strategy_validates_on_every_mesh_and_preset() {
         .iter()
         .map(|n| strategy::by_name(n, &opts).unwrap())
         .collect();
-    // `partition` (issue 33) also at 128/128, the count preset that PRESETS lacks; there and
+    // `partition` also at 128/128, the count preset that PRESETS lacks; there and
     // everywhere it never has more meshlets than `meshopt`, its input.
     let count_only = [Limits::COUNT_PRESETS[2]];
     for f in common::mesh_files() {

@@ -23,7 +23,7 @@ fn every_strategy_validates_on_every_stress_mesh_and_preset() {
             "kmedoids+refine-fast".to_string(),
         ])
         .collect();
-    // `partition` (issue 33) also at 128/128, the count preset that PRESETS lacks.
+    // `partition` also at 128/128, the count preset that PRESETS lacks.
     let count_only = [Limits::COUNT_PRESETS[2]];
     for g in stress_set(3) {
         for limits in Limits::PRESETS.iter().chain(&count_only).copied() {

@@ -619,7 +619,7 @@ fn write_presets(s: &mut String, rows: &[Row], preset_rows: &[Row], cfg: &Config
     );
     let _ = writeln!(
         s,
-        "The goal (issue 33): `partition` with fewer meshlets than every meshoptimizer builder on every mesh at \
+        "The goal: `partition` with fewer meshlets than every meshoptimizer builder on every mesh at \
          each preset (a tie where the best builder already sits at the hard bound counts as met), with mean radius \
          and cone cullability no worse than `meshopt`'s, at no more than 3x its build time. The refinements are \
          kept for the record. hard bound = ceil(triangles / max triangles): no partition has fewer meshlets. \

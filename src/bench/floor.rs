@@ -1,4 +1,4 @@
-//! The physical limit of each GPU kernel (issue 32, item 5), for `bench gpu`: the bytes a kernel
+//! The physical limit of each GPU kernel (background: `docs/gpu-clustering.md`), for `bench gpu`: the bytes a kernel
 //! must read and write, the floor this machine's measured bandwidth puts under its time, and its
 //! time over that floor; the same floor at an H100's bandwidth, as a projection.
 //!

@@ -698,7 +698,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         cfg.one_thread_max
     );
     let _ = writeln!(s, "{}\n", runs_table().markdown(&runs));
-    let _ = writeln!(s, "## Targets (issue 32), `kmedoids` per mesh\n");
+    let _ = writeln!(s, "## Targets, `kmedoids` per mesh\n");
     let _ = writeln!(
         s,
         "Ratios within the run above. Mean hops rise with cluster size, so fewer, fuller clusters than the flat \

@@ -11,7 +11,7 @@ use std::path::PathBuf;
 pub struct BuildArgs {
     /// Mesh file.
     mesh: PathBuf,
-    /// Strategy name.
+    /// Strategy name (`meshletlab --help` lists them, e.g. meshopt, kmedoids, partition).
     #[arg(short, long)]
     strategy: String,
     /// Output file.

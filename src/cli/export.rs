@@ -10,7 +10,7 @@ use std::path::PathBuf;
 pub struct ExportArgs {
     /// Mesh file.
     mesh: PathBuf,
-    /// Strategy name.
+    /// Strategy name (`meshletlab --help` lists them, e.g. meshopt, kmedoids, partition).
     #[arg(short, long, default_value = "meshopt")]
     strategy: String,
     /// Output .glb file.

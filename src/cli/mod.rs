@@ -27,17 +27,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 /// Build, measure and compare meshlets (triangle clusters for GPU mesh shaders).
-///
-/// Meshes: PLY (ASCII/binary), OBJ, glTF 2.0 (.gltf/.glb), each optionally zstd-compressed (.zst);
-/// `gen:NAME` generates one instead (cad-part-128, cad-part-400, strut-lattice, terrain-80: the
-/// stress meshes; noisy-sphere, knot-tube, terrain). Strategies: nvidia, nvidia+tipsify, greedy,
-/// bsphere, bsphere-coherent, bsphere-parallel, kmedoids (capacity-aware), kmedoids-flat, kmedoids-paper,
-/// kmedoids-local, compact, meshopt, meshopt-scan, meshopt-spatial, qem ("all" = all but the slow kmedoids-paper); any of
-/// them followed by "+refine" (e.g. meshopt+refine) refines its output to fewer meshlets
-/// ("+refine-fast": one cheap round; "+refine-max": with simulated annealing, the fewest).
-/// Limits are VERTICES/TRIANGLES per meshlet; default 64/126 (the JCGT paper's).
 #[derive(Parser, Debug)]
-#[command(name = "meshletlab", version, about, long_about)]
+#[command(name = "meshletlab", version, about, long_about = long_about())]
 pub struct Cli {
     /// No progress bars.
     #[arg(short, long, global = true)]
@@ -148,9 +139,10 @@ pub enum Command {
     /// monotonic errors and bounds, and one meshlet per DAG path for random views and every
     /// streaming prefix (exit 1 on any violation).
     LodCheck(lod_check::LodCheckArgs),
-    /// Encodes MESH's meshlets in a compressed format (now: meshoptimizer's meshlet codec with
-    /// anchored positions) within a position tolerance, checks every meshlet decodes back, and
-    /// writes the file; prints bytes per triangle by part and the largest error.
+    /// Encodes MESH's meshlets in a compressed format (`--format`: meshoptimizer's meshlet codec,
+    /// laced wires, or the paper's comparison formats) within a position tolerance, checks every
+    /// meshlet decodes back, and writes the file; prints bytes per triangle by part and the
+    /// largest error.
     Compress(compress::CompressArgs),
     /// Benchmarks that write results/.
     #[command(subcommand)]
@@ -158,6 +150,35 @@ pub enum Command {
     /// Internal: runs fuzz cases for `bench robustness` in a child process.
     #[command(hide = true)]
     FuzzWorker(fuzz_worker::FuzzWorkerArgs),
+}
+
+/// The top-level `--help` text. The strategy and generated-mesh lists are read from their tables
+/// (`strategy::Kind::ALL`, `mesh::generate::NAMES`), so a new entry shows up here by itself.
+fn long_about() -> String {
+    use std::fmt::Write as _;
+    let opts = Options::default();
+    let mut s = format!(
+        "Build, measure and compare meshlets (triangle clusters for GPU mesh shaders).\n\n\
+         Meshes: PLY (ASCII/binary), OBJ, glTF 2.0 (.gltf/.glb), STL (ASCII/binary), each optionally \
+         zstd-compressed (.zst); `gen:NAME` generates one instead ({}; the first {} are the stress \
+         meshes).\n\nStrategies (-s NAME):\n",
+        mesh::generate::NAMES.join(", "),
+        mesh::generate::STRESS_NAMES.len()
+    );
+    for k in strategy::Kind::ALL {
+        let _ = writeln!(s, "  {:<17} {}", k.name(), k.strategy(&opts).summary());
+    }
+    let _ = write!(
+        s,
+        "  {:<17} every strategy above but the slow ones ({})\n\n\
+         Any of them followed by +refine (e.g. meshopt+refine) refines its output to fewer meshlets \
+         (+refine-fast: one cheap round; +refine-max: with simulated annealing, the fewest), or by \
+         +partition (e.g. greedy+partition) re-partitions it as `partition` re-partitions meshopt's.\n\n\
+         Limits are VERTICES/TRIANGLES per meshlet; default 64/126 (the JCGT paper's).",
+        "all",
+        strategy::SLOW.join(", ")
+    );
+    s
 }
 
 /// The default folder of real test meshes.

@@ -14,7 +14,7 @@ use std::path::PathBuf;
 pub struct RenderArgs {
     /// Mesh file.
     mesh: PathBuf,
-    /// Strategy name.
+    /// Strategy name (`meshletlab --help` lists them, e.g. meshopt, kmedoids, partition).
     #[arg(short, long, default_value = "meshopt")]
     strategy: String,
     /// Views (random directions around the mesh, the paper's protocol).

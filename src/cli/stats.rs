@@ -12,7 +12,7 @@ use std::path::PathBuf;
 pub struct StatsArgs {
     /// Mesh file.
     mesh: PathBuf,
-    /// Strategy name, a comma-separated list, or "all".
+    /// Strategy name (`meshletlab --help` lists them), a comma-separated list, or "all".
     #[arg(short, long, default_value = "all")]
     strategy: String,
     /// Builds per strategy; the time column is their median.

@@ -1,5 +1,5 @@
 //! The memory-bandwidth probe (`wgsl/copy.wgsl`): a copy kernel whose bytes moved over its time
-//! is the device's bandwidth, the floor `bench gpu` puts under every kernel (issue 32, item 5).
+//! is the device's bandwidth, the floor `bench gpu` puts under every kernel (`docs/gpu-clustering.md`).
 
 use super::{binding_set, param_block, wgsl, Batch, Gpu, GpuError, Kernels};
 

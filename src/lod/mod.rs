@@ -549,7 +549,10 @@ fn level_zero(mesh: &Mesh, strategy: &dyn Strategy, limits: Limits, chunk: usize
             let [a, b, c] = mesh.triangle(t as usize);
             let p = |v: u32| glam::Vec3::from_array(mesh.positions[v as usize]);
             let q = ((p(a) + p(b) + p(c)) / 3.0 - lo) / scale * 2_097_151.0;
-            (crate::common::morton3(q.x as u32, q.y as u32, q.z as u32), t)
+            (
+                crate::common::morton3(q.x as u32, q.y as u32, q.z as u32),
+                t,
+            )
         })
         .collect();
     order.par_sort_unstable();

@@ -153,17 +153,14 @@ impl Limits {
         (triangles as f64 / per).ceil() as usize
     }
 
-    /// Checked constructor.
-    pub fn new(max_vertices: u32, max_triangles: u32) -> Result<Self, String> {
+    /// Checked constructor: at least 3 vertices and 1 triangle, at most 256 of each (a meshlet's
+    /// corners are u8).
+    pub fn new(max_vertices: u32, max_triangles: u32) -> Result<Self, LimitsError> {
         if !(3..=256).contains(&max_vertices) {
-            return Err(format!(
-                "max vertices must be in 3..=256, got {max_vertices}"
-            ));
+            return Err(LimitsError::Vertices(max_vertices));
         }
         if !(1..=256).contains(&max_triangles) {
-            return Err(format!(
-                "max triangles must be in 1..=256, got {max_triangles}"
-            ));
+            return Err(LimitsError::Triangles(max_triangles));
         }
         Ok(Self {
             max_vertices,
@@ -184,21 +181,41 @@ impl fmt::Display for Limits {
     }
 }
 
+/// Why [`Limits::new`] or parsing `VERTICES/TRIANGLES` refused.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum LimitsError {
+    /// The vertex limit is outside 3..=256.
+    #[error("max vertices must be in 3..=256, got {0}")]
+    Vertices(u32),
+    /// The triangle limit is outside 1..=256.
+    #[error("max triangles must be in 1..=256, got {0}")]
+    Triangles(u32),
+    /// The text has no `/` between the two counts.
+    #[error("limits '{0}' must look like 64/126")]
+    Syntax(String),
+    /// The part before the `/` is not a number.
+    #[error("'{0}' is not a vertex count")]
+    VertexCount(String),
+    /// The part after the `/` is not a number.
+    #[error("'{0}' is not a triangle count")]
+    TriangleCount(String),
+}
+
 impl FromStr for Limits {
-    type Err = String;
+    type Err = LimitsError;
     /// Parses `VERTICES/TRIANGLES`, e.g. `64/126`.
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, LimitsError> {
         let (v, t) = s
             .split_once('/')
-            .ok_or_else(|| format!("limits '{s}' must look like 64/126"))?;
+            .ok_or_else(|| LimitsError::Syntax(s.to_string()))?;
         let v = v
             .trim()
             .parse()
-            .map_err(|_| format!("'{v}' is not a vertex count"))?;
+            .map_err(|_| LimitsError::VertexCount(v.to_string()))?;
         let t = t
             .trim()
             .parse()
-            .map_err(|_| format!("'{t}' is not a triangle count"))?;
+            .map_err(|_| LimitsError::TriangleCount(t.to_string()))?;
         Self::new(v, t)
     }
 }

@@ -1,5 +1,18 @@
-//! Meshlet strategies: each splits a mesh into meshlets under [`Limits`]. One file per strategy;
-//! all are selected by name through [`by_name`], and every output goes through the validator in tests.
+//! Meshlet strategies: each splits a mesh into meshlets under [`Limits`]. One file or folder per
+//! strategy family; all are selected by type ([`Kind`]) or by name ([`by_name`]), and every output
+//! goes through the validator in tests.
+//!
+//! | family | names | file | GPU kernel (driver, shader) |
+//! |---|---|---|---|
+//! | the JCGT paper's greedy | `greedy`, `greedy-paper` | `greedy.rs` | |
+//! | the paper's bounding sphere | `bsphere`, `bsphere-paper`, `bsphere-coherent` | `bsphere.rs` | |
+//! | many bsphere meshlets grown at once | `bsphere-parallel` | [`grow`] | `gpu/grow.rs`, `wgsl/grow.wgsl` |
+//! | k-medoids | `kmedoids`, `kmedoids-flat`, `kmedoids-paper` | [`kmedoids`] (a folder: one file per step) | `gpu/kmedoids.rs`, `gpu/capacity.rs`; `wgsl/{assign,update,split,capacity}.wgsl` |
+//! | NVIDIA's scan | `nvidia`, `nvidia+tipsify` | `nvidia.rs` (tipsify: `mesh::tipsify`) | |
+//! | ours: compact, QEM merging | `compact`, `qem` | `compact.rs`, [`qem`] | |
+//! | meshoptimizer 1.3 (the peer) | `meshopt`, `meshopt-scan`, `meshopt-spatial` | `meshopt.rs` | |
+//! | refinement of any strategy's output | `S+refine`, `S+refine-fast`, `S+refine-max` | [`refine`] | |
+//! | re-partition of any strategy's output | `partition`, `S+partition` | [`partition`] (inside `refine/`, whose state it edits) | |
 //!
 //! Determinism: every strategy gives the same meshlets for the same input on every run and thread
 //! count.

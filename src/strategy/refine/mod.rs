@@ -6,7 +6,7 @@
 //! bounding radius that one move can update exactly) and, weighted lower, the normal (for
 //! cone culling). Background: a disc-shaped patch with V vertices, B of them on its boundary,
 //! holds 2V - B - 2 triangles, so at a vertex limit only shorter boundaries make room
-//! (`../shared/notes/meshlet-count-bound.md`; the bounds are in results/strategies.md).
+//! (`docs/meshlet-count-bound.md`; the bounds are in results/strategies.md).
 //!
 //! The state is a partition (a meshlet label per triangle, counts per meshlet, a move journal;
 //! how often a meshlet uses a vertex is counted on the fly from the vertex -> triangle rows), kept
