@@ -3,7 +3,20 @@
 //!
 //! Every kernel has a CPU reference elsewhere in the crate over the same flat arrays (CSR offsets
 //! and items, u32 labels), so parity is a direct comparison (`tests/gpu_parity.rs`,
-//! `meshletlab parity`). Kernels run on any Vulkan adapter; on a machine without a GPU that is
+//! `meshletlab parity`). Driver, shader and CPU reference share a name wherever they can:
+//!
+//! | driver | shader (`wgsl/`) | CPU reference |
+//! |---|---|---|
+//! | [`adjacency`] | `adjacency.wgsl` | `crate::adjacency` (and `mesh::edges`) |
+//! | [`kmedoids`] (`cluster_flat`, `cluster_capacity`) | `assign.wgsl`, `update.wgsl`, `split.wgsl` | `strategy::kmedoids::{assign, update, split}`, driven as `strategy::kmedoids::flat` |
+//! | [`capacity`] | `capacity.wgsl` | `strategy::kmedoids::capacity::assign_capacity` |
+//! | [`grow`] | `grow.wgsl` | `strategy::grow` (`bsphere-parallel`) |
+//! | [`bounds`] | `bounds.wgsl` | [`bounds::sphere_f32`], checked against `meshlet::bounds` |
+//! | [`select`] | `select.wgsl` | `lod::select` |
+//! | `scan` | `scan.wgsl` | a prefix sum (used by the others) |
+//! | [`copy`] | `copy.wgsl` | none: the bandwidth probe of `bench gpu` |
+//!
+//! Why integer keys and exactly rounded arithmetic make the parity exact: `docs/gpu-clustering.md`. Kernels run on any Vulkan adapter; on a machine without a GPU that is
 //! Mesa's lavapipe, which the project's setup installs.
 //!
 //! Buffers: lavapipe binds at most 128 MiB per storage binding, so arrays that can exceed it

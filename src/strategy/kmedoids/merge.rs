@@ -280,14 +280,8 @@ pub(crate) fn pack_pieces(
     let mut verts = vec![usize::MAX; k];
     let count_verts = |verts: &mut [usize], c: usize| {
         if verts[c] == usize::MAX {
-            let mut v: Vec<u32> = mem
-                .row(c)
-                .iter()
-                .flat_map(|&t| mesh.triangle(t as usize))
-                .collect();
-            v.sort_unstable();
-            v.dedup();
-            verts[c] = v.len();
+            let v = mem.row(c).iter().flat_map(|&t| mesh.triangle(t as usize));
+            verts[c] = sorted(v.collect()).len();
         }
     };
     let mut centre: Vec<glam::Vec3> = (0..k)

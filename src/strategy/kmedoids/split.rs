@@ -3,6 +3,7 @@
 //! its second medoid.
 
 use super::assign::{members, UNREACHED};
+use crate::common::sorted;
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
 use rayon::prelude::*;
@@ -28,10 +29,7 @@ pub fn overflowing(mesh: &Mesh, labels: &[u32], k: usize, limits: Limits) -> Vec
             if m.len() > limits.max_triangles as usize {
                 return 0;
             }
-            let mut v: Vec<u32> = m.iter().flat_map(|&t| mesh.triangle(t as usize)).collect();
-            v.sort_unstable();
-            v.dedup();
-            v.len() as u32
+            sorted(m.iter().flat_map(|&t| mesh.triangle(t as usize)).collect()).len() as u32
         })
         .collect();
     overflowing_from_counts(&triangles, &vertices, limits)
