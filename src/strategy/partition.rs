@@ -250,7 +250,7 @@ pub fn partition_with_stats(
     let mut s = Search::new(mesh, &vt, &dual, labels, k, limits);
     let mut stats = Stats {
         meshlets_before: ml.len(),
-        vertices_before: s.part.vcount.iter().map(|&v| v as usize).sum(),
+        vertices_before: s.cells.vcount.iter().map(|&v| v as usize).sum(),
         ..Stats::default()
     };
     let all: Vec<u32> = (0..mesh.triangle_count() as u32).collect();
@@ -259,15 +259,15 @@ pub fn partition_with_stats(
     // A re-partition repaired with splits, packed: weighed against the packed fallback below.
     let mut candidate: Option<(Vec<u32>, usize)> = None;
     // At the hard bound nothing can be removed: skip the search.
-    if config.lloyd_iterations > 0 && s.part.live > floor {
-        let fallback = s.part.label.clone();
+    if config.lloyd_iterations > 0 && s.cells.live > floor {
+        let fallback = s.cells.label.clone();
         let mut tried = Vec::new();
         for &drop in config.drops {
             // Near the hard bound every cell is needed: drop at most a quarter of the slack.
-            let slack = s.part.live - floor;
+            let slack = s.cells.live - floor;
             // At least one where any is asked for: under 167 cells 0.3 % rounds to none, and
             // fandisk (134 at 64/126) lost one meshlet only with one seed dropped.
-            let share = (drop * s.part.live as f64).round() as usize;
+            let share = (drop * s.cells.live as f64).round() as usize;
             let dropped = (if drop > 0.0 { share.max(1) } else { 0 }).min(slack / 4);
             if tried.contains(&dropped) {
                 continue;
@@ -293,17 +293,17 @@ pub fn partition_with_stats(
     pack(&mut s, &mut adj, config, &mut stats);
     // A re-partition that needed splits, packed, against the packed fallback.
     if let Some((labels, live)) = candidate {
-        if live < s.part.live {
-            s.part.restore(&labels);
+        if live < s.cells.live {
+            s.cells.restore(&labels);
             stats.repartitioned = true;
         }
     }
     if config.round_off {
         // Spread-first moves, then vertex-first ones where those moved (the packing left none
         // elsewhere).
-        s.part.journal = Some(Vec::new());
+        s.cells.journal = Some(Vec::new());
         s.improve(&all, Rank::Spread);
-        let moved = s.part.journal.take().expect("open journal");
+        let moved = s.cells.journal.take().expect("open journal");
         s.improve_around(moved.iter().map(|u| u.t));
         if config.swaps {
             stats.swaps = swaps(&mut s);
@@ -312,8 +312,8 @@ pub fn partition_with_stats(
     if config.cone_repair {
         stats.cones_fixed = cone_repair(&mut s);
     }
-    let live = s.part.live;
-    let out = s.part.into_meshlets(&seq);
+    let live = s.cells.live;
+    let out = s.cells.into_meshlets(&seq);
     // Every step ends within the limits, so no meshlet is split on the way out.
     debug_assert_eq!(out.len(), live, "a partitioned meshlet broke a limit");
     stats.meshlets_after = out.len();
@@ -347,27 +347,27 @@ fn repartition(
     fallback: &[u32],
     stats: &mut Stats,
 ) -> Outcome {
-    let limits = s.part.limits;
-    let all: Vec<u32> = (0..s.part.label.len() as u32).collect();
+    let limits = s.cells.limits;
+    let all: Vec<u32> = (0..s.cells.label.len() as u32).collect();
     let labels = lloyd(s, config, dropped);
-    s.part.restore(&labels);
+    s.cells.restore(&labels);
     // Step 3: the limits are lifted to the largest the format allows (cells are near the real
     // limits, far from these).
-    s.part.limits = Limits::new(256, 256).expect("the largest limits");
+    s.cells.limits = Limits::new(256, 256).expect("the largest limits");
     s.improve(&all, Rank::Vertices);
-    s.part.limits = limits;
-    stats.overfull = (0..s.part.tcount.len() as u32)
+    s.cells.limits = limits;
+    stats.overfull = (0..s.cells.tcount.len() as u32)
         .filter(|&m| over(s, m))
         .count();
     let splits = stats.splits;
     match repair(s, adj, config, stats) {
         Repair::Done => {}
         Repair::Unrepaired => {
-            s.part.restore(fallback);
+            s.cells.restore(fallback);
             return Outcome::Failed;
         }
         Repair::Stopped => {
-            s.part.restore(fallback);
+            s.cells.restore(fallback);
             return Outcome::Hopeless;
         }
     }
@@ -380,8 +380,8 @@ fn repartition(
         return Outcome::Kept;
     }
     pack(s, adj, config, stats);
-    let packed = Outcome::Packed(s.part.label.clone(), s.part.live);
-    s.part.restore(fallback);
+    let packed = Outcome::Packed(s.cells.label.clone(), s.cells.live);
+    s.cells.restore(fallback);
     adj.forget();
     packed
 }
@@ -412,7 +412,7 @@ impl Cones<'_> {
 
     /// The mean unit normal of cell `m` (zero where it has none).
     fn mean(&self, s: &Search, m: u32) -> DVec3 {
-        s.part.members[m as usize]
+        s.cells.members[m as usize]
             .iter()
             .filter_map(|&t| self.normal(t))
             .sum::<DVec3>()
@@ -422,7 +422,7 @@ impl Cones<'_> {
     /// Whether cell `m`'s cone can cull. The exact test reads its normals in triangle order, so
     /// the answer does not depend on the order moves left the members in.
     fn culls(&self, s: &Search, m: u32) -> bool {
-        let members = &s.part.members[m as usize];
+        let members = &s.cells.members[m as usize];
         let mean = self.mean(s, m);
         let sure = mean != DVec3::ZERO
             && members
@@ -440,7 +440,7 @@ impl Cones<'_> {
 
     /// Whether cell `m` has a triangle of non-zero area (one without has nothing to fix).
     fn has_normals(&self, s: &Search, m: u32) -> bool {
-        s.part.members[m as usize]
+        s.cells.members[m as usize]
             .iter()
             .any(|&t| self.normal(t).is_some())
     }
@@ -455,26 +455,26 @@ fn cone_repair(s: &mut Search) -> usize {
     // Candidates tried per step: the most opposed triangles are usually inside the cell or on a
     // full neighbour's border, so a few more than one.
     const TRIES: usize = 8;
-    let cones = Cones { mesh: s.part.mesh };
+    let cones = Cones { mesh: s.cells.mesh };
     let mut fixed = 0;
-    for m in 0..s.part.tcount.len() as u32 {
+    for m in 0..s.cells.tcount.len() as u32 {
         // Under 4 triangles the budget below is 0.
-        if s.part.tcount[m as usize] < 4 || !cones.has_normals(s, m) || cones.culls(s, m) {
+        if s.cells.tcount[m as usize] < 4 || !cones.has_normals(s, m) || cones.culls(s, m) {
             continue;
         }
-        s.part.journal = Some(Vec::new());
-        let mut budget = s.part.tcount[m as usize] / 4;
+        s.cells.journal = Some(Vec::new());
+        let mut budget = s.cells.tcount[m as usize] / 4;
         while budget > 0 && !cones.culls(s, m) {
             budget -= 1;
             let axis = cones.mean(s, m);
-            let mut worst: Vec<(f64, u32)> = s.part.members[m as usize]
+            let mut worst: Vec<(f64, u32)> = s.cells.members[m as usize]
                 .iter()
                 .filter_map(|&t| cones.normal(t).map(|n| (n.dot(axis), t)))
                 .collect();
             worst.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             let mut moved = false;
             for &(_, t) in worst.iter().take(TRIES) {
-                let (nb, n) = s.part.neighbour_labels(t);
+                let (nb, n) = s.cells.neighbour_labels(t);
                 let nt = cones.normal(t).expect("a normal");
                 let mut to: Vec<(f64, u32)> = nb[..n]
                     .iter()
@@ -482,18 +482,18 @@ fn cone_repair(s: &mut Search) -> usize {
                     .collect();
                 to.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 for (_, b) in to {
-                    let add = s.part.added(t, b);
-                    if !s.part.fits(b, add) || !s.stays_connected(t) {
+                    let add = s.cells.added(t, b);
+                    if !s.cells.fits(b, add) || !s.stays_connected(t) {
                         continue;
                     }
                     let had = cones.culls(s, b);
-                    s.part.apply(t, b);
+                    s.cells.apply(t, b);
                     if had && !cones.culls(s, b) {
                         // Out of the journal first: a rollback journals its own moves.
-                        let mut j = s.part.journal.take().expect("open journal");
+                        let mut j = s.cells.journal.take().expect("open journal");
                         let last = j.pop().expect("the move just made");
-                        s.part.rollback(&[last]);
-                        s.part.journal = Some(j);
+                        s.cells.rollback(&[last]);
+                        s.cells.journal = Some(j);
                         continue;
                     }
                     moved = true;
@@ -507,11 +507,11 @@ fn cone_repair(s: &mut Search) -> usize {
                 break;
             }
         }
-        let journal = s.part.journal.take().expect("open journal");
+        let journal = s.cells.journal.take().expect("open journal");
         if cones.culls(s, m) {
             fixed += 1;
         } else {
-            s.part.rollback(&journal);
+            s.cells.rollback(&journal);
         }
     }
     fixed
@@ -524,8 +524,8 @@ fn cone_repair(s: &mut Search) -> usize {
 /// and single moves find no room). A work queue in triangle order revisits the triangles around
 /// each exchange. Returns the exchanges made.
 fn swaps(s: &mut Search) -> usize {
-    let (max_v, max_t) = (s.part.limits.max_vertices, s.part.limits.max_triangles);
-    let n_tris = s.part.label.len();
+    let (max_v, max_t) = (s.cells.limits.max_vertices, s.cells.limits.max_triangles);
+    let n_tris = s.cells.label.len();
     let mut work: VecDeque<u32> = (0..n_tris as u32).collect();
     s.scratch.queued.fill(true);
     // Every exchange lowers the spread; the cap is only a guard.
@@ -534,23 +534,23 @@ fn swaps(s: &mut Search) -> usize {
     let mut cand: Vec<(f64, u32)> = Vec::new();
     while let Some(t) = work.pop_front() {
         s.scratch.queued[t as usize] = false;
-        let a = s.part.label[t as usize];
-        let (nb, n) = s.part.neighbour_labels(t);
+        let a = s.cells.label[t as usize];
+        let (nb, n) = s.cells.neighbour_labels(t);
         let mut partner = None;
         for &b in &nb[..n] {
             // A cell with a free triangle slot took the single moves it could in step 6; at
             // 64/126 exchanges with those changed the mean radius by 0.1 % at 10 % of the time.
-            if s.part.tcount[b as usize] < max_t {
+            if s.cells.tcount[b as usize] < max_t {
                 continue;
             }
-            let d1 = s.part.sse_delta(t, a, b);
+            let d1 = s.cells.sse_delta(t, a, b);
             if d1 >= -SSE_EPS {
                 continue;
             }
             // Triangles of `b` around `t` with an edge into `a` other than through `t`, ranked
             // by the spread change as if `t` had not moved (exact once it has, below).
             cand.clear();
-            let p = &s.part;
+            let p = &s.cells;
             for x in distinct(p.mesh.triangle(t as usize)) {
                 for &u in p.vt.row(x as usize) {
                     if p.label[u as usize] != b || cand.iter().any(|c| c.1 == u) {
@@ -572,9 +572,9 @@ fn swaps(s: &mut Search) -> usize {
             if !s.stays_connected_locally(t) {
                 break;
             }
-            s.part.apply(t, b);
+            s.cells.apply(t, b);
             for c in cand.iter_mut() {
-                c.0 = d1 + s.part.sse_delta(c.1, b, a);
+                c.0 = d1 + s.cells.sse_delta(c.1, b, a);
             }
             cand.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
             for &(total, u) in &cand {
@@ -585,17 +585,17 @@ fn swaps(s: &mut Search) -> usize {
                 if !s.stays_connected_locally(u) {
                     continue;
                 }
-                s.part.apply(u, a);
-                if s.part.vcount[a as usize] <= max_v && s.part.vcount[b as usize] <= max_v {
+                s.cells.apply(u, a);
+                if s.cells.vcount[a as usize] <= max_v && s.cells.vcount[b as usize] <= max_v {
                     partner = Some(u);
                     break;
                 }
-                s.part.apply(u, b);
+                s.cells.apply(u, b);
             }
             if partner.is_some() {
                 break;
             }
-            s.part.apply(t, a);
+            s.cells.apply(t, a);
         }
         let Some(u) = partner else {
             continue;
@@ -617,7 +617,7 @@ fn swaps(s: &mut Search) -> usize {
 
 /// Step 2: balanced geodesic Lloyd from the current cells; the new label of every triangle.
 fn lloyd(s: &Search, config: Config, dropped: usize) -> Vec<u32> {
-    let p = &s.part;
+    let p = &s.cells;
     let n = p.label.len();
     let k = p.tcount.len();
     // The features start with the centroid, scaled to unit spread: scale-free distances.
@@ -793,10 +793,10 @@ impl Adjacency {
     }
 
     fn of(&mut self, s: &Search, m: u32) -> &[u32] {
-        let stamp = s.part.changed_at[m as usize];
+        let stamp = s.cells.changed_at[m as usize];
         let entry = &mut self.lists[m as usize];
         if entry.0 != stamp {
-            *entry = (stamp, s.part.adjacent_meshlets(m));
+            *entry = (stamp, s.cells.adjacent_meshlets(m));
         }
         &entry.1
     }
@@ -804,7 +804,7 @@ impl Adjacency {
 
 /// Whether meshlet `m` is over a limit.
 fn over(s: &Search, m: u32) -> bool {
-    let p = &s.part;
+    let p = &s.cells;
     p.vcount[m as usize] > p.limits.max_vertices || p.tcount[m as usize] > p.limits.max_triangles
 }
 
@@ -822,7 +822,7 @@ enum Repair {
 /// the others (their chains change its surroundings), unless more than four times
 /// [`Config::max_splits`] failed (then it stops); what still fails is split.
 fn repair(s: &mut Search, adj: &mut Adjacency, config: Config, stats: &mut Stats) -> Repair {
-    let mut todo: Vec<u32> = (0..s.part.tcount.len() as u32)
+    let mut todo: Vec<u32> = (0..s.cells.tcount.len() as u32)
         .filter(|&m| over(s, m))
         .collect();
     // Passes after the first fix few cells (measured: 140 -> 128, 17 -> 5, 14 -> 10, 2 -> 1):
@@ -852,8 +852,8 @@ fn repair(s: &mut Search, adj: &mut Adjacency, config: Config, stats: &mut Stats
     }
     // What no chain fixed is split into empty cells (the spares after the input's, or cells
     // whose seed was dropped).
-    let mut spare: VecDeque<u32> = (0..s.part.tcount.len() as u32)
-        .filter(|&z| s.part.tcount[z as usize] == 0)
+    let mut spare: VecDeque<u32> = (0..s.cells.tcount.len() as u32)
+        .filter(|&z| s.cells.tcount[z as usize] == 0)
         .take(config.max_splits as usize)
         .collect();
     todo.retain(|&o| {
@@ -877,7 +877,7 @@ fn repair(s: &mut Search, adj: &mut Adjacency, config: Config, stats: &mut Stats
 /// from its member farthest from its centroid (so `z` is one piece at `o`'s edge), until `o` is
 /// within the limits or `z` would break them.
 fn split(s: &mut Search, o: u32, z: u32) {
-    let p = &s.part;
+    let p = &s.cells;
     let n = p.tcount[o as usize] as f64;
     let centre = DVec3::new(
         p.csum[o as usize][0],
@@ -904,12 +904,12 @@ fn split(s: &mut Search, o: u32, z: u32) {
         if !over(s, o) {
             break;
         }
-        if !s.part.fits(z, s.part.added(t, z)) {
+        if !s.cells.fits(z, s.cells.added(t, z)) {
             break;
         }
-        s.part.apply(t, z);
-        for &u in s.part.dual.row(t as usize) {
-            if s.part.label[u as usize] == o && !seen.contains(&u) {
+        s.cells.apply(t, z);
+        for &u in s.cells.dual.row(t as usize) {
+            if s.cells.label[u as usize] == o && !seen.contains(&u) {
                 seen.push(u);
                 queue.push_back(u);
             }
@@ -919,21 +919,21 @@ fn split(s: &mut Search, o: u32, z: u32) {
 
 /// Step 5: empties the emptiest meshlets while victims go.
 fn pack(s: &mut Search, adj: &mut Adjacency, config: Config, stats: &mut Stats) {
-    let floor = s.part.limits.min_meshlets(s.part.label.len());
-    let mut failed = vec![false; s.part.tcount.len()];
+    let floor = s.cells.limits.min_meshlets(s.cells.label.len());
+    let mut failed = vec![false; s.cells.tcount.len()];
     let mut failures = 0;
-    while s.part.live > floor && failures < config.max_failures {
+    while s.cells.live > floor && failures < config.max_failures {
         let Some(v) = s
-            .part
+            .cells
             .emptiest_first()
             .into_iter()
             .find(|&m| !failed[m as usize])
         else {
             break;
         };
-        s.part.journal = Some(Vec::new());
+        s.cells.journal = Some(Vec::new());
         let ok = empty(s, adj, v, config, stats);
-        let journal = s.part.journal.take().expect("open journal");
+        let journal = s.cells.journal.take().expect("open journal");
         if ok {
             stats.dissolved += 1;
             failures = 0;
@@ -942,7 +942,7 @@ fn pack(s: &mut Search, adj: &mut Adjacency, config: Config, stats: &mut Stats) 
         } else {
             stats.failed += 1;
             failures += 1;
-            s.part.rollback(&journal);
+            s.cells.rollback(&journal);
             failed[v as usize] = true;
         }
     }
@@ -950,9 +950,9 @@ fn pack(s: &mut Search, adj: &mut Adjacency, config: Config, stats: &mut Stats) 
 
 /// Empties meshlet `v`; false (state dirty, to be rolled back) when it cannot.
 fn empty(s: &mut Search, adj: &mut Adjacency, v: u32, config: Config, stats: &mut Stats) -> bool {
-    let mut chains = config.chains_per_triangle * s.part.tcount[v as usize];
+    let mut chains = config.chains_per_triangle * s.cells.tcount[v as usize];
     let mut blocked: Vec<(u32, u32)> = Vec::new();
-    while s.part.tcount[v as usize] > 0 {
+    while s.cells.tcount[v as usize] > 0 {
         if hand_over(s, v) {
             continue;
         }
@@ -992,7 +992,7 @@ fn run_chain(
 /// Hands one triangle of `v` to an edge neighbour with room, cheapest (fewest added vertices)
 /// first, ties to the lowest triangle; false when none fits.
 fn hand_over(s: &mut Search, v: u32) -> bool {
-    let p = &s.part;
+    let p = &s.cells;
     let mut best: Option<(u32, u32, u32)> = None;
     for &t in &p.members[v as usize] {
         let (nb, n) = p.neighbour_labels(t);
@@ -1006,13 +1006,13 @@ fn hand_over(s: &mut Search, v: u32) -> bool {
     let Some((_, t, b)) = best else {
         return false;
     };
-    s.part.apply(t, b);
+    s.cells.apply(t, b);
     true
 }
 
 /// Whether meshlet `m` can take a triangle that adds a vertex.
 fn has_room(s: &Search, m: u32) -> bool {
-    let p = &s.part;
+    let p = &s.cells;
     p.tcount[m as usize] > 0
         && p.tcount[m as usize] < p.limits.max_triangles
         && p.vcount[m as usize] < p.limits.max_vertices
@@ -1026,7 +1026,7 @@ fn shortest_path_to_room(
     v: u32,
     blocked: &[(u32, u32)],
 ) -> Option<Vec<u32>> {
-    let mut parent = vec![u32::MAX; s.part.tcount.len()];
+    let mut parent = vec![u32::MAX; s.cells.tcount.len()];
     parent[v as usize] = v;
     let mut queue = VecDeque::from([v]);
     while let Some(y) = queue.pop_front() {
@@ -1058,7 +1058,7 @@ fn shortest_path_to_room(
 /// it frees that vertex, which a single triangle rarely does once boundaries are short); then a
 /// single triangle that frees nothing.
 fn pass_one(s: &mut Search, y: u32, z: u32, victim: bool) -> bool {
-    let p = &s.part;
+    let p = &s.cells;
     // (frees nothing, vertices added - freed, triangle)
     let mut singles: Vec<(bool, i64, u32)> = Vec::new();
     let mut shared: Vec<u32> = Vec::new();
@@ -1081,7 +1081,7 @@ fn pass_one(s: &mut Search, y: u32, z: u32, victim: bool) -> bool {
     singles.sort_unstable();
     for &(frees_none, _, t) in &singles {
         if !frees_none && (victim || s.stays_connected(t)) {
-            s.part.apply(t, z);
+            s.cells.apply(t, z);
             return true;
         }
     }
@@ -1100,7 +1100,7 @@ fn pass_one(s: &mut Search, y: u32, z: u32, victim: bool) -> bool {
     }
     for &(frees_none, _, t) in &singles {
         if frees_none && s.stays_connected(t) {
-            s.part.apply(t, z);
+            s.cells.apply(t, z);
             return true;
         }
     }
@@ -1109,7 +1109,7 @@ fn pass_one(s: &mut Search, y: u32, z: u32, victim: bool) -> bool {
 
 /// `y`'s triangles around vertex `w`.
 fn fan(s: &Search, y: u32, w: u32) -> Vec<u32> {
-    let p = &s.part;
+    let p = &s.cells;
     p.vt.row(w as usize)
         .iter()
         .copied()
@@ -1120,7 +1120,7 @@ fn fan(s: &Search, y: u32, w: u32) -> Vec<u32> {
 /// (vertices `z` gains - vertices `y` frees, size) of moving `y`'s fan around `w` into `z`, when
 /// it fits `z` and frees a vertex of `y` (always needed unless `y` is the victim).
 fn fan_cost(s: &Search, y: u32, z: u32, w: u32, victim: bool) -> Option<(i64, usize)> {
-    let p = &s.part;
+    let p = &s.cells;
     let f = fan(s, y, w);
     if f.len() < 2
         || f.len() > 4
@@ -1150,18 +1150,18 @@ fn move_fan(s: &mut Search, y: u32, z: u32, w: u32, victim: bool) -> bool {
     let mut rest = fan(s, y, w);
     let mut moved: Vec<u32> = Vec::new();
     while let Some(i) = rest.iter().position(|&t| {
-        let (nb, n) = s.part.neighbour_labels(t);
+        let (nb, n) = s.cells.neighbour_labels(t);
         nb[..n].contains(&z)
     }) {
         let t = rest.swap_remove(i);
-        s.part.apply(t, z);
+        s.cells.apply(t, z);
         moved.push(t);
     }
-    if rest.is_empty() && (victim || s.part.tcount[y as usize] == 0 || s.is_connected(y)) {
+    if rest.is_empty() && (victim || s.cells.tcount[y as usize] == 0 || s.is_connected(y)) {
         return true;
     }
     for &t in moved.iter().rev() {
-        s.part.apply(t, y);
+        s.cells.apply(t, y);
     }
     false
 }
