@@ -13,7 +13,6 @@ pub mod kmedoids_local;
 mod meshopt;
 mod nvidia;
 pub mod parallel;
-pub mod partition;
 pub mod qem;
 pub mod refine;
 pub mod tipsify;
@@ -97,7 +96,8 @@ fn refined(name: &str) -> Option<(&str, refine::Effort, &'static str)> {
     Some((base, effort, full.as_str()))
 }
 
-/// Appended to a strategy name, this sends its output through [`partition`]: `greedy+partition`.
+/// Appended to a strategy name, this sends its output through [`partition`](refine::partition):
+/// `greedy+partition`.
 pub const PARTITION_SUFFIX: &str = "+partition";
 
 /// Splits a `+partition` name into its base strategy and the name as a `'static` string; `None`
@@ -282,7 +282,7 @@ pub enum Kind {
     MeshoptSpatial,
     /// [`qem::Qem`]: `qem`.
     Qem,
-    /// [`partition::Partitioned`] over [`Meshopt`]: `partition`.
+    /// [`refine::partition::Partitioned`] over [`Meshopt`]: `partition`.
     Partition,
 }
 
@@ -358,21 +358,21 @@ impl Kind {
                 fill_weight: opts.fill_weight,
             }),
             Kind::Qem => Box::new(qem::Qem),
-            Kind::Partition => Box::new(partition::Partitioned {
+            Kind::Partition => Box::new(refine::partition::Partitioned {
                 inner: Kind::Meshopt.strategy(opts),
-                config: partition::Config::default(),
+                config: refine::partition::Config::default(),
                 name: "partition",
             }),
         }
     }
 
-    /// The strategy followed by [`partition`], named e.g. `greedy+partition` (`partition` is
-    /// `meshopt+partition`); `None` for [`Kind::Partition`].
+    /// The strategy followed by [`partition`](refine::partition), named e.g. `greedy+partition`
+    /// (`partition` is `meshopt+partition`); `None` for [`Kind::Partition`].
     pub fn partitioned(self, opts: &Options) -> Option<Box<dyn Strategy>> {
         let (_, name) = partitioned(&format!("{}{PARTITION_SUFFIX}", self.name()))?;
-        Some(Box::new(partition::Partitioned {
+        Some(Box::new(refine::partition::Partitioned {
             inner: self.strategy(opts),
-            config: partition::Config::default(),
+            config: refine::partition::Config::default(),
             name,
         }))
     }

@@ -41,6 +41,9 @@
 //! The driver ([`refine_with_stats`]) runs step 1, the global anneal, then up to
 //! [`Config::rounds`] rounds of steps 2 to 5, and step 2 once more at the end.
 //!
+//! [`partition`] is a second strategy on the same cells and boundary moves (a global re-partition
+//! packed along ejection chains); it lives here because it is built on these internals.
+//!
 //! Invariants: the limits hold whenever a step ends (a move is only made when it fits, annealing
 //! is undone unless it ends without overflow), no boundary move splits its source meshlet into
 //! more edge-connected pieces (a rebuild never ends with more meshlets in pieces), and everything
@@ -53,9 +56,10 @@
 
 mod anneal;
 mod dissolve;
-pub(crate) mod moves;
+mod moves;
+pub mod partition;
 mod rebuild;
-pub(crate) mod state;
+mod state;
 
 use super::Strategy;
 use crate::adjacency::{dual_graph, vertex_triangles};
