@@ -208,7 +208,7 @@ fn refinement_beats_meshoptimizer_on_the_bunny() {
 /// two.
 #[test]
 fn partition_beats_meshoptimizer_on_the_bunny() {
-    use meshletlab::strategy::partition::{partition_with_stats, Config};
+    use meshletlab::strategy::refine::partition::{partition_with_stats, Config};
     let (m, input, best_peer) = bunny_and_meshopt();
     let limits = Limits::DEFAULT;
     let base = metrics(&m, &input, limits);

@@ -12,7 +12,7 @@
 //! | ours: compact, QEM merging | `compact`, `qem` | `compact.rs`, [`qem`] | |
 //! | meshoptimizer 1.3 (the peer) | `meshopt`, `meshopt-scan`, `meshopt-spatial` | `meshopt.rs` | |
 //! | refinement of any strategy's output | `S+refine`, `S+refine-fast`, `S+refine-max` | [`refine`] | |
-//! | re-partition of any strategy's output | `partition`, `S+partition` | [`partition`] (inside `refine/`, whose state it edits) | |
+//! | re-partition of any strategy's output | `partition`, `S+partition` | [`refine::partition`] (inside `refine/`, whose state it edits) | |
 //!
 //! Determinism: every strategy gives the same meshlets for the same input on every run and thread
 //! count.
@@ -24,7 +24,6 @@ pub mod grow;
 pub mod kmedoids;
 mod meshopt;
 mod nvidia;
-pub mod partition;
 pub mod qem;
 pub mod refine;
 
@@ -107,7 +106,8 @@ fn refined(name: &str) -> Option<(&str, refine::Effort, &'static str)> {
     Some((base, effort, full.as_str()))
 }
 
-/// Appended to a strategy name, this sends its output through [`partition`]: `greedy+partition`.
+/// Appended to a strategy name, this sends its output through [`partition`](refine::partition):
+/// `greedy+partition`.
 pub const PARTITION_SUFFIX: &str = "+partition";
 
 /// Splits a `+partition` name into its base strategy and the name as a `'static` string; `None`
@@ -289,7 +289,7 @@ pub enum Kind {
     MeshoptSpatial,
     /// [`qem::Qem`]: `qem`.
     Qem,
-    /// [`partition::Partitioned`] over [`Meshopt`]: `partition`.
+    /// [`refine::partition::Partitioned`] over [`Meshopt`]: `partition`.
     Partition,
 }
 
@@ -361,21 +361,21 @@ impl Kind {
                 fill_weight: opts.fill_weight,
             }),
             Kind::Qem => Box::new(qem::Qem),
-            Kind::Partition => Box::new(partition::Partitioned {
+            Kind::Partition => Box::new(refine::partition::Partitioned {
                 inner: Kind::Meshopt.strategy(opts),
-                config: partition::Config::default(),
+                config: refine::partition::Config::default(),
                 name: "partition",
             }),
         }
     }
 
-    /// The strategy followed by [`partition`], named e.g. `greedy+partition` (`partition` is
-    /// `meshopt+partition`); `None` for [`Kind::Partition`].
+    /// The strategy followed by [`partition`](refine::partition), named e.g. `greedy+partition`
+    /// (`partition` is `meshopt+partition`); `None` for [`Kind::Partition`].
     pub fn partitioned(self, opts: &Options) -> Option<Box<dyn Strategy>> {
         let (_, name) = partitioned(&format!("{}{PARTITION_SUFFIX}", self.name()))?;
-        Some(Box::new(partition::Partitioned {
+        Some(Box::new(refine::partition::Partitioned {
             inner: self.strategy(opts),
-            config: partition::Config::default(),
+            config: refine::partition::Config::default(),
             name,
         }))
     }

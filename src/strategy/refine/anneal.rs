@@ -3,12 +3,12 @@
 //! Boundary moves alone cannot move vertex capacity far (a vertex freed on one side of a meshlet
 //! does not help the other); annealing's uphill moves can. The energy is the vertex total, plus
 //! the overflow (vertices and triangles over the limits) times [`OVERFLOW_WEIGHT`], plus the
-//! feature spread times a scale ([`Partition::spread_scale`]). A victim's triangles are handed to
+//! feature spread times a scale ([`Cells::spread_scale`]). A victim's triangles are handed to
 //! their neighbours regardless of the limits, and an anneal confined to the meshlets within
 //! [`ANNEAL_RINGS`] of it must drive the overflow back to zero, or the hand-over is undone.
 
 use super::moves::Rank;
-use super::state::{Partition, Search, F};
+use super::state::{Cells, Search, F};
 use super::{Stats, OVERFLOW_WEIGHT};
 use rand_core::Rng;
 use rand_xorshift::XorShiftRng;
@@ -22,7 +22,7 @@ const SPREAD_WEIGHT: f64 = 0.25;
 /// at more cost; capacity has to come from a few meshlets away.
 const ANNEAL_RINGS: usize = 4;
 
-impl Partition<'_> {
+impl Cells<'_> {
     /// How far meshlet `m` is over the limits (vertices plus triangles).
     fn overflow(&self, m: u32) -> i64 {
         let (v, t) = (self.vcount[m as usize], self.tcount[m as usize]);
@@ -73,7 +73,7 @@ impl Partition<'_> {
 
 impl Search<'_> {
     /// Simulated annealing over boundary moves of the triangles in `pool` (all when `None`) with
-    /// the energy vertex total + overflow × weight + spread × `scale` ([`Partition::spread_scale`]),
+    /// the energy vertex total + overflow × weight + spread × `scale` ([`Cells::spread_scale`]),
     /// temperature falling geometrically from `temps.0` to `temps.1`. Never empties a meshlet.
     /// With `stop_when_feasible` it ends as soon as nothing overflows. True when it ends without
     /// overflow.
@@ -85,13 +85,13 @@ impl Search<'_> {
         rng: &mut XorShiftRng,
         stop_when_feasible: bool,
     ) -> bool {
-        let mut over: i64 = (0..self.part.tcount.len() as u32)
-            .map(|m| self.part.overflow(m))
+        let mut over: i64 = (0..self.cells.tcount.len() as u32)
+            .map(|m| self.cells.overflow(m))
             .sum();
-        let n = self.part.label.len() as u64;
+        let n = self.cells.label.len() as u64;
         let (mv, mt) = (
-            self.part.limits.max_vertices as i64,
-            self.part.limits.max_triangles as i64,
+            self.cells.limits.max_vertices as i64,
+            self.cells.limits.max_triangles as i64,
         );
         let mut temp = temps.0;
         // The temperature is updated every 1024 proposals (a power per proposal costs more than
@@ -108,7 +108,7 @@ impl Search<'_> {
                 Some(p) => p[(rng.next_u64() % p.len() as u64) as usize],
                 None => (rng.next_u64() % n) as u32,
             };
-            let p = &self.part;
+            let p = &self.cells;
             let (nb, k) = p.neighbour_labels(t);
             if k == 0 {
                 continue;
@@ -137,7 +137,7 @@ impl Search<'_> {
             if !self.stays_connected(t) {
                 continue;
             }
-            self.part.apply(t, b);
+            self.cells.apply(t, b);
             over += ov_after - ov_before;
         }
         over == 0
@@ -157,11 +157,11 @@ impl Search<'_> {
         rng: &mut XorShiftRng,
         stats: &mut Stats,
     ) {
-        let mut failed = vec![false; self.part.tcount.len()];
+        let mut failed = vec![false; self.cells.tcount.len()];
         let mut in_a_row = 0;
-        let scale = self.part.spread_scale();
+        let scale = self.cells.spread_scale();
         while in_a_row < failures {
-            let p = &self.part;
+            let p = &self.cells;
             if p.live <= p.limits.min_meshlets(p.label.len()) {
                 return;
             }
@@ -174,11 +174,11 @@ impl Search<'_> {
             let mut region = p.rings(victim, ANNEAL_RINGS, |_| false);
             region.sort_unstable();
             // A journal, not a snapshot: undoing costs the moves made, not the mesh.
-            self.part.journal = Some(Vec::new());
-            let mut ok = self.part.hand_over(victim);
+            self.cells.journal = Some(Vec::new());
+            let mut ok = self.cells.hand_over(victim);
             let pool: Vec<u32> = region
                 .iter()
-                .flat_map(|&m| self.part.members[m as usize].iter().copied())
+                .flat_map(|&m| self.cells.members[m as usize].iter().copied())
                 .collect();
             // Moderate, nearly constant temperature: hot enough to carry overflow through full
             // meshlets, cool enough to keep the boundaries shortened so far.
@@ -191,14 +191,14 @@ impl Search<'_> {
                     rng,
                     true,
                 );
-            let journal = self.part.journal.take().expect("open journal");
+            let journal = self.cells.journal.take().expect("open journal");
             if ok {
                 stats.dissolved += 1;
                 in_a_row = 0;
                 self.improve(&pool, Rank::Vertices);
             } else {
                 stats.failed += 1;
-                self.part.rollback(&journal);
+                self.cells.rollback(&journal);
                 failed[victim as usize] = true;
                 in_a_row += 1;
             }

@@ -6,7 +6,7 @@
 //! room. A victim that cannot be emptied is rolled back from the move journal. The limits hold
 //! after every move, so this step never needs repairing.
 
-use super::state::{Partition, Search};
+use super::state::{Cells, Search};
 use super::Stats;
 use crate::common::distinct;
 
@@ -16,12 +16,12 @@ impl Search<'_> {
     pub(super) fn dissolve_all(&mut self, search_nodes: usize, budget: u64, stats: &mut Stats) {
         let stop = stats.search_work.saturating_add(budget);
         // A victim that failed is tried again only once it or a neighbour has changed since.
-        let mut failed_at: Vec<Option<usize>> = vec![None; self.part.tcount.len()];
+        let mut failed_at: Vec<Option<usize>> = vec![None; self.cells.tcount.len()];
         loop {
-            let order = self.part.emptiest_first();
+            let order = self.cells.emptiest_first();
             let mut any = false;
             for m in order {
-                let p = &self.part;
+                let p = &self.cells;
                 // At the hard bound no victim can go.
                 if stats.search_work >= stop || p.live <= p.limits.min_meshlets(p.label.len()) {
                     return;
@@ -45,17 +45,17 @@ impl Search<'_> {
                     failed_at[m as usize] = Some(p.moves);
                     continue;
                 }
-                self.part.journal = Some(Vec::new());
+                self.cells.journal = Some(Vec::new());
                 let ok = self.dissolve(m, search_nodes, &mut stats.search_work);
-                let journal = self.part.journal.take().expect("open journal");
+                let journal = self.cells.journal.take().expect("open journal");
                 if ok {
                     stats.dissolved += 1;
                     any = true;
                     self.improve_around(journal.iter().map(|u| u.t));
                 } else {
                     stats.failed += 1;
-                    self.part.rollback(&journal);
-                    failed_at[m as usize] = Some(self.part.moves);
+                    self.cells.rollback(&journal);
+                    failed_at[m as usize] = Some(self.cells.moves);
                 }
             }
             if !any {
@@ -68,18 +68,18 @@ impl Search<'_> {
     /// back) when some triangle finds no room even through an ejection chain. `work` counts the
     /// triangles the augmenting searches look at.
     fn dissolve(&mut self, m: u32, search_nodes: usize, work: &mut u64) -> bool {
-        while self.part.tcount[m as usize] > 0 {
+        while self.cells.tcount[m as usize] > 0 {
             // Cheapest hand-overs first: a triangle whose vertices a neighbour already has costs it
             // nothing, and filling such notches first keeps the neighbours round.
             let mut done = false;
             for cost in 0..=3 {
-                let list = self.part.members[m as usize].clone();
+                let list = self.cells.members[m as usize].clone();
                 for t in list {
-                    let (nb, n) = self.part.neighbour_labels(t);
+                    let (nb, n) = self.cells.neighbour_labels(t);
                     for &b in &nb[..n] {
-                        let add = self.part.added(t, b);
-                        if add <= cost && self.part.fits(b, add) {
-                            self.part.apply(t, b);
+                        let add = self.cells.added(t, b);
+                        if add <= cost && self.cells.fits(b, add) {
+                            self.cells.apply(t, b);
                             done = true;
                             break;
                         }
@@ -97,14 +97,14 @@ impl Search<'_> {
             // more: it would explore the same meshlets with no more room. Without this pruning a
             // hopeless victim costs a full search per triangle and neighbour (16 s instead of
             // 0.1 s for a fast refinement of a 20 k-triangle mesh at 128/128).
-            let list = self.part.members[m as usize].clone();
+            let list = self.cells.members[m as usize].clone();
             let mut made = false;
             let mut dead: Vec<(u32, u32)> = Vec::new();
             'outer: for t in list {
-                let (nb, n) = self.part.neighbour_labels(t);
+                let (nb, n) = self.cells.neighbour_labels(t);
                 let mut cands: Vec<(u32, u32)> = nb[..n]
                     .iter()
-                    .map(|&b| (self.part.added(t, b), b))
+                    .map(|&b| (self.cells.added(t, b), b))
                     .collect();
                 cands.sort_unstable();
                 for (add, b) in cands {
@@ -113,9 +113,9 @@ impl Search<'_> {
                     }
                     let ok = search_nodes > 0 && self.augment(b, t, m, search_nodes, work);
                     if ok {
-                        let add = self.part.added(t, b);
-                        if self.part.fits(b, add) {
-                            self.part.apply(t, b);
+                        let add = self.cells.added(t, b);
+                        if self.cells.fits(b, add) {
+                            self.cells.apply(t, b);
                             made = true;
                             break 'outer;
                         }
@@ -142,19 +142,19 @@ impl Search<'_> {
         let mut goal = None;
         while head < nodes.len() && nodes.len() < max_nodes {
             let (y, s_in, _) = nodes[head];
-            let in_v: Vec<u32> = distinct(self.part.mesh.triangle(s_in as usize)).collect();
-            let add_in = self.part.added(s_in, y);
-            if head > 0 && self.part.fits(y, add_in) {
+            let in_v: Vec<u32> = distinct(self.cells.mesh.triangle(s_in as usize)).collect();
+            let add_in = self.cells.added(s_in, y);
+            if head > 0 && self.cells.fits(y, add_in) {
                 goal = Some(head);
                 break;
             }
-            *work += self.part.members[y as usize].len() as u64;
+            *work += self.cells.members[y as usize].len() as u64;
             // y's use count of each of its vertices, counted once for all its members (nothing
             // moves during the search): scanning each vertex's triangles per member cost about
             // 15 % of openfoam_motorbike's refinement (41 s -> 35 s without it).
             let e = self.scratch.new_epoch();
-            for &s in &self.part.members[y as usize] {
-                for v in distinct(self.part.mesh.triangle(s as usize)) {
+            for &s in &self.cells.members[y as usize] {
+                for v in distinct(self.cells.mesh.triangle(s as usize)) {
                     let v = v as usize;
                     if self.scratch.vseen[v] != e {
                         self.scratch.vseen[v] = e;
@@ -163,27 +163,27 @@ impl Search<'_> {
                     self.scratch.vuse[v] += 1;
                 }
             }
-            for i in 0..self.part.members[y as usize].len() {
-                let s = self.part.members[y as usize][i];
+            for i in 0..self.cells.members[y as usize].len() {
+                let s = self.cells.members[y as usize][i];
                 // s_in must still touch y when it arrives: never pass on one of its neighbours.
-                if self.part.dual.row(s_in as usize).contains(&s) {
+                if self.cells.dual.row(s_in as usize).contains(&s) {
                     continue;
                 }
                 // The stamp is this step's: stays_connected below bumps the epoch but only
                 // stamps triangles.
-                let freed = distinct(self.part.mesh.triangle(s as usize))
+                let freed = distinct(self.cells.mesh.triangle(s as usize))
                     .filter(|&v| !in_v.contains(&v) && self.scratch.vuse[v as usize] == 1)
                     .count() as u32;
-                let limits = self.part.limits;
-                if self.part.vcount[y as usize] + add_in > limits.max_vertices + freed {
+                let limits = self.cells.limits;
+                if self.cells.vcount[y as usize] + add_in > limits.max_vertices + freed {
                     continue;
                 }
-                let (nb, n) = self.part.neighbour_labels(s);
+                let (nb, n) = self.cells.neighbour_labels(s);
                 // Whether s may leave y at all, asked once (a search inside y) and only if needed.
                 let mut leaves: Option<bool> = None;
                 for &z in &nb[..n] {
                     if visited.contains(&z)
-                        || self.part.added(s, z) + self.part.vcount[z as usize]
+                        || self.cells.added(s, z) + self.cells.vcount[z as usize]
                             > limits.max_vertices
                     {
                         continue;
@@ -203,19 +203,19 @@ impl Search<'_> {
         // Apply from the far end back to b.
         while g != 0 {
             let (z, s, parent) = nodes[g];
-            let add = self.part.added(s, z);
-            if !self.part.fits(z, add) {
+            let add = self.cells.added(s, z);
+            if !self.cells.fits(z, add) {
                 return false;
             }
-            self.part.apply(s, z);
+            self.cells.apply(s, z);
             g = parent;
         }
-        let add = self.part.added(t, b);
-        self.part.fits(b, add)
+        let add = self.cells.added(t, b);
+        self.cells.fits(b, add)
     }
 }
 
-impl Partition<'_> {
+impl Cells<'_> {
     /// A cheap test before trying to dissolve `m`: the other meshlets have room for its triangles,
     /// and the meshlets up to two hops away have room for the vertices only it uses (each must
     /// join some other meshlet; hand-overs further out mostly just pass a vertex on). A pruning

@@ -8,8 +8,8 @@
 //! holds 2V - B - 2 triangles, so at a vertex limit only shorter boundaries make room
 //! (`docs/meshlet-count-bound.md`; the bounds are in results/strategies.md).
 //!
-//! The state is a partition (a meshlet label per triangle, counts per meshlet, a move journal;
-//! how often a meshlet uses a vertex is counted on the fly from the vertex -> triangle rows), kept
+//! The state, the cells (a meshlet label per triangle, counts per meshlet, a move journal; how
+//! often a meshlet uses a vertex is counted on the fly from the vertex -> triangle rows), is kept
 //! apart from the scratch buffers of its queries (`state.rs`). These steps edit it:
 //! 1. **Boundary moves** (`moves.rs`; Fiduccia–Mattheyses gains, without FM's negative-gain
 //!    passes): a triangle on a meshlet boundary moves to an edge-adjacent meshlet when that lowers
@@ -41,6 +41,9 @@
 //! The driver ([`refine_with_stats`]) runs step 1, the global anneal, then up to
 //! [`Config::rounds`] rounds of steps 2 to 5, and step 2 once more at the end.
 //!
+//! [`partition`] is a second strategy on the same cells and boundary moves (a global re-partition
+//! packed along ejection chains); it lives here because it is built on these internals.
+//!
 //! Invariants: the limits hold whenever a step ends (a move is only made when it fits, annealing
 //! is undone unless it ends without overflow), no boundary move splits its source meshlet into
 //! more edge-connected pieces (a rebuild never ends with more meshlets in pieces), and everything
@@ -53,9 +56,10 @@
 
 mod anneal;
 mod dissolve;
-pub(crate) mod moves;
+mod moves;
+pub mod partition;
 mod rebuild;
-pub(crate) mod state;
+mod state;
 
 use super::Strategy;
 use crate::adjacency::{dual_graph, vertex_triangles};
@@ -250,7 +254,7 @@ pub fn refine_with_stats(
     let mut s = Search::new(mesh, &vt, &dual, labels, ml.len(), limits);
     let mut stats = Stats {
         meshlets_before: ml.len(),
-        vertices_before: s.part.vcount.iter().map(|&v| v as usize).sum(),
+        vertices_before: s.cells.vcount.iter().map(|&v| v as usize).sum(),
         ..Stats::default()
     };
     let all: Vec<u32> = (0..mesh.triangle_count() as u32).collect();
@@ -260,24 +264,24 @@ pub fn refine_with_stats(
     // roundness passes can still help, so the count-removing stages are skipped.
     let floor = limits.min_meshlets(mesh.triangle_count());
     s.improve(&all, Rank::Vertices);
-    if config.global_anneal && steps > 0 && s.part.live > floor {
+    if config.global_anneal && steps > 0 && s.cells.live > floor {
         // Shorter boundaries first: the capacity the batches below live on. Its uphill moves may
         // end with a meshlet over a limit, which the output would have to split; a cold anneal
         // drives that overflow out, and when it cannot, the boundaries go back to the input's.
-        let snapshot = s.part.label.clone();
-        let scale = s.part.spread_scale();
+        let snapshot = s.cells.label.clone();
+        let scale = s.cells.spread_scale();
         let feasible = s.anneal(None, steps, ((1.0, 0.05), scale), &mut rng, false)
             || s.anneal(None, steps, ((0.05, 0.01), scale), &mut rng, true);
         if !feasible {
-            s.part.restore(&snapshot);
+            s.cells.restore(&snapshot);
         }
         s.improve(&all, Rank::Vertices);
     }
     for _ in 0..config.rounds {
-        if s.part.live <= floor {
+        if s.cells.live <= floor {
             break;
         }
-        let before = s.part.live;
+        let before = s.cells.live;
         if config.spread {
             s.round_off(&all);
         }
@@ -295,16 +299,16 @@ pub fn refine_with_stats(
                 &mut stats,
             );
         }
-        if s.part.live == before {
+        if s.cells.live == before {
             break;
         }
     }
     if config.spread {
         s.round_off(&all);
     }
-    stats.moves = s.part.moves;
-    let live = s.part.live;
-    let out = s.part.into_meshlets(&seq);
+    stats.moves = s.cells.moves;
+    let live = s.cells.live;
+    let out = s.cells.into_meshlets(&seq);
     // Every step ends within the limits, so no meshlet is split on the way out.
     debug_assert_eq!(out.len(), live, "a refined meshlet broke a limit");
     stats.meshlets_after = out.len();

@@ -26,7 +26,7 @@ pub(crate) enum Rank {
 impl Search<'_> {
     /// The best improving boundary move of `t` under `rank`, if any.
     fn best_move(&mut self, t: u32, rank: Rank) -> Option<u32> {
-        let p = &self.part;
+        let p = &self.cells;
         let a = p.label[t as usize];
         let (nb, n) = p.neighbour_labels(t);
         if n == 0 {
@@ -74,13 +74,13 @@ impl Search<'_> {
             }
         }
         // Every move strictly lowers (vertex total, spread); the cap is only a guard.
-        let mut budget = 64 * self.part.label.len() + 1024;
+        let mut budget = 64 * self.cells.label.len() + 1024;
         while let Some(t) = work.pop_front() {
             self.scratch.queued[t as usize] = false;
             let Some(b) = self.best_move(t, rank) else {
                 continue;
             };
-            self.part.apply(t, b);
+            self.cells.apply(t, b);
             budget -= 1;
             if budget == 0 {
                 break;
@@ -95,8 +95,8 @@ impl Search<'_> {
     /// Queues every triangle sharing a vertex with `t` that is not queued yet (their gains may
     /// have changed with `t`'s move); `scratch.queued` marks the queue's members.
     pub(crate) fn queue_around(&mut self, t: u32, work: &mut VecDeque<u32>) {
-        for v in distinct(self.part.mesh.triangle(t as usize)) {
-            for &u in self.part.vt.row(v as usize) {
+        for v in distinct(self.cells.mesh.triangle(t as usize)) {
+            for &u in self.cells.vt.row(v as usize) {
                 if !self.scratch.queued[u as usize] {
                     self.scratch.queued[u as usize] = true;
                     work.push_back(u);
@@ -116,8 +116,8 @@ impl Search<'_> {
     pub(crate) fn improve_around(&mut self, moved: impl IntoIterator<Item = u32>) {
         let mut seeds = Vec::new();
         for t in moved {
-            for v in distinct(self.part.mesh.triangle(t as usize)) {
-                seeds.extend_from_slice(self.part.vt.row(v as usize));
+            for v in distinct(self.cells.mesh.triangle(t as usize)) {
+                seeds.extend_from_slice(self.cells.vt.row(v as usize));
             }
         }
         self.improve(&seeds, Rank::Vertices);

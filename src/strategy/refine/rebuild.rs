@@ -16,17 +16,17 @@ impl Search<'_> {
     /// Every live meshlet, emptiest first, with its neighbours rebuilt from scratch; counts the
     /// meshlets removed as dissolved.
     pub(super) fn rebuild_all(&mut self, stats: &mut Stats) {
-        for m in self.part.emptiest_first() {
-            if self.part.tcount[m as usize] == 0 {
+        for m in self.cells.emptiest_first() {
+            if self.cells.tcount[m as usize] == 0 {
                 continue;
             }
-            let mut region = self.part.adjacent_meshlets(m);
+            let mut region = self.cells.adjacent_meshlets(m);
             region.push(m);
             region.sort_unstable();
             region.dedup();
             let before = region.len();
             if self.rebuild(&region) {
-                stats.dissolved += before - self.part.live_in(&region);
+                stats.dissolved += before - self.cells.live_in(&region);
             }
         }
     }
@@ -35,7 +35,7 @@ impl Search<'_> {
     /// when it has fewer meshlets, or as many with fewer vertex references (and no more meshlets
     /// in pieces). True when kept.
     fn rebuild(&mut self, region: &[u32]) -> bool {
-        let p = &self.part;
+        let p = &self.cells;
         let mut tris: Vec<u32> = region
             .iter()
             .flat_map(|&m| p.members[m as usize].iter().copied())
@@ -65,23 +65,23 @@ impl Search<'_> {
         let (labels, _) = labels_of(&sub, &vt, &ml);
         let before = (p.live_in(region), old_refs);
         let pieces_before = region.iter().filter(|&&m| !self.is_connected(m)).count();
-        let old_labels: Vec<u32> = tris.iter().map(|&t| self.part.label[t as usize]).collect();
+        let old_labels: Vec<u32> = tris.iter().map(|&t| self.cells.label[t as usize]).collect();
         let new_labels: Vec<u32> = labels.iter().map(|&l| region[l as usize]).collect();
-        self.part
+        self.cells
             .relabel(&mut self.scratch, &tris, &new_labels, region);
         // meshoptimizer does not promise one piece per meshlet: hand stray pieces to neighbours,
         // and never end with more meshlets in pieces than before.
         self.mend_pieces(region);
         let pieces_after = region.iter().filter(|&&m| !self.is_connected(m)).count();
-        let refs: u32 = region.iter().map(|&m| self.part.vcount[m as usize]).sum();
-        if pieces_after > pieces_before || (self.part.live_in(region), refs) >= before {
-            self.part
+        let refs: u32 = region.iter().map(|&m| self.cells.vcount[m as usize]).sum();
+        if pieces_after > pieces_before || (self.cells.live_in(region), refs) >= before {
+            self.cells
                 .relabel(&mut self.scratch, &tris, &old_labels, region);
             return false;
         }
-        self.part.moves += 1;
+        self.cells.moves += 1;
         for &m in region {
-            self.part.changed_at[m as usize] = self.part.moves;
+            self.cells.changed_at[m as usize] = self.cells.moves;
         }
         true
     }
@@ -93,7 +93,7 @@ impl Search<'_> {
             if self.is_connected(m) {
                 continue;
             }
-            let pieces = self.scratch.pieces(&self.part, m);
+            let pieces = self.scratch.pieces(&self.cells, m);
             let largest = (0..pieces.len())
                 .max_by_key(|&i| (pieces[i].len(), std::cmp::Reverse(pieces[i][0])))
                 .expect("a meshlet in pieces has pieces");
@@ -101,7 +101,7 @@ impl Search<'_> {
                 if i == largest {
                     continue;
                 }
-                let p = &mut self.part;
+                let p = &mut self.cells;
                 let mut left: Vec<u32> = piece.clone();
                 let mut progress = true;
                 while !left.is_empty() && progress {

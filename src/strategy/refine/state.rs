@@ -1,11 +1,12 @@
-//! The partition the search edits, apart from the scratch buffers its queries reuse.
+//! The cells the search edits (a labelling of the triangles with meshlets), apart from the scratch
+//! buffers its queries reuse.
 //!
-//! [`Partition`] is the search state proper: a meshlet label per triangle and, kept in step by
-//! [`Partition::apply`], per-meshlet triangle and distinct-vertex counts, feature sums and member
+//! [`Cells`] is the search state proper: a meshlet label per triangle and, kept in step by
+//! [`Cells::apply`], per-meshlet triangle and distinct-vertex counts, feature sums and member
 //! lists. How often a meshlet uses a vertex is not stored: it is counted on the fly from the
 //! vertex -> triangle rows (a handful of triangles), which keeps a move O(1) in the mesh size. An
 //! optional move journal makes a failed attempt cost its own moves to undo
-//! ([`Partition::rollback`]), not a copy of the mesh.
+//! ([`Cells::rollback`]), not a copy of the mesh.
 //!
 //! [`Scratch`] holds the epoch-stamped buffers of the queries (a buffer is cleared by bumping the
 //! epoch, not by a pass over it), with the one flood fill ([`Scratch::flood`]) that every exact
@@ -53,7 +54,7 @@ pub(crate) fn labels_of(mesh: &Mesh, vt: &Csr, ml: &Meshlets) -> (Vec<u32>, Vec<
     (labels, seq)
 }
 
-/// Distinct vertices of each of the `k` meshlets of the partition `label` (one pass over the
+/// Distinct vertices of each of the `k` meshlets of the labelling `label` (one pass over the
 /// vertex -> triangle rows: a meshlet is counted once per vertex it uses).
 pub(crate) fn vertex_counts(vt: &Csr, label: &[u32], k: usize) -> Vec<u32> {
     let mut count = vec![0u32; k];
@@ -80,8 +81,8 @@ pub(crate) struct Undo {
     stamps: [usize; 2],
 }
 
-/// A partition of the mesh's triangles into meshlets, with every count a move needs.
-pub(crate) struct Partition<'a> {
+/// The cells: a meshlet label per triangle of the mesh, with every count a move needs.
+pub(crate) struct Cells<'a> {
     pub(crate) mesh: &'a Mesh,
     /// Vertex -> triangles.
     pub(crate) vt: &'a Csr,
@@ -110,8 +111,8 @@ pub(crate) struct Partition<'a> {
     pub(crate) journal: Option<Vec<Undo>>,
 }
 
-impl<'a> Partition<'a> {
-    /// The partition `label` (meshlets `0..k`) with every count made.
+impl<'a> Cells<'a> {
+    /// The labelling `label` (meshlets `0..k`) with every count made.
     pub(crate) fn new(
         mesh: &'a Mesh,
         vt: &'a Csr,
@@ -409,7 +410,7 @@ impl<'a> Partition<'a> {
         self.live = self.live - live_before + self.live_in(region);
     }
 
-    /// The partition as meshlets, in the input's meshlet order; inside a meshlet the triangles
+    /// The cells as meshlets, in the input's meshlet order; inside a meshlet the triangles
     /// keep the input's triangle order (`seq`), received ones where they came from.
     pub(crate) fn into_meshlets(self, seq: &[u32]) -> Meshlets {
         let mut order: Vec<Vec<u32>> = vec![Vec::new(); self.tcount.len()];
@@ -445,13 +446,14 @@ pub(crate) struct Scratch {
 }
 
 /// The edge neighbours of `t` in its own meshlet: what must stay joined when `t` leaves.
-fn same_meshlet_neighbours(part: &Partition, t: u32) -> Vec<u32> {
-    let own = part.label[t as usize];
-    part.dual
+fn same_meshlet_neighbours(cells: &Cells, t: u32) -> Vec<u32> {
+    let own = cells.label[t as usize];
+    cells
+        .dual
         .row(t as usize)
         .iter()
         .copied()
-        .filter(|&u| part.label[u as usize] == own)
+        .filter(|&u| cells.label[u as usize] == own)
         .collect()
 }
 
@@ -479,13 +481,8 @@ impl Scratch {
     /// marked beforehand is a wall). `reached` is told every triangle after `start` as the fill
     /// reaches it and ends the fill by returning true, and then so does this. The triangles
     /// reached (so far) are left in `piece`, in the order reached.
-    fn flood(
-        &mut self,
-        part: &Partition,
-        start: u32,
-        mut reached: impl FnMut(u32) -> bool,
-    ) -> bool {
-        let m = part.label[start as usize];
+    fn flood(&mut self, cells: &Cells, start: u32, mut reached: impl FnMut(u32) -> bool) -> bool {
+        let m = cells.label[start as usize];
         let e = self.epoch;
         self.seen[start as usize] = e;
         self.piece.clear();
@@ -494,8 +491,8 @@ impl Scratch {
         while i < self.piece.len() {
             let u = self.piece[i];
             i += 1;
-            for &w in part.dual.row(u as usize) {
-                if part.label[w as usize] == m && self.seen[w as usize] != e {
+            for &w in cells.dual.row(u as usize) {
+                if cells.label[w as usize] == m && self.seen[w as usize] != e {
                     self.seen[w as usize] = e;
                     self.piece.push(w);
                     if reached(w) {
@@ -509,15 +506,15 @@ impl Scratch {
 
     /// Whether removing `t` leaves its meshlet's edge-connected piece around `t` in one piece:
     /// a fill from one of `t`'s same-meshlet neighbours, walled at `t`, reaches the others.
-    pub(crate) fn stays_connected(&mut self, part: &Partition, t: u32) -> bool {
-        let targets = same_meshlet_neighbours(part, t);
+    pub(crate) fn stays_connected(&mut self, cells: &Cells, t: u32) -> bool {
+        let targets = same_meshlet_neighbours(cells, t);
         if targets.len() <= 1 {
             return true;
         }
         let e = self.new_epoch();
         self.seen[t as usize] = e;
         let mut left = targets.len() - 1;
-        self.flood(part, targets[0], |w| {
+        self.flood(cells, targets[0], |w| {
             if targets.contains(&w) {
                 left -= 1;
                 left == 0
@@ -531,17 +528,17 @@ impl Scratch {
     /// `t`'s same-meshlet neighbours are joined without `t` through the meshlet's triangles around
     /// `t`'s corners. False can be wrong (a detour outside the ring), true cannot; it costs a few
     /// dozen steps where the fill walks the whole meshlet to find that `t` is a bridge.
-    pub(crate) fn stays_connected_locally(&mut self, part: &Partition, t: u32) -> bool {
-        let own = part.label[t as usize];
-        let targets = same_meshlet_neighbours(part, t);
+    pub(crate) fn stays_connected_locally(&mut self, cells: &Cells, t: u32) -> bool {
+        let own = cells.label[t as usize];
+        let targets = same_meshlet_neighbours(cells, t);
         if targets.len() <= 1 {
             return true;
         }
         // The ring is marked with one epoch, the fill with the next.
         let ring = self.new_epoch();
-        for x in distinct(part.mesh.triangle(t as usize)) {
-            for &u in part.vt.row(x as usize) {
-                if part.label[u as usize] == own {
+        for x in distinct(cells.mesh.triangle(t as usize)) {
+            for &u in cells.vt.row(x as usize) {
+                if cells.label[u as usize] == own {
                     self.seen[u as usize] = ring;
                 }
             }
@@ -555,7 +552,7 @@ impl Scratch {
         while i < self.piece.len() {
             let w = self.piece[i];
             i += 1;
-            for &z in part.dual.row(w as usize) {
+            for &z in cells.dual.row(w as usize) {
                 if self.seen[z as usize] == ring {
                     self.seen[z as usize] = fill;
                     self.piece.push(z);
@@ -566,20 +563,20 @@ impl Scratch {
     }
 
     /// Whether meshlet `m` is one edge-connected piece.
-    pub(crate) fn is_connected(&mut self, part: &Partition, m: u32) -> bool {
-        let members = &part.members[m as usize];
+    pub(crate) fn is_connected(&mut self, cells: &Cells, m: u32) -> bool {
+        let members = &cells.members[m as usize];
         let Some(&first) = members.first() else {
             return true;
         };
         self.new_epoch();
-        self.flood(part, first, |_| false);
+        self.flood(cells, first, |_| false);
         self.piece.len() == members.len()
     }
 
     /// The edge-connected pieces of meshlet `m`, each led by its smallest triangle and in the
     /// order the fill reached it, smallest leader first.
-    pub(crate) fn pieces(&mut self, part: &Partition, m: u32) -> Vec<Vec<u32>> {
-        let mut members = part.members[m as usize].clone();
+    pub(crate) fn pieces(&mut self, cells: &Cells, m: u32) -> Vec<Vec<u32>> {
+        let mut members = cells.members[m as usize].clone();
         members.sort_unstable();
         let e = self.new_epoch();
         let mut out = Vec::new();
@@ -587,7 +584,7 @@ impl Scratch {
             if self.seen[first as usize] == e {
                 continue;
             }
-            self.flood(part, first, |_| false);
+            self.flood(cells, first, |_| false);
             out.push(self.piece.clone());
         }
         out
@@ -609,14 +606,14 @@ impl Scratch {
     }
 }
 
-/// What the steps work on: the partition and the scratch buffers of its queries.
+/// What the steps work on: the cells and the scratch buffers of their queries.
 pub(crate) struct Search<'a> {
-    pub(crate) part: Partition<'a>,
+    pub(crate) cells: Cells<'a>,
     pub(crate) scratch: Scratch,
 }
 
 impl<'a> Search<'a> {
-    /// The search over the partition `label` (meshlets `0..k`) of `mesh`.
+    /// The search over the labelling `label` (meshlets `0..k`) of `mesh`.
     pub(crate) fn new(
         mesh: &'a Mesh,
         vt: &'a Csr,
@@ -626,24 +623,24 @@ impl<'a> Search<'a> {
         limits: Limits,
     ) -> Self {
         Self {
-            part: Partition::new(mesh, vt, dual, label, k, limits),
+            cells: Cells::new(mesh, vt, dual, label, k, limits),
             scratch: Scratch::new(mesh.triangle_count(), mesh.vertex_count()),
         }
     }
 
-    /// [`Scratch::stays_connected`] on the partition.
+    /// [`Scratch::stays_connected`] on the cells.
     pub(crate) fn stays_connected(&mut self, t: u32) -> bool {
-        self.scratch.stays_connected(&self.part, t)
+        self.scratch.stays_connected(&self.cells, t)
     }
 
-    /// [`Scratch::stays_connected_locally`] on the partition.
+    /// [`Scratch::stays_connected_locally`] on the cells.
     pub(crate) fn stays_connected_locally(&mut self, t: u32) -> bool {
-        self.scratch.stays_connected_locally(&self.part, t)
+        self.scratch.stays_connected_locally(&self.cells, t)
     }
 
-    /// [`Scratch::is_connected`] on the partition.
+    /// [`Scratch::is_connected`] on the cells.
     pub(crate) fn is_connected(&mut self, m: u32) -> bool {
-        self.scratch.is_connected(&self.part, m)
+        self.scratch.is_connected(&self.cells, m)
     }
 }
 
@@ -672,14 +669,14 @@ mod tests {
             let fill = s.stays_connected(t);
             assert!(!local || fill, "triangle {t}: locally joined, but a bridge");
             // Only triangles with two or more neighbours in their meshlet need a search.
-            let searched = same_meshlet_neighbours(&s.part, t).len() >= 2;
+            let searched = same_meshlet_neighbours(&s.cells, t).len() >= 2;
             yes += (local && searched) as usize;
             no += (!fill) as usize;
         }
         assert!(yes > 0 && no > 0, "{yes} joined, {no} bridges");
     }
 
-    /// Every exact connectivity query goes through the one flood fill: on a partition with
+    /// Every exact connectivity query goes through the one flood fill: on a labelling with
     /// meshlets in pieces (triangles dealt out by index), the pieces split each meshlet,
     /// `is_connected` agrees with them, and `stays_connected` agrees with the piece count once `t`
     /// is moved out.
@@ -695,10 +692,10 @@ mod tests {
         let mut s = Search::new(&mesh, &vt, &dual, label, k, Limits::DEFAULT);
         let mut split = 0;
         for m in 0..k as u32 {
-            let pieces = s.scratch.pieces(&s.part, m);
+            let pieces = s.scratch.pieces(&s.cells, m);
             let mut all: Vec<u32> = pieces.concat();
             all.sort_unstable();
-            let mut members = s.part.members[m as usize].clone();
+            let mut members = s.cells.members[m as usize].clone();
             members.sort_unstable();
             assert_eq!(all, members, "meshlet {m}");
             assert!(pieces.windows(2).all(|w| w[0][0] < w[1][0]));
@@ -707,20 +704,20 @@ mod tests {
         }
         assert!(
             split > 0,
-            "the test partition should have meshlets in pieces"
+            "the test labelling should have meshlets in pieces"
         );
         // `t` leaves its piece whole when moving it out adds no piece to its meshlet.
         let spare = k as u32 - 1;
         for t in (0..mesh.triangle_count() as u32).step_by(5) {
-            let own = s.part.label[t as usize];
+            let own = s.cells.label[t as usize];
             if own == spare {
                 continue;
             }
-            let before = s.scratch.pieces(&s.part, own).len();
+            let before = s.scratch.pieces(&s.cells, own).len();
             let stays = s.stays_connected(t);
-            s.part.apply(t, spare);
-            let after = s.scratch.pieces(&s.part, own).len();
-            s.part.apply(t, own);
+            s.cells.apply(t, spare);
+            let after = s.scratch.pieces(&s.cells, own).len();
+            s.cells.apply(t, own);
             // Without same-meshlet neighbours `t` was a piece of its own and leaves one fewer.
             assert_eq!(
                 stays,
@@ -739,7 +736,7 @@ mod tests {
         let dual = dual_graph(&mesh, &vt);
         let label: Vec<u32> = (0..mesh.triangle_count() as u32).map(|t| t / 24).collect();
         let k = *label.iter().max().unwrap() as usize + 1;
-        let p = Partition::new(&mesh, &vt, &dual, label, k, Limits::DEFAULT);
+        let p = Cells::new(&mesh, &vt, &dual, label, k, Limits::DEFAULT);
         for m in 0..k as u32 {
             assert_eq!(p.rings(m, 0, |_| false), vec![m]);
             let mut one = p.rings(m, 1, |_| false);
