@@ -4,7 +4,7 @@
 //! # Building meshlets
 //!
 //! **In:** a [`mesh::Mesh`]: f32 positions and a u32 triangle list, counter-clockwise. Load one
-//! from a file with [`mesh::load`] (PLY, OBJ, glTF/GLB, optionally zstd-compressed) or hand over
+//! from a file with [`mesh::load`] (PLY, OBJ, STL, glTF/GLB, optionally zstd-compressed) or hand over
 //! the arrays an engine holds with [`mesh::Mesh::from_slices`] / [`mesh::Mesh::from_strided`];
 //! every constructor validates (finite positions, indices in range, at least one triangle) and
 //! returns a typed [`mesh::MeshError`] that names the source.

@@ -28,7 +28,8 @@ use std::time::Duration;
 
 /// Build, measure and compare meshlets (triangle clusters for GPU mesh shaders).
 ///
-/// Meshes: PLY (ASCII/binary), OBJ, glTF 2.0 (.gltf/.glb), each optionally zstd-compressed (.zst);
+/// Meshes: PLY (ASCII/binary), OBJ, STL (ASCII/binary), glTF 2.0 (.gltf/.glb), each optionally
+/// zstd-compressed (.zst);
 /// `gen:NAME` generates one instead (cad-part-128, cad-part-400, strut-lattice, terrain-80: the
 /// stress meshes; noisy-sphere, knot-tube, terrain). Strategies: nvidia, nvidia+tipsify, greedy,
 /// bsphere, bsphere-coherent, bsphere-parallel, kmedoids (capacity-aware), kmedoids-flat, kmedoids-paper,

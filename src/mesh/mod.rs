@@ -13,6 +13,7 @@ mod load;
 mod obj;
 pub mod ply;
 mod stats;
+pub mod stl;
 pub mod subdivide;
 
 pub use error::{MeshError, MeshErrorKind};
