@@ -16,6 +16,25 @@ fn binary_ply() -> Vec<u8> {
     b
 }
 
+fn binary_stl() -> Vec<u8> {
+    let m = mesh::generate::terrain(4, 1);
+    let mut b = Vec::new();
+    mesh::stl::write_binary(&m.positions, &m.indices, &mut b).unwrap();
+    b
+}
+
+/// `binary_stl()` with `f` applied.
+fn stl_with(f: impl FnOnce(&mut Vec<u8>)) -> Vec<u8> {
+    let mut b = binary_stl();
+    f(&mut b);
+    b
+}
+
+/// An ASCII STL of one triangle.
+const STL: &str =
+    "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n\
+                   endloop\nendfacet\nendsolid t\n";
+
 fn zst(data: &[u8]) -> Vec<u8> {
     zstd::stream::encode_all(data, 3).unwrap()
 }
@@ -56,6 +75,24 @@ fn cases() -> Vec<Case> {
         ("range.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n".to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),
         ("nan.obj", b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n".to_vec(), |k| matches!(k, MeshErrorKind::NonFinite { .. })),
         ("empty.obj", b"# nothing\nv 0 0 0\n".to_vec(), |k| matches!(k, MeshErrorKind::Empty(_))),
+        ("truncated.stl", stl_with(|b| b.truncate(b.len() - 7)), |k| matches!(k, MeshErrorKind::Truncated(_))),
+        ("too_long.stl", stl_with(|b| b.extend_from_slice(&[0u8; 13])), |k| matches!(k, MeshErrorKind::CountMismatch(_))),
+        // A header beginning with "solid" does not make a cut binary file ASCII.
+        ("solid_truncated.stl", stl_with(|b| { b[..5].copy_from_slice(b"solid"); b.truncate(b.len() - 50) }), |k| matches!(k, MeshErrorKind::Truncated(_))),
+        // 4 G facets announced by a 1 KiB file: refused before anything is allocated.
+        ("absurd.stl", stl_with(|b| b[80..84].copy_from_slice(&u32::MAX.to_le_bytes())), |k| matches!(k, MeshErrorKind::Truncated(_))),
+        ("no_facets.stl", stl_with(|b| { b.truncate(84); b[80..84].fill(0) }), |k| matches!(k, MeshErrorKind::Empty(_))),
+        ("short.stl", b"not an stl".to_vec(), |k| matches!(k, MeshErrorKind::Truncated(_))),
+        ("inf.stl", stl_with(|b| b[84 + 50 + 16..84 + 50 + 20].copy_from_slice(&f32::INFINITY.to_le_bytes())), |k| matches!(k, MeshErrorKind::NonFinite { vertex: 3, .. })),
+        ("nan.stl", STL.replace("vertex 1 0 0", "vertex 1 nan 0").into_bytes(), |k| matches!(k, MeshErrorKind::NonFinite { vertex: 1, .. })),
+        ("big.stl", STL.replace("vertex 0 1 0", "vertex 0 1 1e39").into_bytes(), |k| matches!(k, MeshErrorKind::NonFinite { vertex: 2, .. })),
+        ("keyword.stl", STL.replace("outer loop", "outer lop").into_bytes(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("number.stl", STL.replace("vertex 1 0 0", "vertex 1,5 0 0").into_bytes(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("four_corners.stl", STL.replace("endloop", "vertex 1 1 0\nendloop").into_bytes(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("cut_ascii.stl", STL.as_bytes()[..STL.len() - 30].to_vec(), |k| matches!(k, MeshErrorKind::Truncated(_))),
+        ("empty.stl", b"solid nothing\nendsolid nothing\n".to_vec(), |k| matches!(k, MeshErrorKind::Empty(_))),
+        ("trailing.stl", format!("{STL}facet").into_bytes(), |k| matches!(k, MeshErrorKind::Parse { .. })),
+        ("nan_in.stl.zst", zst(&stl_with(|b| b[84 + 24..84 + 28].copy_from_slice(&f32::NAN.to_le_bytes()))), |k| matches!(k, MeshErrorKind::NonFinite { vertex: 1, .. })),
         ("bad.gltf", b"{ not json".to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),
         ("bad.glb", b"glTF\x02\x00\x00\x00\xff\xff\xff\xff".to_vec(), |k| matches!(k, MeshErrorKind::Truncated(_))),
         ("short.glb", b"glTF\x02\x00\x00\x00\x05\x00\x00\x00".to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),

@@ -279,3 +279,63 @@ fn export_round_trips_through_the_gltf_loader() {
         }
     }
 }
+
+/// The triangles of `m` as corner positions, and the number of distinct positions they use (-0.0
+/// and 0.0 counted as one): what an STL round trip must give back.
+fn welded(m: &Mesh) -> (Vec<[[f32; 3]; 3]>, usize) {
+    let key = |p: [f32; 3]| p.map(|c| if c == 0.0 { 0 } else { c.to_bits() });
+    let corners: Vec<[[f32; 3]; 3]> = (0..m.triangle_count())
+        .map(|t| m.triangle(t).map(|v| m.positions[v as usize]))
+        .collect();
+    let distinct: std::collections::HashSet<[u32; 3]> =
+        corners.iter().flatten().map(|&p| key(p)).collect();
+    (corners, distinct.len())
+}
+
+#[test]
+fn stl_ascii_binary_and_zst_round_trip_through_load() {
+    let dir = common::scratch("stl");
+    for (name, m) in [
+        ("terrain", mesh::generate::terrain(40, 2)),
+        ("cad-part", mesh::generate::named("cad-part-128").unwrap()),
+    ] {
+        let (corners, distinct) = welded(&m);
+        let check = |file: &str| {
+            let back = mesh::load(&dir.join(file)).unwrap_or_else(|e| panic!("{e}"));
+            let (got, _) = welded(&back);
+            assert_eq!(got, corners, "{file}: corners, winding and order kept");
+            assert_eq!(back.vertex_count(), distinct, "{file}: welded exactly");
+        };
+        let mut bin = Vec::new();
+        mesh::stl::write_binary(&m.positions, &m.indices, &mut bin).unwrap();
+        std::fs::write(dir.join(format!("{name}.stl")), &bin).unwrap();
+        check(&format!("{name}.stl"));
+        std::fs::write(
+            dir.join(format!("{name}.STL.zst")),
+            zstd::encode_all(&bin[..], 1).unwrap(),
+        )
+        .unwrap();
+        check(&format!("{name}.STL.zst"));
+        // The same header starting with "solid", as many CAD exporters write it.
+        bin[..16].copy_from_slice(b"solid part      ");
+        std::fs::write(dir.join(format!("{name}-solid.stl")), &bin).unwrap();
+        check(&format!("{name}-solid.stl"));
+
+        let mut ascii = format!("solid {name}\n");
+        for c in &corners {
+            ascii += " facet normal 0 0 0\n  outer loop\n";
+            for p in c {
+                writeln!(ascii, "   vertex {:?} {:?} {:?}", p[0], p[1], p[2]).unwrap();
+            }
+            ascii += "  endloop\n endfacet\n";
+        }
+        ascii += &format!("endsolid {name}\n");
+        std::fs::write(dir.join(format!("{name}-ascii.stl")), &ascii).unwrap();
+        check(&format!("{name}-ascii.stl"));
+        assert_eq!(
+            mesh::load(&dir.join(format!("{name}-ascii.stl"))).unwrap(),
+            mesh::load(&dir.join(format!("{name}.stl"))).unwrap(),
+            "ASCII and binary give the same mesh"
+        );
+    }
+}

@@ -165,7 +165,7 @@ pub fn mesh_files(dir: &Path) -> Result<Vec<PathBuf>> {
     files.sort();
     if files.is_empty() {
         bail!(
-            "{}: no mesh files (.ply, .obj, .gltf, .glb, optionally .zst)",
+            "{}: no mesh files (.ply, .obj, .stl, .gltf, .glb, optionally .zst)",
             dir.display()
         );
     }

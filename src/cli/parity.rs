@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 /// Arguments of `parity`.
 #[derive(Args, Debug)]
 pub struct ParityArgs {
-    /// Mesh file (PLY, OBJ, glTF/GLB, optionally .zst).
+    /// Mesh file (PLY, OBJ, STL, glTF/GLB, optionally .zst).
     mesh: PathBuf,
     /// Meshlet limits for k-medoids.
     #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]

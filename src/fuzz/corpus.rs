@@ -93,7 +93,8 @@ pub struct Seed {
     pub numbers: Vec<Field>,
     /// Float fields (coordinates).
     pub floats: Vec<Field>,
-    /// Bytes `..text_end` are text (the whole file for text formats, the header for binary PLY).
+    /// Bytes `..text_end` are text (the whole file for text formats, the header for binary PLY and
+    /// binary STL).
     pub text_end: usize,
     /// glTF parts, for glTF and GLB seeds.
     pub gltf: Option<GltfParts>,
@@ -140,6 +141,10 @@ impl Corpus {
             seeds.push(gltf_quantised(&pos, &quads, glb));
             seeds.push(gltf_meshopt(&pos, &quads, glb));
         }
+        for rich in [false, true] {
+            seeds.push(stl_ascii(&pos, &quads, rich));
+            seeds.push(stl_binary(&pos, &quads, rich));
+        }
         let meshlet_source = Mesh {
             positions: pos.clone(),
             indices: quads
@@ -165,7 +170,7 @@ impl Corpus {
         let inner = |s: &&Seed| match t {
             Target::Zst => matches!(
                 s.target,
-                Target::PlyAscii | Target::PlyLe | Target::Obj | Target::Glb
+                Target::PlyAscii | Target::PlyLe | Target::Obj | Target::Glb | Target::StlBinary
             ),
             _ => s.target == t,
         };
@@ -512,6 +517,157 @@ fn obj(pos: &[[f32; 3]], quads: &[[u32; 4]], rich: bool) -> Seed {
         boundaries: w.boundaries,
         numbers: w.numbers,
         floats: w.floats,
+        gltf: None,
+    }
+}
+
+/// The grid's quads as counter-clockwise triangles.
+fn triangles(quads: &[[u32; 4]]) -> Vec<[u32; 3]> {
+    quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect()
+}
+
+/// Unit normal of a triangle (what an exporter writes; the reader ignores it).
+fn normal(p: [[f32; 3]; 3]) -> [f32; 3] {
+    let [a, b, c] = p.map(glam::Vec3::from_array);
+    (b - a).cross(c - a).normalize_or_zero().to_array()
+}
+
+/// An ASCII STL of the grid. Rich: CRLF line ends, tabs, upper-case keywords, two solids (the
+/// second without a name), and x = 0 written as -0 in every other facet (welded with 0).
+fn stl_ascii(pos: &[[f32; 3]], quads: &[[u32; 4]], rich: bool) -> Seed {
+    let mut w = Writer {
+        out: Vec::new(),
+        enc: Enc::Ascii,
+        boundaries: Vec::new(),
+        numbers: Vec::new(),
+        floats: Vec::new(),
+    };
+    let eol = |w: &mut Writer| {
+        if rich {
+            w.text("\r");
+        }
+        w.end_record();
+    };
+    let tris = triangles(quads);
+    let half = if rich { tris.len() / 2 } else { tris.len() };
+    for (part, solid) in [&tris[..half], &tris[half..]].into_iter().enumerate() {
+        if solid.is_empty() {
+            continue;
+        }
+        let kw = |s: &str| {
+            if part == 1 {
+                s.to_ascii_uppercase()
+            } else {
+                s.to_string()
+            }
+        };
+        let indent = if rich { "\t" } else { "  " };
+        w.text(&kw(if part == 0 {
+            "solid meshletlab fuzz seed"
+        } else {
+            "solid"
+        }));
+        eol(&mut w);
+        for (f, t) in solid.iter().enumerate() {
+            let p = t.map(|v| pos[v as usize]);
+            w.text(&kw("facet normal"));
+            for c in normal(p) {
+                w.value("float", c as f64, true, false);
+            }
+            eol(&mut w);
+            w.text(&format!("{indent}{}", kw("outer loop")));
+            eol(&mut w);
+            for c in p {
+                w.text(&format!("{indent}{indent}{}", kw("vertex")));
+                for (k, &x) in c.iter().enumerate() {
+                    let x = if rich && k == 0 && x == 0.0 && f % 2 == 1 {
+                        -0.0
+                    } else {
+                        x
+                    };
+                    w.value("float", x as f64, true, false);
+                }
+                eol(&mut w);
+            }
+            w.text(&format!("{indent}{}", kw("endloop")));
+            eol(&mut w);
+            w.text(&kw("endfacet"));
+            eol(&mut w);
+        }
+        w.text(&kw(if part == 0 {
+            "endsolid meshletlab fuzz seed"
+        } else {
+            "endsolid"
+        }));
+        eol(&mut w);
+    }
+    Seed {
+        name: format!(
+            "stl-ascii/{}",
+            if rich {
+                "crlf-upper-two-solids"
+            } else {
+                "plain"
+            }
+        ),
+        target: Target::StlAscii,
+        text_end: w.out.len(),
+        bytes: w.out,
+        boundaries: w.boundaries,
+        numbers: w.numbers,
+        floats: w.floats,
+        gltf: None,
+    }
+}
+
+/// A binary STL of the grid: the facet count and every normal and corner float marked. Solid: the
+/// header begins with "solid" (as many exporters write it), padded with spaces, and the attribute
+/// words hold colours; else a header padded with NULs and zero attribute words.
+fn stl_binary(pos: &[[f32; 3]], quads: &[[u32; 4]], solid: bool) -> Seed {
+    let tris = triangles(quads);
+    let mut bytes = vec![if solid { b' ' } else { 0 }; 80];
+    let name: &[u8] = if solid {
+        b"solid meshletlab fuzz seed"
+    } else {
+        b"binary STL, meshletlab fuzz seed"
+    };
+    bytes[..name.len()].copy_from_slice(name);
+    bytes.extend_from_slice(&(tris.len() as u32).to_le_bytes());
+    let mut boundaries = vec![80, 84];
+    let mut floats = Vec::new();
+    for (f, t) in tris.iter().enumerate() {
+        let p = t.map(|v| pos[v as usize]);
+        boundaries.extend([bytes.len(), bytes.len() + 12, bytes.len() + 48]);
+        for c in std::iter::once(normal(p)).chain(p).flatten() {
+            floats.push(Field::Bin {
+                at: bytes.len(),
+                width: 4,
+                be: false,
+            });
+            bytes.extend_from_slice(&c.to_le_bytes());
+        }
+        let attribute = if solid { 0x8000 | (f as u16 * 997) } else { 0 };
+        bytes.extend_from_slice(&attribute.to_le_bytes());
+    }
+    boundaries.push(bytes.len());
+    Seed {
+        name: format!(
+            "stl-binary/{}",
+            if solid { "solid-header" } else { "plain" }
+        ),
+        target: Target::StlBinary,
+        bytes,
+        boundaries,
+        numbers: vec![Field::Bin {
+            at: 80,
+            width: 4,
+            be: false,
+        }],
+        floats,
+        text_end: 80,
         gltf: None,
     }
 }

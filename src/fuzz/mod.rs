@@ -1,6 +1,6 @@
 //! A seeded mutation fuzzer over every file reader: PLY (ASCII, binary little and big endian), OBJ,
-//! glTF, GLB, zstd-compressed files, the meshlet file (`check`), the LOD file (`lod-check`) and the
-//! compressed-meshlet file (`check`).
+//! glTF, GLB, STL (ASCII and binary), zstd-compressed files, the meshlet file (`check`), the LOD
+//! file (`lod-check`) and the compressed-meshlet file (`check`).
 //!
 //! Case `k` of a run with seed `s` is a pure function of `(s, k)`: a target format, a seed file of
 //! that format ([`corpus`]) and a mutation ([`mutate`]): bit flips, truncation at structural
@@ -58,7 +58,11 @@ pub enum Target {
     Gltf,
     /// Binary glTF.
     Glb,
-    /// zstd-compressed PLY, OBJ or GLB.
+    /// STL, ASCII.
+    StlAscii,
+    /// STL, binary.
+    StlBinary,
+    /// zstd-compressed PLY, OBJ, GLB or binary STL.
     Zst,
     /// The meshlet file, read and checked against its mesh (`meshletlab check`).
     Meshlet,
@@ -70,13 +74,15 @@ pub enum Target {
 
 impl Target {
     /// Every target, in report order.
-    pub const ALL: [Target; 10] = [
+    pub const ALL: [Target; 12] = [
         Target::PlyAscii,
         Target::PlyLe,
         Target::PlyBe,
         Target::Obj,
         Target::Gltf,
         Target::Glb,
+        Target::StlAscii,
+        Target::StlBinary,
         Target::Zst,
         Target::Meshlet,
         Target::Lod,
@@ -92,6 +98,8 @@ impl Target {
             Target::Obj => "obj",
             Target::Gltf => "gltf",
             Target::Glb => "glb",
+            Target::StlAscii => "stl-ascii",
+            Target::StlBinary => "stl-binary",
             Target::Zst => "zst",
             Target::Meshlet => "meshlet",
             Target::Lod => "lod",
@@ -105,6 +113,7 @@ impl Target {
             Target::Obj => "obj",
             Target::Gltf => "gltf",
             Target::Glb => "glb",
+            Target::StlAscii | Target::StlBinary => "stl",
             Target::Zst => "zst",
             Target::Meshlet => "mlt",
             Target::Lod => "lod",
@@ -182,7 +191,8 @@ impl Mutation {
         let gltf = matches!(t, Target::Gltf | Target::Glb);
         match self {
             Mutation::JsonIndex | Mutation::JsonType | Mutation::JsonCycle => gltf,
-            // Text exists in every format but the meshlet file (binary PLY: its header; GLB: JSON).
+            // Text exists in every format but the meshlet, LOD and compressed files (binary PLY and
+            // STL: the header; GLB: JSON).
             Mutation::TokenDelete | Mutation::TokenRepeat => {
                 !matches!(t, Target::Meshlet | Target::Lod | Target::Compressed)
             }

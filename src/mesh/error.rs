@@ -20,7 +20,9 @@ pub enum MeshErrorKind {
     #[error("cannot read file: {0}")]
     Io(#[from] std::io::Error),
     /// The file extension names no supported format.
-    #[error("unknown mesh format (expected .ply, .obj, .gltf or .glb, optionally with .zst)")]
+    #[error(
+        "unknown mesh format (expected .ply, .obj, .stl, .gltf or .glb, optionally with .zst)"
+    )]
     UnknownFormat,
     /// A `gen:NAME` path whose name is not a generated mesh; holds the names there are.
     #[error("no generated mesh of that name (there are: {0})")]

@@ -1,7 +1,7 @@
 //! Format dispatch by file extension, with in-process zstd decompression of `*.zst`.
 
 use super::error::{MeshError, MeshErrorKind};
-use super::{gltf_io, obj, ply, Mesh};
+use super::{gltf_io, obj, ply, stl, Mesh};
 use std::path::Path;
 
 /// A supported mesh container.
@@ -15,6 +15,8 @@ pub enum Format {
     Gltf,
     /// glTF 2.0 binary container.
     Glb,
+    /// STL, ASCII or binary (vertices welded by exact position).
+    Stl,
 }
 
 impl Format {
@@ -32,6 +34,7 @@ impl Format {
             "obj" => Format::Obj,
             "gltf" => Format::Gltf,
             "glb" => Format::Glb,
+            "stl" => Format::Stl,
             _ => return None,
         };
         Some((f, zst))
@@ -75,6 +78,7 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
     let (positions, indices) = match format {
         Format::Ply => ply::parse(data),
         Format::Obj => obj::parse(data),
+        Format::Stl => stl::parse(data),
         Format::Gltf | Format::Glb => gltf_io::parse(data, path.parent()),
     }
     .map_err(err)?;

@@ -14,6 +14,7 @@ mod load;
 mod obj;
 pub mod ply;
 mod stats;
+pub mod stl;
 pub mod subdivide;
 pub mod tipsify;
 
