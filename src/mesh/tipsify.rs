@@ -86,7 +86,24 @@ fn next_live(live: &[u32], cursor: &mut usize) -> Option<u32> {
 /// measure tipsify optimises, used to test it.
 pub fn acmr_fifo(mesh: &Mesh, order: &[u32], k: usize) -> f64 {
     let refs = order.iter().flat_map(|&t| mesh.triangle(t as usize));
-    crate::meshlet::order::fifo_misses(refs, k) as f64 / order.len().max(1) as f64
+    fifo_misses(refs, k) as f64 / order.len().max(1) as f64
+}
+
+/// Misses of a FIFO cache of `k` entries over a stream of vertex references (post-transform cache
+/// model; shared by tipsify's ACMR and the in-meshlet locality measure).
+pub fn fifo_misses<T: PartialEq + Copy>(refs: impl IntoIterator<Item = T>, k: usize) -> usize {
+    let mut fifo = std::collections::VecDeque::with_capacity(k + 1);
+    let mut misses = 0;
+    for v in refs {
+        if !fifo.contains(&v) {
+            misses += 1;
+            fifo.push_back(v);
+            if fifo.len() > k {
+                fifo.pop_front();
+            }
+        }
+    }
+    misses
 }
 
 #[cfg(test)]

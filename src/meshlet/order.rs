@@ -3,6 +3,7 @@
 //! matters") and the order of meshlets in the collection (the paper's Figure 10).
 
 use super::Meshlets;
+use crate::mesh::tipsify::fifo_misses;
 use serde::Serialize;
 use std::str::FromStr;
 
@@ -127,23 +128,6 @@ pub fn local_miss_rate(ml: &Meshlets, cache: usize) -> f64 {
         .map(|i| fifo_misses(ml.meshlet_triangles(i).iter().copied(), cache))
         .sum();
     misses as f64 / ml.triangle_count().max(1) as f64
-}
-
-/// Misses of a FIFO cache of `k` entries over a stream of vertex references (post-transform cache
-/// model; shared by tipsify's ACMR and the in-meshlet locality measure).
-pub fn fifo_misses<T: PartialEq + Copy>(refs: impl IntoIterator<Item = T>, k: usize) -> usize {
-    let mut fifo = std::collections::VecDeque::with_capacity(k + 1);
-    let mut misses = 0;
-    for v in refs {
-        if !fifo.contains(&v) {
-            misses += 1;
-            fifo.push_back(v);
-            if fifo.len() > k {
-                fifo.pop_front();
-            }
-        }
-    }
-    misses
 }
 
 #[cfg(test)]

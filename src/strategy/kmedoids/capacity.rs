@@ -185,13 +185,9 @@ pub fn cluster_with(
 /// Whether steps 2-4 may pay for themselves: at least a third of the `k` clusters are light
 /// (at most half the triangle limit). Light clusters are what a re-assignment can absorb; where
 /// fewer are light, growing all clusters at once from their medoids leaves more gaps than it
-/// closes. Measured (64/126, 64/84, 128/128; ten shared and six generated meshes) before step 1b:
-/// rounds were accepted only on the neurons (40-55 % light, 3-4 rounds, a fifth fewer clusters);
-/// every other mesh (at most 29 % light) rejected the first round, which cost a third of the run
-/// (the 14 M-triangle dragon: 6.8 s of 23 s). Step 1b leaves fewer light clusters: with the
-/// corner-first seeds the gate then opened with centre growth only on neuron 722817260 at 128/128
-/// (5 rounds), and rounds forced on at 64/126 and 64/84 were all rejected; with the deepest-first
-/// seeds ([`seed_order`]) it opens on neither neuron at 64/126, 64/84 or 128/128.
+/// closes. A third is where the measurements split: rounds were accepted only on meshes with many
+/// light clusters (trees of thin tubes), and every mesh with fewer rejected the first round after
+/// paying for it. `results/kmedoids.md` reports the rounds each mesh ran (`bench kmedoids`).
 fn worth_a_round(labels: &[u32], k: usize, limits: Limits) -> bool {
     let mut tris = vec![0u32; k];
     for &l in labels {

@@ -90,7 +90,7 @@ impl LocalGraph {
 
     /// [`Self::distance_sums`] for at most 128 nodes (every cluster that fits a meshlet: the
     /// presets' triangle limits are at most 128), each reach set one `u128`: no inner loop over
-    /// words, a fifth of the run's medoid time on the dragon. Same sums.
+    /// words, the medoid update's hot loop. Same sums.
     fn distance_sums_128(&self) -> Vec<u64> {
         let n = self.len();
         let full = n as u32;

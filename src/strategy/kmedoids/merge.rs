@@ -38,8 +38,7 @@ impl Pieces {
 
 /// Per-cluster sets of a merge pass, built only for the clusters a merge test reads: on most
 /// meshes nearly every cluster is full and fails the cheap triangle test, so building every
-/// cluster's vertex and piece sets up front cost more than the merges (a sixth of the whole run
-/// on the dragon).
+/// cluster's vertex and piece sets up front cost more than the merges themselves.
 struct ClusterSets<'a> {
     mesh: &'a Mesh,
     piece: &'a [u32],

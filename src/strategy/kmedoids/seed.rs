@@ -20,12 +20,11 @@ pub(crate) const FREE: u32 = NONE;
 /// cuts a free region off from the rest (an orphan a later seed would turn into a small
 /// cluster). On a tree of tubes (the neurons) the clusters start at the branch tips and meet
 /// towards the root, as in the bottom-up partition of a tree (Kundu and Misra, SIAM J. Comput.
-/// 6(1), 1977), where the tip remainders a sweep leaves behind are what the count loses. Measured
-/// (mean count over meshoptimizer's, ten shared and six generated meshes, 64/126, 64/84,
-/// 128/128): 1.074, 1.097, 1.102 with the seed order before it (the free frontier triangle with
-/// the most taken neighbours, else the next free one in Morton order); 1.045, 1.050, 1.051 with
-/// it. The dragon's run takes about 15 % longer (the breadth-first pass, and clusters grown
-/// further apart in memory).
+/// 6(1), 1977), where the tip remainders a sweep leaves behind are what the count loses. It gave
+/// fewer meshlets than the order before it (the free frontier triangle with the most taken
+/// neighbours, else the next free one in Morton order) at every count preset, for a little more
+/// time (the breadth-first pass, and clusters grown further apart in memory); the counts are in
+/// `results/kmedoids.md`.
 pub(crate) fn seed_order(dual: &Csr) -> Vec<u32> {
     let n = dual.rows();
     let mut seen = vec![false; n];
@@ -195,14 +194,11 @@ pub fn seed_clusters(
 ///   next to the orphan ([`Orphans::front_shed`]), kept only when the result is one piece.
 ///
 /// The given-back triangles are free again (later seeds reach them); each rule gives back at most
-/// half of the cluster as it stands when the rule runs. Measured with the seed order before
-/// [`seed_order`] (corners first) on the ten shared and six generated meshes, mean count over
-/// meshoptimizer's at 64/126, 64/84 and 128/128: 1.135, 1.141, 1.166 without step 1b; 1.090,
-/// 1.115, 1.113 with the last-grown rule alone; 1.074, 1.097, 1.102 with the front rule after it
-/// (the front rule alone: 1.101, 1.093, 1.099). Spheres grow a few percent, still under
-/// meshoptimizer's. Absorbing only what fits without giving back changed
-/// nothing; giving back at most a quarter, or no more than the orphans hold, gained less than
-/// half; re-growing the cluster with the orphans preferred was no better on average.
+/// half of the cluster as it stands when the rule runs. Each rule lowered the count at every count
+/// preset, the two together most, for spheres a little larger and still under meshoptimizer's.
+/// Absorbing only what fits without giving back changed nothing; giving back at most a quarter,
+/// or no more than the orphans hold, gained less; re-growing the cluster with the orphans
+/// preferred was no better on average.
 struct Orphans {
     /// Per triangle: 1 + the cluster whose check visited it last (0: none; zeroed pages are free).
     stamp: Vec<u32>,
@@ -574,8 +570,8 @@ pub enum Grow {
     #[default]
     Centre,
     /// The triangle fewest hops from the seed, then nearest the running centroid: round in the
-    /// dual graph, the k-medoids metric, so the fewest meshlets, but 5-40 % larger spheres (more
-    /// on fans of long thin triangles, whose hop-balls are long wedges).
+    /// dual graph, the k-medoids metric, so the fewest meshlets, but larger spheres (most on fans
+    /// of long thin triangles, whose hop-balls are long wedges; results/kmedoids.md).
     Hops,
 }
 

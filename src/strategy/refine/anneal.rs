@@ -8,7 +8,7 @@
 //! [`ANNEAL_RINGS`] of it must drive the overflow back to zero, or the hand-over is undone.
 
 use super::moves::Rank;
-use super::state::{Cells, Search, F};
+use super::state::{Cells, Search, FEATURES};
 use super::{Stats, OVERFLOW_WEIGHT};
 use rand_core::Rng;
 use rand_xorshift::XorShiftRng;
@@ -39,7 +39,7 @@ impl Cells<'_> {
         for (t, &m) in self.label.iter().enumerate() {
             let n = self.tcount[m as usize] as f64;
             let c = self.csum[m as usize];
-            sum += (0..F)
+            sum += (0..FEATURES)
                 .map(|i| (self.features[t][i] - c[i] / n).powi(2))
                 .sum::<f64>();
         }

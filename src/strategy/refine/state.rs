@@ -22,7 +22,7 @@ use crate::meshlet::{canonical, Limits, MeshletBuilder, Meshlets};
 
 /// Per-triangle features whose spread (sum of squared distances to the meshlet mean) is the third
 /// objective: the centroid, scaled to unit RMS spread in the input, and the unit normal.
-pub(crate) const F: usize = 6;
+pub(crate) const FEATURES: usize = 6;
 
 /// Weight of the normal against the scaled centroid in the spread: tight normal cones keep
 /// meshlets cone-cullable. Measured on the bunny with `+refine-max`: 0 lost 0.3 % of the
@@ -98,9 +98,9 @@ pub(crate) struct Cells<'a> {
     /// Members of each meshlet, unordered.
     pub(crate) members: Vec<Vec<u32>>,
     /// Sum of member triangle features, per meshlet.
-    pub(crate) csum: Vec<[f64; F]>,
-    /// Per triangle, its features ([`F`]).
-    pub(crate) features: Vec<[f64; F]>,
+    pub(crate) csum: Vec<[f64; FEATURES]>,
+    /// Per triangle, its features ([`FEATURES`]).
+    pub(crate) features: Vec<[f64; FEATURES]>,
     /// Meshlets with at least one triangle.
     pub(crate) live: usize,
     /// Moves made (a rollback takes its moves back off).
@@ -122,7 +122,7 @@ impl<'a> Cells<'a> {
         limits: Limits,
     ) -> Self {
         let t_count = mesh.triangle_count();
-        let features: Vec<[f64; F]> = (0..t_count)
+        let features: Vec<[f64; FEATURES]> = (0..t_count)
             .map(|t| {
                 let [a, b, c] = mesh
                     .triangle(t)
@@ -141,7 +141,7 @@ impl<'a> Cells<'a> {
             tcount: vec![0; k],
             vcount: vec![0; k],
             members: vec![Vec::new(); k],
-            csum: vec![[0.0; F]; k],
+            csum: vec![[0.0; FEATURES]; k],
             features,
             live: 0,
             moves: 0,
@@ -172,14 +172,14 @@ impl<'a> Cells<'a> {
     fn recount(&mut self) {
         let k = self.tcount.len();
         self.tcount.fill(0);
-        self.csum.fill([0.0; F]);
+        self.csum.fill([0.0; FEATURES]);
         for m in &mut self.members {
             m.clear();
         }
         for (t, &m) in self.label.iter().enumerate() {
             self.tcount[m as usize] += 1;
             self.members[m as usize].push(t as u32);
-            for i in 0..F {
+            for i in 0..FEATURES {
                 self.csum[m as usize][i] += self.features[t][i];
             }
         }
@@ -308,7 +308,9 @@ impl<'a> Cells<'a> {
         let d2 = |m: u32| {
             let n = self.tcount[m as usize] as f64;
             let c = self.csum[m as usize];
-            (0..F).map(|i| (x[i] - c[i] / n).powi(2)).sum::<f64>()
+            (0..FEATURES)
+                .map(|i| (x[i] - c[i] / n).powi(2))
+                .sum::<f64>()
         };
         let (na, nb) = (
             self.tcount[a as usize] as f64,
@@ -393,13 +395,13 @@ impl<'a> Cells<'a> {
             self.members[m as usize].clear();
             self.tcount[m as usize] = 0;
             self.vcount[m as usize] = 0;
-            self.csum[m as usize] = [0.0; F];
+            self.csum[m as usize] = [0.0; FEATURES];
         }
         for (&t, &m) in tris.iter().zip(labels) {
             self.label[t as usize] = m;
             self.members[m as usize].push(t);
             self.tcount[m as usize] += 1;
-            for k in 0..F {
+            for k in 0..FEATURES {
                 self.csum[m as usize][k] += self.features[t as usize][k];
             }
         }

@@ -90,7 +90,7 @@ use cones::cone_repair;
 use exchanges::swaps;
 use lloyd::lloyd;
 use pack::pack;
-use repair::{over, repair, Repair};
+use repair::{over_limit, repair, Repair};
 
 /// Search settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -362,7 +362,7 @@ fn repartition(
     s.improve(&all, Rank::Vertices);
     s.cells.limits = limits;
     stats.overfull = (0..s.cells.tcount.len() as u32)
-        .filter(|&m| over(s, m))
+        .filter(|&m| over_limit(s, m))
         .count();
     let splits = stats.splits;
     match repair(s, adj, config, stats) {

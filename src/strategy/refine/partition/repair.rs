@@ -10,7 +10,7 @@ use glam::DVec3;
 use std::collections::VecDeque;
 
 /// Whether meshlet `m` is over a limit.
-pub(super) fn over(s: &Search, m: u32) -> bool {
+pub(super) fn over_limit(s: &Search, m: u32) -> bool {
     let p = &s.cells;
     p.vcount[m as usize] > p.limits.max_vertices || p.tcount[m as usize] > p.limits.max_triangles
 }
@@ -35,7 +35,7 @@ pub(super) fn repair(
     stats: &mut Stats,
 ) -> Repair {
     let mut todo: Vec<u32> = (0..s.cells.tcount.len() as u32)
-        .filter(|&m| over(s, m))
+        .filter(|&m| over_limit(s, m))
         .collect();
     // Passes after the first fix few cells (measured: 140 -> 128, 17 -> 5, 14 -> 10, 2 -> 1):
     // far more failures than the splits can take mean a failed re-partition, so stop paying.
@@ -45,7 +45,7 @@ pub(super) fn repair(
         for &o in &todo {
             let mut blocked: Vec<(u32, u32)> = Vec::new();
             let mut chains = config.chains_per_meshlet;
-            while over(s, o) && chains > 0 {
+            while over_limit(s, o) && chains > 0 {
                 chains -= 1;
                 stats.chains += 1;
                 let Some(path) = shortest_path_to_room(s, adj, o, &blocked) else {
@@ -53,7 +53,7 @@ pub(super) fn repair(
                 };
                 run_chain(s, &path, false, &mut blocked, stats);
             }
-            if over(s, o) {
+            if over_limit(s, o) {
                 left.push(o);
                 if left.len() > most_failures {
                     return Repair::Stopped;
@@ -69,12 +69,12 @@ pub(super) fn repair(
         .take(config.max_splits as usize)
         .collect();
     todo.retain(|&o| {
-        while over(s, o) {
+        while over_limit(s, o) {
             let Some(z) = spare.pop_front() else { break };
             split(s, o, z);
             stats.splits += 1;
         }
-        over(s, o)
+        over_limit(s, o)
     });
     // A chain may push a cell that was within its limits over them only through a bug: every
     // hop is a move within its receiver's limits.
@@ -113,7 +113,7 @@ fn split(s: &mut Search, o: u32, z: u32) {
     let mut queue = VecDeque::from([seed]);
     let mut seen = vec![seed];
     while let Some(t) = queue.pop_front() {
-        if !over(s, o) {
+        if !over_limit(s, o) {
             break;
         }
         if !s.cells.fits(z, s.cells.added(t, z)) {
