@@ -212,6 +212,23 @@ fn help_explains_commands() {
 }
 
 #[test]
+fn help_lists_every_strategy_and_generated_mesh_with_its_summary() {
+    let out = ok(&["--help"]);
+    let opts = meshletlab::strategy::Options::default();
+    for k in meshletlab::strategy::Kind::ALL {
+        let line = format!("{:<17} {}", k.name(), k.strategy(&opts).summary());
+        assert!(out.contains(&line), "--help lacks `{line}`:\n{out}");
+    }
+    for name in meshletlab::mesh::generate::NAMES {
+        assert!(out.contains(name), "--help lacks gen:{name}:\n{out}");
+    }
+    for suffix in ["+refine", "+refine-fast", "+refine-max", "+partition"] {
+        assert!(out.contains(suffix), "--help lacks {suffix}:\n{out}");
+    }
+    assert!(!out.contains("kmedoids-local"), "{out}");
+}
+
+#[test]
 fn render_writes_a_meshlet_coloured_png_for_each_descriptor() {
     let dir = common::scratch("render-png");
     let mesh = common::meshes_dir().join("fandisk.ply.zst");

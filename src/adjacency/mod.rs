@@ -150,6 +150,20 @@ pub fn cluster_pieces(dual: &Csr, labels: &[u32], k: usize) -> Vec<(usize, usize
 mod tests {
     use super::*;
 
+    #[test]
+    fn pieces_number_components_by_lowest_triangle_and_clusters_count_theirs() {
+        // Triangles 0-1-2 form a path, 3-4 another, 5 stands alone.
+        let pairs = [(0, 1), (1, 0), (1, 2), (2, 1), (3, 4), (4, 3)];
+        let dual = Csr::from_pairs(6, pairs.into_iter());
+        assert_eq!(pieces(&dual), vec![0, 0, 0, 1, 1, 2]);
+        // Cluster 0 = {0, 2}: two pieces of its own (1 lies between them) in one mesh piece.
+        // Cluster 1 = {1, 3, 4, 5}: pieces {1}, {3, 4}, {5} in three mesh pieces.
+        let labels = [0, 1, 0, 1, 1, 1];
+        assert_eq!(cluster_pieces(&dual, &labels, 2), vec![(2, 1), (3, 3)]);
+        // An empty cluster has neither.
+        assert_eq!(cluster_pieces(&dual, &labels, 3)[2], (0, 0));
+    }
+
     fn quad_and_fin() -> Mesh {
         // Two triangles sharing edge (0,2), plus a third on the same edge (non-manifold) and a
         // degenerate triangle.
