@@ -308,8 +308,8 @@ struct MeshResult {
 fn configs() -> Vec<(&'static str, Option<(Limits, Grouping)>)> {
     let l128 = Limits::new(128, 128).expect("128/128 is valid");
     vec![
-        ("ours 64/126", Some((Limits::DEFAULT, Grouping::Partition))),
-        ("ours 128/128", Some((l128, Grouping::Partition))),
+        ("ours 64/126", Some((Limits::DEFAULT, Grouping::Meshopt))),
+        ("ours 128/128", Some((l128, Grouping::Meshopt))),
         ("clod 128", None),
         (
             "ours 128/128 k-medoids groups",

@@ -53,7 +53,7 @@ use serde::Serialize;
 pub enum Grouping {
     /// meshoptimizer's `partition_clusters` over welded vertices and positions.
     #[default]
-    Partition,
+    Meshopt,
     /// Our k-medoids on the meshlet graph (`group::kmedoids`).
     KMedoids,
 }
@@ -86,7 +86,7 @@ impl Default for Config {
         Self {
             group_size: 8,
             stuck_ratio: 0.85,
-            grouping: Grouping::Partition,
+            grouping: Grouping::Meshopt,
             max_levels: 32,
             min_root_triangles: 8,
             level0_chunk: 1 << 17,
@@ -241,7 +241,7 @@ pub fn build(mesh: &Mesh, strategy: &dyn Strategy, limits: Limits, cfg: &Config)
             })
             .collect();
         let parts = match cfg.grouping {
-            Grouping::Partition => partition(mesh, &clusters, cfg.group_size),
+            Grouping::Meshopt => group_with_meshopt(mesh, &clusters, cfg.group_size),
             Grouping::KMedoids => group::kmedoids(mesh.vertex_count(), &clusters, cfg.group_size),
         };
         let locked = shared_vertices(mesh.vertex_count(), &clusters, &parts);
@@ -304,7 +304,7 @@ pub fn build(mesh: &Mesh, strategy: &dyn Strategy, limits: Limits, cfg: &Config)
 
 /// Partitions clusters into groups of about `size` (meshoptimizer's partitioner over welded
 /// vertices and positions); groups listed in order of their first cluster.
-fn partition(mesh: &Mesh, clusters: &[Cluster], size: usize) -> Vec<Vec<usize>> {
+fn group_with_meshopt(mesh: &Mesh, clusters: &[Cluster], size: usize) -> Vec<Vec<usize>> {
     let mut indices = Vec::new();
     let mut counts = Vec::with_capacity(clusters.len());
     for c in clusters {
