@@ -1,7 +1,7 @@
 //! `+refine` on the shared real meshes: every refined output validates, never has more meshlets or
 //! more meshlets in pieces than its input, and does not depend on the thread count; at the default
 //! effort it beats meshoptimizer's count on the bunny at no worse radius and cullability, as
-//! `partition` does, and k-medoids reaches the fills the refinement issue asks for.
+//! `partition` does, and k-medoids reaches the fills the refinement aims at.
 
 mod common;
 
@@ -172,7 +172,7 @@ fn non_cullable(x: &Metrics) -> f64 {
     ((1.0 - x.cone_cullable) * x.meshlets as f64).round()
 }
 
-/// The count issues' goal on the bunny: fewer meshlets than every meshoptimizer builder, with
+/// The count goal on the bunny: fewer meshlets than every meshoptimizer builder, with
 /// mean radius and number of meshlets that cannot be cone-culled no worse than `meshopt`'s.
 fn assert_beats_meshoptimizer(ours: &Metrics, base: &Metrics, best_peer: usize) {
     assert!(

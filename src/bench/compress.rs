@@ -4,7 +4,7 @@
 //! Rows per mesh: laced wires and meshoptimizer's codec on the same qem 64/84 meshlets at the
 //! paper's tolerance (the paper's setting, Tables 2, 4, 5), then both at 1e-4 of the
 //! bounding-box diagonal, meshoptimizer's codec on its own best meshlets (meshopt 128/128, the
-//! comparison the issue sets). Every size is split into connectivity (topology and vertex
+//! comparison the project sets). Every size is split into connectivity (topology and vertex
 //! references), positions, headers and padding; errors are measured on the decoded positions;
 //! encode and decode speeds are medians of interleaved runs on 1 and 2 threads. Figure 8 of the
 //! paper: bits per vertex against maximum error for 8- to 16-bit quantisation, global (b bits
@@ -62,7 +62,7 @@ pub mod paper {
 }
 
 /// meshoptimizer's codec with anchored positions measured out of tree at about 1e-4 of the
-/// diagonal with 128/128 meshlets (the issue's figures, bytes per triangle), and AMD's DGF range.
+/// diagonal with 128/128 meshlets (figures measured outside this repository, bytes per triangle), and AMD's DGF range.
 pub const OUT_OF_TREE: &[(&str, f64)] = &[
     ("stanford_bunny", 3.15),
     ("igea", 3.02),
@@ -494,7 +494,7 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
         md,
         "\n## At 1e-4 of the diagonal: laced wires against meshoptimizer's codec\n"
     )?;
-    writeln!(md, "The goal: laced wires no larger than meshoptimizer's codec with anchored positions at the same maximum error (both use one grid, so the error is the same). Out-of-tree measurement quoted by the issue for meshoptimizer's codec at 128/128: {}; AMD's DGF blocks need 3.8-5.0 B/triangle on the same meshes (quoted, not built).\n", OUT_OF_TREE.iter().map(|(m, b)| format!("{m} {b:.2}")).collect::<Vec<_>>().join(", "))?;
+    writeln!(md, "The goal: laced wires no larger than meshoptimizer's codec with anchored positions at the same maximum error (both use one grid, so the error is the same). Out-of-tree measurement for meshoptimizer's codec at 128/128: {}; AMD's DGF blocks need 3.8-5.0 B/triangle on the same meshes (quoted, not built).\n", OUT_OF_TREE.iter().map(|(m, b)| format!("{m} {b:.2}")).collect::<Vec<_>>().join(", "))?;
     writeln!(md, "{}", encodings().markdown(at4.iter().copied()))?;
     writeln!(md, "\nBest laced-wire meshlets against the peer at its best setting (ratio < 1: laced wires smaller). The peer carries no culling data; laced wires carry 8 bytes per meshlet, so the ratio is given without and with them:\n")?;
     writeln!(md, "| mesh | laced wires B/tri | from | without culling | meshopt codec 128/128 B/tri | ratio without culling | ratio with | out-of-tree peer |")?;

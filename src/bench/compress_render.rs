@@ -399,7 +399,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
             a.meshlets, a.culled, b.culled
         )?;
     }
-    // The targets as ratios of medians, per mesh and as geometric means.
+    // The targets as ratios of medians, per mesh and as geometric means.
     let ratios: [(&str, &str, &str); 5] = [
         ("laced wires / SC compact", "laced-wires", "sc-compact"),
         (

@@ -1,7 +1,7 @@
 //! `meshletlab bench kmedoids`: the k-medoids variants at scale (the capacity-aware default, the
 //! flat method and the paper's, on every shared mesh, the in-tree stress meshes and the dragon
 //! subdivided x4 and x16, with meshoptimizer's `build_meshlets` timed in the same run), the
-//! issue-32 targets per mesh, and a sweep of each method's knobs (run time against error, with the
+//! k-medoids targets per mesh, and a sweep of each method's knobs (run time against error, with the
 //! Pareto front) -> results/kmedoids.md, results/kmedoids.csv, results/kmedoids_sweep.csv and two
 //! plots.
 
@@ -278,7 +278,7 @@ fn runs_table<'a>() -> Table<'a, Run> {
         })
 }
 
-/// One mesh's verdict on the issue-32 targets: `kmedoids` against meshoptimizer and the flat method.
+/// One mesh's verdict on the k-medoids targets: `kmedoids` against meshoptimizer and the flat method.
 struct Verdict {
     mesh: String,
     triangles: usize,

@@ -66,7 +66,7 @@ pub struct StrategyArgs {
     /// centroid: smaller spheres) or `hops` (fewest hops from its seed: fewer meshlets).
     #[arg(long, default_value = "centre", value_parser = clap::value_parser!(strategy::kmedoids::Grow))]
     pub kmedoids_grow: strategy::kmedoids::Grow,
-    /// kmedoids-paper: seconds before the remaining splits are done the fast way.
+    /// kmedoids-paper: seconds before the remaining splits are done the flat way.
     #[arg(long, default_value_t = 300.0)]
     pub paper_budget: f64,
     /// Reorder triangles inside each meshlet for vertex reuse, local vertices in first-use order.

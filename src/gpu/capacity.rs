@@ -1,5 +1,5 @@
 //! The capacity-aware assignment of the default `kmedoids`
-//! ([`crate::strategy::kmedoids_capacity::assign_capacity`]) as kernels (`wgsl/capacity.wgsl`),
+//! ([`crate::strategy::kmedoids::capacity::assign_capacity`]) as kernels (`wgsl/capacity.wgsl`),
 //! with labels identical to the CPU's.
 //!
 //! The CPU takes each BFS level's clusters in ascending id, a cluster skipping what a lower one
@@ -190,7 +190,7 @@ impl CapacityAssign {
         k * per_cluster(limits) <= PART
     }
 
-    /// The labels [`crate::strategy::kmedoids_capacity::assign_capacity`] gives from `medoids`
+    /// The labels [`crate::strategy::kmedoids::capacity::assign_capacity`] gives from `medoids`
     /// (`u32::MAX` where no cluster had room) on the mesh of `adj`.
     pub fn run(
         &mut self,

@@ -1,4 +1,4 @@
-//! `compact`: our attempt at fewer meshlets than meshoptimizer (issue goal 7).
+//! `compact`: our attempt at fewer meshlets than meshoptimizer.
 //!
 //! The bounding-sphere grower's machinery with a different ranking, aimed at packing more triangles
 //! into each 64-vertex meshlet (a patch holds about 2V - B - 2 triangles, so fewer boundary vertices
@@ -12,10 +12,10 @@
 //! - the next meshlet starts in a corner: the closed meshlet's vertex with the fewest unused
 //!   triangles left, so pockets are filled before they are trapped.
 //!
-//! Measured against meshoptimizer 1.3 in results/strategies.md; on the bunny it lands at the paper's
-//! best count but not below meshoptimizer's (see the issue note). Tried and dropped: an island bonus
-//! (no effect), closing meshlets when the border empties (791 on the bunny), seeding the next meshlet
-//! with the best candidate that did not fit (741).
+//! Measured against meshoptimizer 1.3 in results/strategies.md: it reaches the paper's best counts
+//! but not below meshoptimizer's. Tried and dropped: an island bonus (no effect), closing meshlets
+//! when the border empties, and seeding the next meshlet with the best candidate that did not fit
+//! (both gave more meshlets).
 
 use super::bsphere::{grow, Scoring};
 use super::Strategy;

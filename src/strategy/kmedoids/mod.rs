@@ -168,9 +168,9 @@ pub struct Clustering {
     pub distances: Vec<u32>,
     /// Assign/update iterations run in total.
     pub iterations: u32,
-    /// Split rounds (fast) or clusters added (paper).
+    /// Split rounds (flat) or clusters added (paper).
     pub splits: u32,
-    /// Whether paper mode ran out of budget and finished the fast way.
+    /// Whether the paper's method ran out of budget and finished the flat way.
     pub budget_exhausted: bool,
     /// Mean hop distance after the initial clustering, before any split (the k-medoids objective).
     pub initial_mean_distance: f64,
@@ -211,6 +211,7 @@ impl Clustering {
     }
 }
 
+/// Mean of hop distances (0 for none).
 pub(crate) fn mean(d: &[u32]) -> f64 {
     d.iter().map(|&x| x as f64).sum::<f64>() / d.len().max(1) as f64
 }
