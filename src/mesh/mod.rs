@@ -17,6 +17,7 @@ mod stats;
 pub mod stl;
 pub mod subdivide;
 pub mod tipsify;
+mod tokens;
 
 pub use error::{MeshError, MeshErrorKind};
 pub use load::{

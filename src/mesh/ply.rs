@@ -7,6 +7,7 @@
 //! the bytes actually present, and a body shorter or longer than the header says is an error.
 
 use super::error::{parse_err, MeshErrorKind};
+use super::tokens::Tokens;
 use std::io::Write;
 
 /// Longest header we accept; a real header is a few hundred bytes, so this stops a scan of a binary blob.
@@ -531,50 +532,26 @@ impl<const BE: bool> BinReader<'_, BE> {
     }
 }
 
-/// Whitespace tokens with the line each came from, for error messages.
-struct Tokens<'a> {
-    text: &'a str,
-    pos: usize,
-    line: usize,
-}
-
-impl<'a> Tokens<'a> {
-    fn next(&mut self) -> Option<(&'a str, usize)> {
-        let b = self.text.as_bytes();
-        while self.pos < b.len() && b[self.pos].is_ascii_whitespace() {
-            if b[self.pos] == b'\n' {
-                self.line += 1;
-            }
-            self.pos += 1;
-        }
-        if self.pos >= b.len() {
-            return None;
-        }
-        let start = self.pos;
-        while self.pos < b.len() && !b[self.pos].is_ascii_whitespace() {
-            self.pos += 1;
-        }
-        Some((&self.text[start..self.pos], self.line))
-    }
-
-    fn value(&mut self, s: Scalar, what: &dyn Fn() -> String) -> Result<f64, MeshErrorKind> {
-        let Some((tok, line)) = self.next() else {
-            return Err(MeshErrorKind::Truncated(format!(
-                "file ends inside {}",
-                what()
-            )));
-        };
-        let bad = || {
-            parse_err(
-                format!("line {line} ({})", what()),
-                format!("'{tok}' is not a valid {s:?} value"),
-            )
-        };
-        if s.is_integer() {
-            tok.parse::<i64>().map(|v| v as f64).map_err(|_| bad())
-        } else {
-            tok.parse::<f64>().map_err(|_| bad())
-        }
+/// The next ASCII value of scalar type `s`; `what` names the record for messages.
+fn value(t: &mut Tokens, s: Scalar, what: &dyn Fn() -> String) -> Result<f64, MeshErrorKind> {
+    let Some((tok, line)) = t.next() else {
+        return Err(MeshErrorKind::Truncated(format!(
+            "file ends inside {}",
+            what()
+        )));
+    };
+    // The body was checked to be UTF-8, and tokens split at ASCII whitespace stay so.
+    let tok = std::str::from_utf8(tok).expect("a token of valid text is text");
+    let bad = || {
+        parse_err(
+            format!("line {line} ({})", what()),
+            format!("'{tok}' is not a valid {s:?} value"),
+        )
+    };
+    if s.is_integer() {
+        tok.parse::<i64>().map(|v| v as f64).map_err(|_| bad())
+    } else {
+        tok.parse::<f64>().map_err(|_| bad())
     }
 }
 
@@ -591,11 +568,7 @@ fn read_ascii(
             "ASCII PLY body is not valid text",
         )
     })?;
-    let mut t = Tokens {
-        text,
-        pos: 0,
-        line: header_lines + 1,
-    };
+    let mut t = Tokens::new(text.as_bytes(), header_lines + 1);
     let mut list: Vec<i64> = Vec::new();
     for (e, role) in elements.iter().zip(roles) {
         // Every ASCII value takes at least two bytes (digit and separator).
@@ -607,7 +580,7 @@ fn read_ascii(
             for (pi, p) in e.props.iter().enumerate() {
                 match p.kind {
                     PropKind::Scalar(s) => {
-                        let v = t.value(s, &what)?;
+                        let v = value(&mut t, s, &what)?;
                         if let Role::Vertex { x, y, z } = *role {
                             if pi == x {
                                 xyz[0] = v as f32;
@@ -619,10 +592,10 @@ fn read_ascii(
                         }
                     }
                     PropKind::List { count, item } => {
-                        let n = list_len(t.value(count, &what)?, &what)?;
+                        let n = list_len(value(&mut t, count, &what)?, &what)?;
                         let keep = matches!(*role, Role::Face { list: li } | Role::Strips { list: li } if li == pi);
                         for _ in 0..n {
-                            let v = t.value(item, &what)?;
+                            let v = value(&mut t, item, &what)?;
                             if keep {
                                 list.push(v as i64);
                             }
@@ -640,7 +613,8 @@ fn read_ascii(
     }
     if let Some((tok, line)) = t.next() {
         return Err(MeshErrorKind::CountMismatch(format!(
-            "line {line}: '{tok}' follows the last element the header declares"
+            "line {line}: '{}' follows the last element the header declares",
+            String::from_utf8_lossy(tok)
         )));
     }
     Ok(())

@@ -25,6 +25,7 @@
 //! ASCII output grows only with the facets actually read (each at least 80 bytes of text).
 
 use super::error::{parse_err, MeshErrorKind};
+use super::tokens::Tokens;
 use std::collections::HashMap;
 use std::io::Write;
 
@@ -141,44 +142,6 @@ fn read_binary(data: &[u8], count: usize) -> Result<(Vec<[f32; 3]>, Vec<u32>), M
     Ok(w.finish())
 }
 
-/// Whitespace-separated tokens of an ASCII file with the line each starts on.
-struct Lexer<'a> {
-    data: &'a [u8],
-    pos: usize,
-    line: usize,
-}
-
-impl<'a> Lexer<'a> {
-    fn next(&mut self) -> Option<(&'a [u8], usize)> {
-        let b = self.data;
-        while self.pos < b.len() && b[self.pos].is_ascii_whitespace() {
-            if b[self.pos] == b'\n' {
-                self.line += 1;
-            }
-            self.pos += 1;
-        }
-        if self.pos >= b.len() {
-            return None;
-        }
-        let start = self.pos;
-        while self.pos < b.len() && !b[self.pos].is_ascii_whitespace() {
-            self.pos += 1;
-        }
-        Some((&b[start..self.pos], self.line))
-    }
-
-    /// Skips the rest of the current line (a solid's name).
-    fn skip_line(&mut self) {
-        match self.data[self.pos..].iter().position(|&c| c == b'\n') {
-            Some(i) => {
-                self.pos += i + 1;
-                self.line += 1;
-            }
-            None => self.pos = self.data.len(),
-        }
-    }
-}
-
 /// A token as it may appear in a one-line message: escaped, at most 32 bytes.
 fn show(tok: &[u8]) -> String {
     let cut = &tok[..tok.len().min(32)];
@@ -192,11 +155,7 @@ fn keyword(tok: &[u8], word: &str) -> bool {
 
 /// Reads an ASCII file (see the module docs for the grammar).
 fn read_ascii(data: &[u8]) -> Result<(Vec<[f32; 3]>, Vec<u32>), MeshErrorKind> {
-    let mut t = Lexer {
-        data,
-        pos: 0,
-        line: 1,
-    };
+    let mut t = Tokens::new(data, 1);
     let mut w = Welder::default();
     let mut facet = 0usize;
     while let Some((tok, line)) = t.next() {
@@ -238,7 +197,7 @@ fn read_ascii(data: &[u8]) -> Result<(Vec<[f32; 3]>, Vec<u32>), MeshErrorKind> {
 }
 
 /// Reads one facet after its `facet` keyword.
-fn read_facet(t: &mut Lexer, w: &mut Welder, facet: usize) -> Result<(), MeshErrorKind> {
+fn read_facet(t: &mut Tokens, w: &mut Welder, facet: usize) -> Result<(), MeshErrorKind> {
     const THREE: &str = " (a facet has three vertices)";
     expect(t, facet, "normal", "")?;
     for _ in 0..3 {
@@ -266,14 +225,14 @@ fn read_facet(t: &mut Lexer, w: &mut Welder, facet: usize) -> Result<(), MeshErr
 }
 
 /// The next token of facet `facet`; the end of the file there is truncation.
-fn token<'a>(t: &mut Lexer<'a>, facet: usize) -> Result<(&'a [u8], usize), MeshErrorKind> {
+fn token<'a>(t: &mut Tokens<'a>, facet: usize) -> Result<(&'a [u8], usize), MeshErrorKind> {
     t.next().ok_or_else(|| {
         MeshErrorKind::Truncated(format!("file ends inside facet {facet} (line {})", t.line))
     })
 }
 
 /// The keyword `word` (any case), or a parse error ending in `hint`.
-fn expect(t: &mut Lexer, facet: usize, word: &str, hint: &str) -> Result<(), MeshErrorKind> {
+fn expect(t: &mut Tokens, facet: usize, word: &str, hint: &str) -> Result<(), MeshErrorKind> {
     let (tok, line) = token(t, facet)?;
     if keyword(tok, word) {
         return Ok(());
@@ -285,7 +244,7 @@ fn expect(t: &mut Lexer, facet: usize, word: &str, hint: &str) -> Result<(), Mes
 }
 
 /// A number (NaN and infinities included) and its text.
-fn number<'a>(t: &mut Lexer<'a>, facet: usize) -> Result<(f32, &'a [u8]), MeshErrorKind> {
+fn number<'a>(t: &mut Tokens<'a>, facet: usize) -> Result<(f32, &'a [u8]), MeshErrorKind> {
     let (tok, line) = token(t, facet)?;
     std::str::from_utf8(tok)
         .ok()

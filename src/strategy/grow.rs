@@ -24,7 +24,7 @@
 
 use super::Strategy;
 use crate::adjacency::{dual_graph, vertex_triangles, Csr};
-use crate::common::NONE;
+use crate::common::{distinct, NONE};
 use crate::mesh::Mesh;
 use crate::meshlet::{Limits, MeshletBuilder, Meshlets};
 use rayon::prelude::*;
@@ -142,19 +142,6 @@ impl Setup {
         }
         (cell, d2)
     }
-}
-
-/// Distinct vertices of `tri` in order (a degenerate triangle repeats one).
-#[inline]
-pub fn distinct(tri: [u32; 3]) -> impl Iterator<Item = u32> {
-    let [a, b, c] = tri;
-    [
-        Some(a),
-        (b != a).then_some(b),
-        (c != a && c != b).then_some(c),
-    ]
-    .into_iter()
-    .flatten()
 }
 
 /// Whether the key (score, r2, t) beats (score', r2', t'): higher score, then smaller radius, then
