@@ -12,7 +12,7 @@
 //!    the frontier triangle that adds the fewest vertices, then the most enclosed one, then
 //!    ([`Grow`]) the one nearest the cluster's running centroid, or the one fewest hops from the
 //!    seed. The next seed is the deepest free triangle (hop distance from its piece's root,
-//!    [`super::seed::seed_order`]), so in the first growth the free triangles stay one shrinking
+//!    `seed::seed_order`), so in the first growth the free triangles stay one shrinking
 //!    ball and the branches of a tree of tubes are clustered from their tips inwards. Step 1b
 //!    (the orphans, [`super::seed`]): a cluster that stops takes the small enclosed free regions
 //!    next to it, giving back triangles at its growth front to make room.
@@ -22,8 +22,8 @@
 //! 3. [`assign_capacity`]: a level-synchronous multi-source BFS from all medoids at once in which
 //!    a triangle joins the nearest medoid *whose cluster still has room* (ties to the lower
 //!    cluster). Triangles no cluster has room for are grown into new clusters as in step 1.
-//! 4. [`merge_neighbours`]: neighbouring clusters whose union fits are merged, smallest first;
-//!    then ([`pack_pieces`]) clusters that share no vertex with any other (whole small pieces of
+//! 4. `merge::merge_neighbours`: neighbouring clusters whose union fits are merged, smallest first;
+//!    then (`merge::pack_pieces`) clusters that share no vertex with any other (whole small pieces of
 //!    the mesh) join the nearest cluster whose union fits.
 //! 5. Steps 2-4 repeat while the cluster count does not grow and the objective (mean hop distance
 //!    to the medoid) falls; the best clustering seen is kept. They run only where at least a

@@ -4,7 +4,7 @@
 //!
 //! 1. [`initial_medoids`]: k = ceil(T / per_cluster) triangles spread in Morton order of
 //!    centroids; every dual-graph component gets one ([`add_component_medoids`]).
-//! 2. [`assign`](super::assign::assign): one multi-source BFS from all medoids at once. Each
+//! 2. [`assign`]: one multi-source BFS from all medoids at once. Each
 //!    triangle takes the smallest packed key `(distance << 32) | cluster`, so ties go to the lower
 //!    cluster id (= lower medoid triangle id: clusters are numbered by ascending medoid) whatever
 //!    the processing order; on a GPU this is one `atomicMin` per relaxation.
@@ -16,7 +16,7 @@
 //!    their farthest member. The paper adds one cluster and re-runs everything (under a time
 //!    budget here); the flat method splits the largest overflows a fraction at a time, then runs
 //!    a few iterations.
-//! 6. [`pack`](super::pack): each cluster becomes meshlets in BFS order from its medoid; a
+//! 6. [`pack`](super::pack()): each cluster becomes meshlets in BFS order from its medoid; a
 //!    cluster that still does not fit is chunked, so the output is always valid.
 //!
 //! Where it differs from the paper (section 3): the flat method starts from clusters of the size

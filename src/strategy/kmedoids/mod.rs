@@ -13,7 +13,7 @@
 //! | [`Mode::Paper`] | `kmedoids-paper` | [`flat`]: one cluster added and everything re-run per overflow | (none: slow by design) |
 //!
 //! The files, lowest first (a file reads only those above it in this list):
-//! - [`assign`]: the flat multi-source BFS and member lists (CPU reference of `wgsl/assign.wgsl`);
+//! - [`mod@assign`]: the flat multi-source BFS and member lists (CPU reference of `wgsl/assign.wgsl`);
 //! - `local_graph`: one cluster's induced subgraph: medoids, distances, floods;
 //! - [`update`]: the medoid update with its cache (CPU reference of `wgsl/update.wgsl`);
 //! - [`split`]: the flat method's overflow statistics (CPU reference of `wgsl/split.wgsl`);
