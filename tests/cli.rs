@@ -530,3 +530,92 @@ fn render_lod_runs_end_to_end() {
         assert_eq!(r["meshlets_drawn"], r["cpu_reference_drawn"], "{r}");
     }
 }
+
+#[test]
+fn building_on_the_gpu_writes_the_cpu_files_byte_for_byte() {
+    let dir = common::scratch("device");
+    let orders: [&[&str]; 2] = [&[], &["--local-order", "--meshlet-order", "triangles"]];
+    for s in ["kmedoids-flat", "bsphere-parallel"] {
+        for (i, order) in orders.iter().enumerate() {
+            for (what, ext) in [("build", "mlt"), ("export", "glb")] {
+                let file = |device: &str| dir.join(format!("{s}-{i}-{device}.{ext}"));
+                for device in ["cpu", "gpu"] {
+                    let f = file(device);
+                    let mut args =
+                        vec![what, "-q", "gen:cad-part-128", "-s", s, "--device", device];
+                    args.extend(["-o", f.to_str().unwrap()]);
+                    args.extend_from_slice(order);
+                    ok(&args);
+                }
+                let (cpu, gpu) = (file("cpu"), file("gpu"));
+                assert_eq!(
+                    std::fs::read(&cpu).unwrap(),
+                    std::fs::read(&gpu).unwrap(),
+                    "{what} {s} {order:?}: the GPU's file differs from the CPU's"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn stats_on_the_gpu_keeps_the_names_and_reports_build_and_setup_time() {
+    let out = ok(&["stats", "-q", "gen:terrain", "--device", "gpu", "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["device"], "gpu");
+    let rows = v["strategies"].as_array().unwrap();
+    let names: Vec<&str> = rows
+        .iter()
+        .map(|r| r["strategy"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["bsphere-parallel", "kmedoids-flat"]);
+    for r in rows {
+        assert_eq!(r["device"], "gpu", "{r}");
+        assert!(r["invalid"].is_null(), "{r}");
+        assert!(r["build_ms"].as_f64().unwrap() > 0.0, "{r}");
+        assert!(r["setup_ms"].as_f64().unwrap() > 0.0, "{r}");
+    }
+    // The CPU rows carry the device too, and no setup time.
+    let out = ok(&[
+        "stats",
+        "-q",
+        "gen:terrain",
+        "-s",
+        "kmedoids-flat",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["strategies"][0]["device"], "cpu");
+    assert!(v["strategies"][0].get("setup_ms").is_none());
+}
+
+#[test]
+fn the_gpu_refuses_strategies_without_a_gpu_path_and_says_when_there_is_no_adapter() {
+    let dir = common::scratch("device-refused");
+    let f = dir.join("x.mlt");
+    for s in ["meshopt", "kmedoids", "kmedoids-flat+refine"] {
+        let out = cli(&["build", "gen:terrain", "-s", s, "--device", "gpu"]
+            .into_iter()
+            .chain(["-o", f.to_str().unwrap()])
+            .collect::<Vec<_>>());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success());
+        assert!(
+            err.contains(&format!("'{s}'")) && err.contains("no GPU path"),
+            "{err}"
+        );
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(!f.exists());
+    }
+    // No Vulkan driver at all: the one-line error that names the way out.
+    let out = Command::new(env!("CARGO_BIN_EXE_meshletlab"))
+        .args(["stats", "gen:terrain", "--device", "gpu"])
+        .env("VK_DRIVER_FILES", "/nonexistent.json")
+        .env("VK_ICD_FILENAMES", "/nonexistent.json")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("no Vulkan adapter"), "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+}

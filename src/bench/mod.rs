@@ -150,6 +150,15 @@ pub struct Evaluation {
     pub times_ms: Vec<f64>,
     /// `None` when the validator accepted the output, else its message.
     pub invalid: Option<String>,
+    /// Where the builds ran: `cpu`, or `gpu` (`--device gpu`).
+    pub device: &'static str,
+    /// Median build time in ms: on the GPU the whole run (uploads, kernels, readbacks and the
+    /// host steps between them).
+    pub build_ms: f64,
+    /// GPU builds only: device creation and the first compilation of the strategy's pipelines,
+    /// in ms, kept out of `build_ms`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub setup_ms: Option<f64>,
     /// The meshlets of the last run (not serialised).
     #[serde(skip)]
     pub meshlets: Meshlets,
@@ -181,12 +190,27 @@ pub fn median(xs: &[f64]) -> f64 {
 /// Builds `runs` times (>= 1), then validates the output and computes bounds and metrics.
 /// Also checks that repeated builds agree (determinism); a difference is reported as invalid.
 pub fn evaluate(mesh: &Mesh, strategy: &dyn Strategy, limits: Limits, runs: usize) -> Evaluation {
+    let build = || Ok::<_, std::convert::Infallible>(strategy.build(mesh, limits));
+    match evaluate_builds(mesh, strategy.name(), limits, runs, build) {
+        Ok(e) => e,
+        Err(never) => match never {},
+    }
+}
+
+/// [`evaluate`] over any build of strategy `name` (on the GPU, say), stopping at its first error.
+pub fn evaluate_builds<E>(
+    mesh: &Mesh,
+    name: &str,
+    limits: Limits,
+    runs: usize,
+    mut build: impl FnMut() -> Result<Meshlets, E>,
+) -> Result<Evaluation, E> {
     let mut times = Vec::with_capacity(runs.max(1));
     let mut first: Option<Meshlets> = None;
     let mut nondeterministic = false;
     for _ in 0..runs.max(1) {
         let t0 = Instant::now();
-        let ml = strategy.build(mesh, limits);
+        let ml = build()?;
         times.push(t0.elapsed().as_secs_f64() * 1e3);
         match &first {
             None => first = Some(ml),
@@ -207,14 +231,17 @@ pub fn evaluate(mesh: &Mesh, strategy: &dyn Strategy, limits: Limits, runs: usiz
         &b,
         Some(Duration::from_secs_f64(med / 1e3)),
     );
-    Evaluation {
-        strategy: strategy.name().to_string(),
+    Ok(Evaluation {
+        strategy: name.to_string(),
         limits,
         metrics,
         times_ms: times,
         invalid,
+        device: "cpu",
+        build_ms: med,
+        setup_ms: None,
         meshlets: ml,
-    }
+    })
 }
 
 /// A short description of this machine and build for results/ headers.

@@ -1,6 +1,7 @@
 //! `meshletlab export`: meshlets as a glTF binary with one flat colour per meshlet.
 
-use super::{build_validated, load, StrategyArgs};
+use super::{build_validated, build_validated_on_gpu, gpu_for, load};
+use super::{Device, DeviceArgs, StrategyArgs};
 use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -18,12 +19,21 @@ pub struct ExportArgs {
     output: PathBuf,
     #[command(flatten)]
     args: StrategyArgs,
+    #[command(flatten)]
+    device: DeviceArgs,
 }
 
 pub(super) fn run(a: ExportArgs, quiet: bool) -> Result<()> {
     crate::strategy::by_name(&a.strategy, &a.args.options())?;
+    let gpu = match a.device.device {
+        Device::Cpu => None,
+        Device::Gpu => Some(gpu_for(&[&a.strategy])?),
+    };
     let m = load(&a.mesh, quiet)?;
-    let ml = build_validated(&m, &a.mesh, &a.strategy, &a.args)?;
+    let ml = match &gpu {
+        None => build_validated(&m, &a.mesh, &a.strategy, &a.args)?,
+        Some((gpu, ms)) => build_validated_on_gpu(gpu, *ms, &m, &a.mesh, &a.strategy, &a.args)?.0,
+    };
     let glb = crate::meshlet::export::glb(&m, &ml);
     crate::atomic::write(&a.output, &glb)
         .with_context(|| format!("cannot write {}", a.output.display()))?;

@@ -269,6 +269,68 @@ fn strategies(spec: &str, opts: &Options) -> Result<Vec<Box<dyn Strategy>>> {
         .collect()
 }
 
+/// Where meshlets are built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Device {
+    /// On the CPU: every strategy.
+    Cpu,
+    /// On the GPU: the strategies whose every step is a kernel.
+    Gpu,
+}
+
+/// `--device`, for the commands that build meshlets (`build`, `stats`, `export`).
+#[derive(Args, Debug, Clone, Copy)]
+pub struct DeviceArgs {
+    /// Where to build (the help text lists the GPU strategies).
+    #[arg(long, value_enum, default_value = "cpu", help = device_help())]
+    pub device: Device,
+}
+
+/// `--device`'s help, the GPU strategies read from their table.
+fn device_help() -> String {
+    format!(
+        "Where to build: cpu, or gpu for the strategies whose every step is a kernel ({}); the \
+         same meshlets either way. The GPU is the default Vulkan adapter (lavapipe on a machine \
+         without a GPU)",
+        crate::gpu::build::GPU_STRATEGIES
+            .map(|k| k.name())
+            .join(", ")
+    )
+}
+
+/// A GPU to build with each of `names` on, checked before anything is loaded or run (a strategy
+/// without a whole GPU path is refused by name); also the milliseconds its creation took.
+fn gpu_for(names: &[&str]) -> Result<(crate::gpu::Gpu, f64)> {
+    for name in names {
+        crate::gpu::build::gpu_kind(name)?;
+    }
+    let t0 = std::time::Instant::now();
+    let gpu = crate::gpu::Gpu::new()?;
+    Ok((gpu, t0.elapsed().as_secs_f64() * 1e3))
+}
+
+/// [`build_validated`] on the GPU, after a warm-up build that compiles the pipelines: the
+/// meshlets, the build's wall time and the setup time (`device_ms` plus the warm-up), in ms.
+fn build_validated_on_gpu(
+    gpu: &crate::gpu::Gpu,
+    device_ms: f64,
+    m: &Mesh,
+    path: &Path,
+    name: &str,
+    args: &StrategyArgs,
+) -> Result<(crate::meshlet::Meshlets, f64, f64)> {
+    let opts = args.options();
+    let warm_ms = crate::gpu::build::warm_up(gpu, name, args.limits, &opts)? * 1e3;
+    let b = crate::gpu::build::build(gpu, name, m, args.limits, &opts)?;
+    crate::meshlet::validate(m, &b.meshlets, args.limits).with_context(|| {
+        format!(
+            "{}: {name} built invalid meshlets on the GPU",
+            path.display()
+        )
+    })?;
+    Ok((b.meshlets, b.seconds * 1e3, device_ms + warm_ms))
+}
+
 /// Builds with strategy `name` and validates the result (an invalid build is an error naming the
 /// mesh file).
 fn build_validated(

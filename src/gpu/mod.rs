@@ -16,6 +16,9 @@
 //! | `scan` | `scan.wgsl` | a prefix sum (used by the others) |
 //! | [`copy`] | `copy.wgsl` | none: the bandwidth probe of `bench gpu` |
 //!
+//! [`build::build`] builds meshlets on the GPU with any strategy whose every step is a kernel
+//! (`meshletlab build --device gpu`).
+//!
 //! Why integer keys and exactly rounded arithmetic make the parity exact: `docs/gpu-clustering.md`. Kernels run on any Vulkan adapter; on a machine without a GPU that is
 //! Mesa's lavapipe, which the project's setup installs.
 //!
@@ -26,6 +29,7 @@
 
 pub mod adjacency;
 pub mod bounds;
+pub mod build;
 pub mod capacity;
 pub mod copy;
 pub mod grow;
@@ -72,6 +76,9 @@ pub enum GpuError {
     /// The GPU path does not offer this.
     #[error("{0}")]
     Unsupported(&'static str),
+    /// A strategy without a whole GPU path was asked to build on the GPU.
+    #[error("strategy '{0}' has no GPU path; --device gpu builds {list}", list = build::GPU_STRATEGIES.map(|k| k.name()).join(", "))]
+    NoGpuPath(String),
     /// A readback failed.
     #[error("GPU readback failed: {0}")]
     Readback(String),

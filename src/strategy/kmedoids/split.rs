@@ -8,8 +8,8 @@ use crate::mesh::Mesh;
 use crate::meshlet::Limits;
 use rayon::prelude::*;
 
-/// The flat method's split choice: the largest overflows first (ties to the lower cluster), a fraction
-/// per round; returns the clusters to split.
+/// The flat method's split choice: the largest overflows first (ties to the lower cluster), a
+/// fraction per round; returns the clusters to split.
 pub fn split_choice(mut over: Vec<(u32, u32)>, fraction: f64) -> Vec<u32> {
     over.sort_unstable_by_key(|&(c, size)| (std::cmp::Reverse(size), c));
     let take = ((over.len() as f64 * fraction).ceil() as usize).clamp(1, over.len());
