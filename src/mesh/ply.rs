@@ -540,14 +540,18 @@ fn value(t: &mut Tokens, s: Scalar, what: &dyn Fn() -> String) -> Result<f64, Me
             what()
         )));
     };
-    // The body was checked to be UTF-8, and tokens split at ASCII whitespace stay so.
-    let tok = std::str::from_utf8(tok).expect("a token of valid text is text");
     let bad = || {
         parse_err(
             format!("line {line} ({})", what()),
-            format!("'{tok}' is not a valid {s:?} value"),
+            format!(
+                "'{}' is not a valid {s:?} value",
+                String::from_utf8_lossy(tok)
+            ),
         )
     };
+    // The body was checked to be UTF-8 and tokens end at ASCII whitespace, so this never fails;
+    // if it did, the token is no number either.
+    let tok = std::str::from_utf8(tok).map_err(|_| bad())?;
     if s.is_integer() {
         tok.parse::<i64>().map(|v| v as f64).map_err(|_| bad())
     } else {
@@ -622,11 +626,8 @@ fn read_ascii(
 
 /// Writes a binary little-endian PLY (float x/y/z; `list uchar uint vertex_indices`), the format of
 /// the shared test meshes.
-pub fn write_binary(
-    positions: &[[f32; 3]],
-    indices: &[u32],
-    mut w: impl Write,
-) -> std::io::Result<()> {
+pub fn write_binary(positions: &[[f32; 3]], indices: &[u32], w: impl Write) -> std::io::Result<()> {
+    let mut w = std::io::BufWriter::with_capacity(1 << 16, w);
     write!(
         w,
         "ply\nformat binary_little_endian 1.0\ncomment written by meshletlab\n\
@@ -635,27 +636,17 @@ pub fn write_binary(
         positions.len(),
         indices.len() / 3
     )?;
-    let mut buf = Vec::with_capacity(1 << 16);
     for p in positions {
         for c in p {
-            buf.extend_from_slice(&c.to_le_bytes());
-        }
-        if buf.len() > 1 << 15 {
-            w.write_all(&buf)?;
-            buf.clear();
+            w.write_all(&c.to_le_bytes())?;
         }
     }
     for t in indices.chunks_exact(3) {
-        buf.push(3);
+        w.write_all(&[3])?;
         for i in t {
-            buf.extend_from_slice(&i.to_le_bytes());
-        }
-        if buf.len() > 1 << 15 {
-            w.write_all(&buf)?;
-            buf.clear();
+            w.write_all(&i.to_le_bytes())?;
         }
     }
-    w.write_all(&buf)?;
     w.flush()
 }
 

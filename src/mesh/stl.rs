@@ -261,11 +261,8 @@ fn number<'a>(t: &mut Tokens<'a>, facet: usize) -> Result<(f32, &'a [u8]), MeshE
 /// Writes a binary STL: a header naming meshletlab (not starting with `solid`), then per triangle
 /// its unit normal (zero for a degenerate one), corners and a zero attribute word. Vertex sharing
 /// is lost, as in every STL; [`parse`] welds it back (exactly equal positions only).
-pub fn write_binary(
-    positions: &[[f32; 3]],
-    indices: &[u32],
-    mut w: impl Write,
-) -> std::io::Result<()> {
+pub fn write_binary(positions: &[[f32; 3]], indices: &[u32], w: impl Write) -> std::io::Result<()> {
+    let mut w = std::io::BufWriter::with_capacity(1 << 16, w);
     let count = u32::try_from(indices.len() / 3).map_err(|_| {
         std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
@@ -277,23 +274,17 @@ pub fn write_binary(
     header[..text.len()].copy_from_slice(text);
     w.write_all(&header)?;
     w.write_all(&count.to_le_bytes())?;
-    let mut buf = Vec::with_capacity(1 << 16);
     for t in indices.chunks_exact(3) {
         let p: [glam::Vec3; 3] =
             std::array::from_fn(|k| glam::Vec3::from_array(positions[t[k] as usize]));
         let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
         for v in std::iter::once(n).chain(p) {
             for c in v.to_array() {
-                buf.extend_from_slice(&c.to_le_bytes());
+                w.write_all(&c.to_le_bytes())?;
             }
         }
-        buf.extend_from_slice(&[0, 0]);
-        if buf.len() > 1 << 15 {
-            w.write_all(&buf)?;
-            buf.clear();
-        }
+        w.write_all(&[0, 0])?;
     }
-    w.write_all(&buf)?;
     w.flush()
 }
 
