@@ -246,6 +246,20 @@ struct Writer {
 }
 
 impl Writer {
+    /// The written file as a seed of `target`; bytes below `text_end` are text.
+    fn into_seed(self, name: String, target: Target, text_end: usize) -> Seed {
+        Seed {
+            name,
+            target,
+            bytes: self.out,
+            boundaries: self.boundaries,
+            numbers: self.numbers,
+            floats: self.floats,
+            text_end,
+            gltf: None,
+        }
+    }
+
     fn text(&mut self, s: &str) {
         self.out.extend_from_slice(s.as_bytes());
     }
@@ -436,24 +450,12 @@ fn ply(t: Target, enc: Enc, s: &PlySpec, pos: &[[f32; 3]], quads: &[[u32; 4]]) -
         }
     }
     let text_end = if enc == Enc::Ascii { w.out.len() } else { body };
-    Seed {
-        name: format!(
-            "{}/{}",
-            t.name(),
-            if s.normals {
-                "props-polygons-strips"
-            } else {
-                "plain"
-            }
-        ),
-        target: t,
-        bytes: w.out,
-        boundaries: w.boundaries,
-        numbers: w.numbers,
-        floats: w.floats,
-        text_end,
-        gltf: None,
-    }
+    let variant = if s.normals {
+        "props-polygons-strips"
+    } else {
+        "plain"
+    };
+    w.into_seed(format!("{}/{variant}", t.name()), t, text_end)
 }
 
 fn obj(pos: &[[f32; 3]], quads: &[[u32; 4]], rich: bool) -> Seed {
@@ -502,23 +504,13 @@ fn obj(pos: &[[f32; 3]], quads: &[[u32; 4]], rich: bool) -> Seed {
         }
         w.end_record();
     }
-    Seed {
-        name: format!(
-            "obj/{}",
-            if rich {
-                "groups-normals-negative"
-            } else {
-                "plain"
-            }
-        ),
-        target: Target::Obj,
-        text_end: w.out.len(),
-        bytes: w.out,
-        boundaries: w.boundaries,
-        numbers: w.numbers,
-        floats: w.floats,
-        gltf: None,
-    }
+    let variant = if rich {
+        "groups-normals-negative"
+    } else {
+        "plain"
+    };
+    let end = w.out.len();
+    w.into_seed(format!("obj/{variant}"), Target::Obj, end)
 }
 
 /// The grid's quads as counter-clockwise triangles.
@@ -604,23 +596,13 @@ fn stl_ascii(pos: &[[f32; 3]], quads: &[[u32; 4]], rich: bool) -> Seed {
         }));
         eol(&mut w);
     }
-    Seed {
-        name: format!(
-            "stl-ascii/{}",
-            if rich {
-                "crlf-upper-two-solids"
-            } else {
-                "plain"
-            }
-        ),
-        target: Target::StlAscii,
-        text_end: w.out.len(),
-        bytes: w.out,
-        boundaries: w.boundaries,
-        numbers: w.numbers,
-        floats: w.floats,
-        gltf: None,
-    }
+    let variant = if rich {
+        "crlf-upper-two-solids"
+    } else {
+        "plain"
+    };
+    let end = w.out.len();
+    w.into_seed(format!("stl-ascii/{variant}"), Target::StlAscii, end)
 }
 
 /// A binary STL of the grid: the facet count and every normal and corner float marked. Solid: the
