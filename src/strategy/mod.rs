@@ -140,6 +140,7 @@ pub const NAMES: &[&str] = &[
     "kmedoids",
     "kmedoids-flat",
     "kmedoids-paper",
+    "kmedoids-parallel",
     "compact",
     "meshopt",
     "meshopt-scan",
@@ -279,6 +280,8 @@ pub enum Kind {
     KmedoidsFlat,
     /// [`KMedoids`] as the paper runs it (slow by design): `kmedoids-paper`.
     KmedoidsPaper,
+    /// [`KMedoids`], capacity-aware on regions at once with border merges: `kmedoids-parallel`.
+    KmedoidsParallel,
     /// [`Compact`]: `compact`.
     Compact,
     /// [`Meshopt`] (meshoptimizer's `build_meshlets`): `meshopt`.
@@ -295,7 +298,7 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in [`NAMES`] (table) order.
-    pub const ALL: [Kind; 17] = [
+    pub const ALL: [Kind; 18] = [
         Kind::Nvidia,
         Kind::NvidiaTipsify,
         Kind::Greedy,
@@ -307,6 +310,7 @@ impl Kind {
         Kind::Kmedoids,
         Kind::KmedoidsFlat,
         Kind::KmedoidsPaper,
+        Kind::KmedoidsParallel,
         Kind::Compact,
         Kind::Meshopt,
         Kind::MeshoptScan,
@@ -352,6 +356,7 @@ impl Kind {
             Kind::Kmedoids => Box::new(kmedoids(kmedoids::Mode::Capacity)),
             Kind::KmedoidsFlat => Box::new(kmedoids(kmedoids::Mode::Flat)),
             Kind::KmedoidsPaper => Box::new(kmedoids(kmedoids::Mode::Paper)),
+            Kind::KmedoidsParallel => Box::new(kmedoids(kmedoids::Mode::Parallel)),
             Kind::Compact => Box::new(Compact),
             Kind::Meshopt => Box::new(Meshopt {
                 cone_weight: opts.cone_weight,

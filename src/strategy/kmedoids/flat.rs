@@ -39,7 +39,7 @@ pub fn cluster_size(limits: Limits, mode: Mode) -> usize {
         Mode::Paper => limits.max_triangles as usize,
         // A closed 64-vertex patch holds about 1.5 x 64 triangles (Euler: T ~ 2V minus the
         // boundary), so starting at that size leaves far fewer clusters to split.
-        Mode::Flat | Mode::Capacity => (limits.max_triangles as usize)
+        Mode::Flat | Mode::Capacity | Mode::Parallel => (limits.max_triangles as usize)
             .min(3 * limits.max_vertices as usize / 2)
             .max(1),
     }
@@ -138,6 +138,15 @@ pub fn cluster(
 pub fn initial_medoids(mesh: &Mesh, per_cluster: usize) -> Vec<u32> {
     let t = mesh.triangle_count();
     let k = t.div_ceil(per_cluster.max(1)).max(1);
+    let order = morton_order(mesh);
+    // The middle of each of k equal runs of the Morton order.
+    sorted((0..k).map(|j| order[(j * t + t / 2) / k]).collect())
+}
+
+/// Triangles in the Morton order of their centroids (10 bits per axis over the bounding box's
+/// longest side), ties to the lower id.
+pub fn morton_order(mesh: &Mesh) -> Vec<u32> {
+    let t = mesh.triangle_count();
     let (lo, hi) = mesh.bounding_box();
     let scale = (hi - lo).max_element().max(f32::MIN_POSITIVE);
     let mut keyed: Vec<(u64, u32)> = (0..t)
@@ -153,8 +162,7 @@ pub fn initial_medoids(mesh: &Mesh, per_cluster: usize) -> Vec<u32> {
         })
         .collect();
     keyed.sort_unstable();
-    // The middle of each of k equal runs of the Morton order.
-    sorted((0..k).map(|j| keyed[(j * t + t / 2) / k].1).collect())
+    keyed.into_iter().map(|(_, i)| i).collect()
 }
 
 /// Assigns, then adds a medoid (the lowest unreached triangle) to every dual-graph component that has

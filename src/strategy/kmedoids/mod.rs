@@ -10,6 +10,7 @@
 //! |---|---|---|---|
 //! | [`Mode::Capacity`] (the default) | `kmedoids` | [`capacity`]: clusters grow to the limits, nothing is split | `gpu::kmedoids::cluster_capacity` |
 //! | [`Mode::Flat`] | `kmedoids-flat` | [`flat`]: nearest-medoid assignment, overflows split a fraction at a time | `gpu::kmedoids::cluster_flat` |
+//! | [`Mode::Parallel`] | `kmedoids-parallel` | [`parallel`]: the capacity-aware method on many regions at once, border clusters merged in matching rounds | (none yet: the per-region growth is host code) |
 //! | [`Mode::Paper`] | `kmedoids-paper` | [`flat`]: one cluster added and everything re-run per overflow | (none: slow by design) |
 //!
 //! The files, lowest first (a file reads only those above it in this list):
@@ -22,6 +23,7 @@
 //! - [`capacity`]: the default's driver and its capacity-aware assignment (CPU reference of
 //!   `wgsl/capacity.wgsl`);
 //! - [`flat`]: the flat and paper drivers;
+//! - [`parallel`]: the region-parallel driver over the capacity-aware one;
 //! - this file: the strategy, its settings, [`cluster`] and [`pack`].
 //!
 //! Every step is a function over flat arrays (CSR adjacency, u32 labels and distances), so a
@@ -34,6 +36,7 @@ pub mod capacity;
 pub mod flat;
 mod local_graph;
 pub mod merge;
+pub mod parallel;
 pub mod seed;
 pub mod split;
 pub mod update;
@@ -59,6 +62,9 @@ pub enum Mode {
     /// Add one cluster at a time and re-run everything (the paper's method; slow, kept for
     /// comparison: `kmedoids-paper`).
     Paper,
+    /// The capacity-aware method on regions of the mesh at once, then border merges
+    /// ([`parallel`], `kmedoids-parallel`).
+    Parallel,
 }
 
 impl Mode {
@@ -68,6 +74,7 @@ impl Mode {
             Mode::Capacity => "kmedoids",
             Mode::Flat => "kmedoids-flat",
             Mode::Paper => "kmedoids-paper",
+            Mode::Parallel => "kmedoids-parallel",
         }
     }
 }
@@ -89,8 +96,11 @@ pub struct Config {
     pub paper_budget: Duration,
     /// Run on the global rayon pool (true) or on one thread (false); results are identical.
     pub parallel: bool,
-    /// What a growing cluster prefers (capacity).
+    /// What a growing cluster prefers (capacity, parallel).
     pub grow: Grow,
+    /// Triangles per region, each clustered on its own (parallel): smaller regions give more
+    /// parallel work and more partly filled clusters at their borders.
+    pub region_triangles: u32,
 }
 
 impl Default for Config {
@@ -103,6 +113,7 @@ impl Default for Config {
             paper_budget: Duration::from_secs(300),
             parallel: true,
             grow: Default::default(),
+            region_triangles: 16384,
         }
     }
 }
@@ -125,6 +136,7 @@ impl Strategy for KMedoids {
             Mode::Flat => "k-medoids on the triangle dual graph (hop distance), overflowing clusters split a fraction at a time",
             Mode::Paper => "k-medoids as the paper runs it: one cluster added and everything re-run per overflow",
             Mode::Capacity => "k-medoids whose clusters grow to the limits and take triangles only while they have room",
+            Mode::Parallel => "the capacity-aware k-medoids on regions of the mesh at once, border clusters merged in parallel rounds",
         }
     }
 
@@ -153,6 +165,7 @@ pub fn cluster(mesh: &Mesh, limits: Limits, mode: Mode, cfg: &Config) -> Cluster
             Clustering::from_grown(mesh, limits, g, t0.elapsed().as_secs_f64())
         }
         Mode::Flat | Mode::Paper => flat::cluster(mesh, &dual, limits, mode, cfg, t0),
+        Mode::Parallel => parallel::cluster(mesh, &dual, limits, cfg, t0),
     }
 }
 
@@ -168,11 +181,13 @@ pub struct Clustering {
     pub distances: Vec<u32>,
     /// Assign/update iterations run in total.
     pub iterations: u32,
-    /// Split rounds (flat) or clusters added (paper).
+    /// Split rounds (flat), clusters added (paper) or border-merge rounds that merged (parallel).
     pub splits: u32,
     /// Whether the paper's method ran out of budget and finished the flat way.
     pub budget_exhausted: bool,
-    /// Mean hop distance after the initial clustering, before any split (the k-medoids objective).
+    /// Mean hop distance after the initial clustering, before any split (the k-medoids
+    /// objective); for the parallel method, that of the per-region clusters before the border
+    /// merges.
     pub initial_mean_distance: f64,
     /// Iterations of the initial clustering.
     pub initial_iterations: u32,
