@@ -108,7 +108,10 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::Kmedoids(mut c) => {
             complete(&mut c.common, q);
             bench::kmedoids::run(&c)?;
-            println!("wrote {}", c.common.out.join("kmedoids.md").display());
+            println!(
+                "wrote {}",
+                c.common.out.join(c.tag.name("kmedoids.md")).display()
+            );
             Ok(())
         }
         BenchCommand::Build { mut bench, args } => {

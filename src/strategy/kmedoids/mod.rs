@@ -165,7 +165,7 @@ pub fn cluster(mesh: &Mesh, limits: Limits, mode: Mode, cfg: &Config) -> Cluster
             Clustering::from_grown(mesh, limits, g, t0.elapsed().as_secs_f64())
         }
         Mode::Flat | Mode::Paper => flat::cluster(mesh, &dual, limits, mode, cfg, t0),
-        Mode::Parallel => parallel::cluster(mesh, &dual, limits, cfg, t0),
+        Mode::Parallel => parallel::cluster(mesh, &dual, &vt, limits, cfg, t0),
     }
 }
 

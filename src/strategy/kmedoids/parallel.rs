@@ -11,7 +11,7 @@
 //! parallelism is one level up:
 //!
 //! 1. **Regions** ([`regions`]): the flat method's seeding and assignment ([`super::flat`],
-//!    [`super::assign`]) at a coarse scale, [`Config::region_triangles`] per region: seeds spread
+//!    [`mod@super::assign`]) at a coarse scale, [`Config::region_triangles`] per region: seeds spread
 //!    along the Morton order of centroids, one multi-source BFS. Each BFS cell is edge-connected;
 //!    small pieces no seed reaches join the region nearest in Morton order.
 //! 2. **Clusters per region**, all regions at once: the capacity-aware method on the region's
@@ -47,14 +47,32 @@ use std::cmp::Reverse;
 use std::time::Instant;
 
 /// Runs steps 1-4 over the dual graph; `t0` is when the run began (the adjacency counts in).
-pub fn cluster(mesh: &Mesh, dual: &Csr, limits: Limits, cfg: &Config, t0: Instant) -> Clustering {
+pub fn cluster(
+    mesh: &Mesh,
+    dual: &Csr,
+    vt: &Csr,
+    limits: Limits,
+    cfg: &Config,
+    t0: Instant,
+) -> Clustering {
     let (region, k_regions) = regions(mesh, dual, cfg.region_triangles as usize);
     let rows = members(&region, k_regions);
-    // Step 2: every region on its own; results in region order.
-    let runs: Vec<Region> = (0..k_regions)
-        .into_par_iter()
-        .map(|r| cluster_region(mesh, rows.row(r), limits, cfg))
-        .collect();
+    // Step 2: every region on its own; results in region order. One region is the whole mesh:
+    // its own copy would only cost time (the same triangles in the same order).
+    let runs: Vec<Region> = if k_regions == 1 {
+        let g = capacity::cluster(mesh, dual, vt, limits, cfg.grow, cfg.max_iterations);
+        vec![Region {
+            labels: g.labels,
+            distances: g.distances,
+            medoids: g.medoids,
+            iterations: g.iterations,
+        }]
+    } else {
+        (0..k_regions)
+            .into_par_iter()
+            .map(|r| cluster_region(mesh, rows.row(r), limits, cfg))
+            .collect()
+    };
     let mut labels = vec![UNREACHED; mesh.triangle_count()];
     let mut distances = vec![0u32; mesh.triangle_count()];
     let mut medoids = Vec::new();
@@ -117,8 +135,12 @@ pub fn regions(mesh: &Mesh, dual: &Csr, size: usize) -> (Vec<u32>, usize) {
     if t == 0 {
         return (Vec::new(), 0);
     }
-    let order = morton_order(mesh);
     let k = t.div_ceil(size.max(1)).max(1);
+    if k == 1 {
+        // One region: no BFS (its levels are many tiny parallel steps on a long thin mesh).
+        return (vec![0; t], 1);
+    }
+    let order = morton_order(mesh);
     let seeds: Vec<u32> = (0..k).map(|j| order[(j * t + t / 2) / k]).collect();
     let sorted_seeds = sorted(seeds.clone());
     let (mut labels, _) = assign(dual, &sorted_seeds);
