@@ -619,3 +619,40 @@ fn the_gpu_refuses_strategies_without_a_gpu_path_and_says_when_there_is_no_adapt
     assert!(err.contains("no Vulkan adapter"), "{err}");
     assert_eq!(err.trim().lines().count(), 1, "{err}");
 }
+
+#[test]
+fn kmedoids_regions_knob_reaches_kmedoids_parallel() {
+    // gaspra (32 k triangles) is one region by default and many at 1024 triangles per region.
+    let mesh = common::meshes_dir().join("stellarium_gaspra.ply.zst");
+    let meshlets = |regions: &str| {
+        let out = ok(&[
+            "stats",
+            "-q",
+            mesh.to_str().unwrap(),
+            "--json",
+            "-s",
+            "kmedoids,kmedoids-parallel",
+            "--kmedoids-regions",
+            regions,
+        ]);
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        let rows = v["strategies"].as_array().unwrap().clone();
+        assert!(rows.iter().all(|r| r["invalid"].is_null()), "{out}");
+        let n = |i: usize| rows[i]["metrics"]["meshlets"].as_u64().unwrap();
+        (n(0), n(1))
+    };
+    let (seq, whole) = meshlets("65536");
+    let (seq_again, cut) = meshlets("1024");
+    // One region is the sequential method itself; the knob does not touch `kmedoids`.
+    assert_eq!((whole, seq_again), (seq, seq));
+    // Many regions: part-filled clusters at their borders, a few more meshlets.
+    assert!(cut > whole, "{cut} vs {whole}");
+    let out = cli(&[
+        "stats",
+        "-q",
+        mesh.to_str().unwrap(),
+        "--kmedoids-regions",
+        "0",
+    ]);
+    assert!(!out.status.success());
+}

@@ -590,6 +590,7 @@ fn write_strategies(rows: &[Row], preset_rows: &[Row], cfg: &Config) -> Result<(
             &hist(&|r| &r.eval.metrics.vertex_histogram),
             plot::Axes {
                 log_x: false,
+                log_y: false,
                 zero_y: true,
             },
         )?;
@@ -601,6 +602,7 @@ fn write_strategies(rows: &[Row], preset_rows: &[Row], cfg: &Config) -> Result<(
             &hist(&|r| &r.eval.metrics.triangle_histogram),
             plot::Axes {
                 log_x: false,
+                log_y: false,
                 zero_y: true,
             },
         )?;

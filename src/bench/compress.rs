@@ -387,6 +387,7 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
             &series,
             Axes {
                 log_x: true,
+                log_y: false,
                 zero_y: true,
             },
         )?;

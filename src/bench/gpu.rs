@@ -78,6 +78,8 @@ struct Row {
     grow: Vec<GrowRow>,
     /// The capacity-aware default `kmedoids`.
     cap: Cap,
+    /// `kmedoids-parallel` (no GPU path): meshlets, one thread and rayon seconds.
+    par: (usize, Option<f64>, f64),
 }
 
 /// Capacity-aware k-medoids on one mesh: CPU one thread and rayon, GPU (adjacency, medoid
@@ -325,6 +327,18 @@ pub fn run(cfg: &Config) -> Result<()> {
             rayon: cap_rayon,
             gpu: cap_gpu,
         };
+        pb.set_message(format!("{name} ({t} triangles): kmedoids-parallel"));
+        let (par_r, par_rayon) = secs(|| cluster(m, cfg.limits, Mode::Parallel, &capc));
+        let par_cpu1 = (t <= cfg.one_thread_max)
+            .then(|| secs(|| one.install(|| cluster(m, cfg.limits, Mode::Parallel, &capc))))
+            .map(|(one_r, s)| {
+                if one_r.meshlets != par_r.meshlets {
+                    bail!("{name}: kmedoids-parallel differs on one thread");
+                }
+                Ok(s)
+            })
+            .transpose()?;
+        let par = (par_r.meshlets.len(), par_cpu1, par_rayon);
         pb.finish_and_clear();
         say(format!("{name}: adjacency cpu {adj_cpu:.3}s gpu kernel {:.3}s; k-medoids rayon {km_rayon:.2}s gpu {:?}", adj_gpu.kernel, km_gpu.as_ref().map(|k| k.seconds)));
         rows.push(Row {
@@ -343,6 +357,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             iterations: cr.iterations,
             grow,
             cap,
+            par,
         });
     }
 
@@ -657,6 +672,9 @@ fn adjacency_table<'a>() -> Table<'a, Row> {
         .csv_only("capacity_rayon_s", |r| format!("{:.4}", r.cap.rayon))
         .csv_only("capacity_gpu_s", move |r| s4(r.cap.gpu.map(|g| g.0)))
         .csv_only("capacity_gpu_kernel_s", move |r| s4(r.cap.gpu.map(|g| g.1)))
+        .csv_only("parallel_meshlets", |r| r.par.0.to_string())
+        .csv_only("parallel_cpu1_s", move |r| s4(r.par.1))
+        .csv_only("parallel_rayon_s", |r| format!("{:.4}", r.par.2))
 }
 
 fn write(
@@ -738,6 +756,31 @@ fn write(
             opt(c.gpu.map(|g| g.0 / c.rayon), &|x| format!("{x:.2}x")),
             c.gpu.map(|g| g.2.to_string()).unwrap_or_else(|| "-".into()),
             c.assignments,
+        )?;
+    }
+    writeln!(md)?;
+    writeln!(
+        md,
+        "## `kmedoids-parallel` (CPU only), whole run including adjacency\n"
+    )?;
+    writeln!(md, "The capacity-aware method on regions of the mesh at once, border clusters merged in matching rounds (src/strategy/kmedoids/parallel.rs). It has no GPU path yet: the per-region growth is host code. One thread checked identical to the pool.\n")?;
+    writeln!(
+        md,
+        "| mesh | triangles | meshlets | CPU 1 thread s | CPU rayon s | 1 thread / rayon | rayon / kmedoids rayon |"
+    )?;
+    writeln!(md, "|---|---:|---:|---:|---:|---:|---:|")?;
+    for r in rows {
+        let (n, one, pool) = r.par;
+        writeln!(
+            md,
+            "| {} | {} | {} | {} | {:.2} | {} | {:.2}x |",
+            r.mesh,
+            r.triangles,
+            n,
+            opt(one, &|x| format!("{x:.2}")),
+            pool,
+            opt(one.map(|x| x / pool), &|x| format!("{x:.2}")),
+            pool / r.cap.rayon,
         )?;
     }
     writeln!(md)?;
@@ -846,20 +889,40 @@ fn write(
     line_chart(
         &cfg.common.out.join(cfg.tag.name("gpu_scaling.svg")),
         "k-medoids and adjacency run time against mesh size",
-        "triangles (log)",
+        "triangles",
         "seconds",
         &[
             Series {
-                label: "k-medoids CPU 1 thread".into(),
+                label: "kmedoids-flat CPU 1 thread".into(),
                 points: pts(&|r| r.km_cpu1),
             },
             Series {
-                label: "k-medoids CPU rayon".into(),
+                label: "kmedoids-flat CPU rayon".into(),
                 points: pts(&|r| Some(r.km_rayon)),
             },
             Series {
-                label: format!("k-medoids GPU ({})", g.info.name),
+                label: format!("kmedoids-flat GPU ({})", g.info.name),
                 points: pts(&|r| r.km_gpu.as_ref().map(|k| k.seconds)),
+            },
+            Series {
+                label: "kmedoids CPU 1 thread".into(),
+                points: pts(&|r| r.cap.cpu1),
+            },
+            Series {
+                label: "kmedoids CPU rayon".into(),
+                points: pts(&|r| Some(r.cap.rayon)),
+            },
+            Series {
+                label: format!("kmedoids GPU + host ({})", g.info.name),
+                points: pts(&|r| r.cap.gpu.map(|g| g.0)),
+            },
+            Series {
+                label: "kmedoids-parallel CPU 1 thread".into(),
+                points: pts(&|r| r.par.1),
+            },
+            Series {
+                label: "kmedoids-parallel CPU rayon".into(),
+                points: pts(&|r| Some(r.par.2)),
             },
             Series {
                 label: "adjacency CPU".into(),
@@ -872,6 +935,7 @@ fn write(
         ],
         Axes {
             log_x: true,
+            log_y: true,
             ..Axes::default()
         },
     )?;

@@ -769,6 +769,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         &series(&|r| r.c.mean_distance()),
         plot::Axes {
             log_x: true,
+            log_y: false,
             zero_y: false,
         },
     )?;
@@ -783,6 +784,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         &series(&|r| r.c.meshlets.len() as f64),
         plot::Axes {
             log_x: true,
+            log_y: false,
             zero_y: false,
         },
     )?;

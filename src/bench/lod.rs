@@ -842,6 +842,7 @@ fn write_results(
         &ratio_series,
         Axes {
             log_x: true,
+            log_y: false,
             zero_y: false,
         },
     )?;
@@ -857,6 +858,7 @@ fn write_results(
             &series,
             Axes {
                 log_x: true,
+                log_y: false,
                 zero_y: true,
             },
         )?;
@@ -899,6 +901,7 @@ fn write_results(
                 &series,
                 Axes {
                     log_x: true,
+                    log_y: false,
                     zero_y: true,
                 },
             )?;

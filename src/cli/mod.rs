@@ -66,6 +66,10 @@ pub struct StrategyArgs {
     /// centroid: smaller spheres) or `hops` (fewest hops from its seed: fewer meshlets).
     #[arg(long, default_value = "centre", value_parser = clap::value_parser!(strategy::kmedoids::Grow))]
     pub kmedoids_grow: strategy::kmedoids::Grow,
+    /// kmedoids-parallel: triangles per region (each region is clustered on its own, all at once;
+    /// smaller regions give more parallel work and a few more meshlets at their borders).
+    #[arg(long, default_value_t = strategy::kmedoids::DEFAULT_REGION_TRIANGLES, value_parser = clap::value_parser!(u32).range(1..))]
+    pub kmedoids_regions: u32,
     /// kmedoids-paper: seconds before the remaining splits are done the flat way.
     #[arg(long, default_value_t = 300.0)]
     pub paper_budget: f64,
@@ -87,6 +91,7 @@ impl StrategyArgs {
                 max_iterations: self.kmedoids_iterations,
                 shift_threshold: self.kmedoids_threshold,
                 grow: self.kmedoids_grow,
+                region_triangles: self.kmedoids_regions,
                 paper_budget: Duration::from_secs_f64(self.paper_budget),
                 ..Default::default()
             },

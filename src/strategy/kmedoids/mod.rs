@@ -79,6 +79,11 @@ impl Mode {
     }
 }
 
+/// Triangles per region of `kmedoids-parallel` by default: on the shared meshes, regions of this
+/// size cost about a percent of meshlets over one region per mesh while leaving dozens of regions
+/// from a million triangles up (the region-size sweep of `meshletlab bench kmedoids`).
+pub const DEFAULT_REGION_TRIANGLES: u32 = 16384;
+
 /// k-medoids tunables; each names the methods that read it. The method itself is a [`Mode`],
 /// chosen by the strategy name, never by these settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -113,7 +118,7 @@ impl Default for Config {
             paper_budget: Duration::from_secs(300),
             parallel: true,
             grow: Default::default(),
-            region_triangles: 16384,
+            region_triangles: DEFAULT_REGION_TRIANGLES,
         }
     }
 }
