@@ -282,3 +282,48 @@ fn capacity_assignment_matches_on_wide_fans_and_conflict_chains() {
         }
     }
 }
+
+/// The library on a device the caller made (as an engine would pass its own): refused with the
+/// short limit named when requested with wgpu's defaults, and the same meshlets as the CPU when
+/// requested with `Gpu::required_limits`.
+#[test]
+fn an_engines_own_device_runs_the_kernels_and_a_short_one_is_refused() {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = wgpu::Backends::VULKAN;
+    desc.flags = wgpu::InstanceFlags::empty();
+    let instance = wgpu::Instance::new(desc);
+    let adapter =
+        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+            .unwrap_or_else(|e| panic!("no Vulkan adapter ({e}): run `make setup`"));
+    let device_with = |limits: wgpu::Limits| {
+        pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            required_features: Gpu::wanted_features(&adapter),
+            required_limits: limits,
+            ..Default::default()
+        }))
+        .unwrap()
+    };
+    let (device, queue) = device_with(wgpu::Limits::default());
+    let err = Gpu::from_device(device, queue, adapter.get_info())
+        .err()
+        .expect("wgpu's default limits are short of the kernels'")
+        .to_string();
+    assert!(
+        err.contains("max_storage_buffers_per_shader_stage"),
+        "{err}"
+    );
+    let (device, queue) = device_with(Gpu::required_limits(&adapter.limits()));
+    let gpu = Gpu::from_device(device.clone(), queue, adapter.get_info()).unwrap();
+    let mesh = generate::knot_tube(90, 10, 5);
+    let limits = Limits::new(64, 126).unwrap();
+    let opts = meshletlab::strategy::Options::default();
+    for name in ["kmedoids-flat", "bsphere-parallel"] {
+        let cpu = meshletlab::strategy::by_name(name, &opts)
+            .unwrap()
+            .build(&mesh, limits);
+        let on_gpu = meshletlab::gpu::build::build(&gpu, name, &mesh, limits, &opts).unwrap();
+        assert_eq!(on_gpu.meshlets, cpu, "{name}");
+    }
+    // The caller's handle still works: the library took a clone, not the device.
+    let _ = device.limits();
+}

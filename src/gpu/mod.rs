@@ -90,6 +90,13 @@ pub enum GpuError {
 /// Elements per part of a [`Split`] array: 2^25 u32 = 128 MiB, lavapipe's storage-binding limit.
 pub const PART: usize = 1 << 25;
 
+/// Storage buffers the widest kernel binds in one stage (`grow.wgsl`: 15; a test counts them).
+pub const MIN_STORAGE_BUFFERS: u32 = 15;
+
+/// Workgroup memory the largest kernel declares, in bytes (`update.wgsl`'s medoid update: 6657
+/// words, rounded up to whole KiB; a test sums the declarations).
+pub const MIN_WORKGROUP_STORAGE: u32 = 27 * 1024;
+
 /// A GPU context: one adapter, device and queue, plus timestamp support.
 pub struct Gpu {
     /// The device.
@@ -160,36 +167,82 @@ impl Gpu {
             pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
                 .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
         let info = adapter.get_info();
-        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
-        let mut features = wgpu::Features::empty();
-        if timestamps {
-            features |= wgpu::Features::TIMESTAMP_QUERY;
-        }
-        let al = adapter.limits();
-        let limits = wgpu::Limits {
-            max_storage_buffers_per_shader_stage: 16.min(al.max_storage_buffers_per_shader_stage),
-            max_storage_buffer_binding_size: al.max_storage_buffer_binding_size,
-            max_buffer_size: al.max_buffer_size,
-            max_compute_workgroups_per_dimension: al.max_compute_workgroups_per_dimension,
-            max_compute_workgroup_storage_size: al.max_compute_workgroup_storage_size,
-            ..wgpu::Limits::default()
-        };
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("meshletlab"),
-            required_features: features,
-            required_limits: limits,
+            required_features: Self::wanted_features(&adapter),
+            required_limits: Self::required_limits(&adapter.limits()),
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device {
             adapter: info.name.clone(),
             reason: e.to_string(),
         })?;
-        if (device.limits().max_storage_buffer_binding_size as usize) < PART * 4 {
-            return Err(GpuError::Device {
-                adapter: info.name.clone(),
-                reason: "storage bindings under 128 MiB".into(),
-            });
+        Self::from_device(device, queue, info)
+    }
+
+    /// The optional features the kernels use where `adapter` offers them (GPU timestamps, for
+    /// kernel times); an engine adds them to its own device request.
+    pub fn wanted_features(adapter: &wgpu::Adapter) -> wgpu::Features {
+        adapter.features() & wgpu::Features::TIMESTAMP_QUERY
+    }
+
+    /// The limits to request for a device the kernels run on, from the adapter's: wgpu's
+    /// defaults, raised to what the kernels bind (storage buffers per stage, the medoid update's
+    /// workgroup memory) and to the adapter's buffer sizes and grid. An engine that passes its own
+    /// device to [`Gpu::from_device`] requests at least these.
+    pub fn required_limits(adapter: &wgpu::Limits) -> wgpu::Limits {
+        wgpu::Limits {
+            max_storage_buffers_per_shader_stage: 16
+                .min(adapter.max_storage_buffers_per_shader_stage),
+            max_storage_buffer_binding_size: adapter.max_storage_buffer_binding_size,
+            max_buffer_size: adapter.max_buffer_size,
+            max_compute_workgroups_per_dimension: adapter.max_compute_workgroups_per_dimension,
+            max_compute_workgroup_storage_size: adapter.max_compute_workgroup_storage_size,
+            ..wgpu::Limits::default()
         }
+    }
+
+    /// Runs the kernels on a device the caller already holds (an engine's own `Device` and
+    /// `Queue`, cloned handles of them), with `info` from its adapter for reports. The device
+    /// must have been requested with at least [`Gpu::required_limits`]; one that has less is
+    /// refused with the limit named, before any pipeline is created. Kernel times come from GPU
+    /// timestamps when the device was requested with [`Gpu::wanted_features`].
+    pub fn from_device(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        info: wgpu::AdapterInfo,
+    ) -> Result<Self, GpuError> {
+        let have = device.limits();
+        let short = |what: &str, has: u64, needs: u64| {
+            GpuError::Device {
+            adapter: info.name.clone(),
+            reason: format!(
+                "the device's {what} is {has}, the kernels need {needs} (request Gpu::required_limits)"
+            ),
+        }
+        };
+        if have.max_storage_buffers_per_shader_stage < MIN_STORAGE_BUFFERS {
+            return Err(short(
+                "max_storage_buffers_per_shader_stage",
+                have.max_storage_buffers_per_shader_stage as u64,
+                MIN_STORAGE_BUFFERS as u64,
+            ));
+        }
+        if have.max_compute_workgroup_storage_size < MIN_WORKGROUP_STORAGE {
+            return Err(short(
+                "max_compute_workgroup_storage_size",
+                have.max_compute_workgroup_storage_size as u64,
+                MIN_WORKGROUP_STORAGE as u64,
+            ));
+        }
+        if (have.max_storage_buffer_binding_size as usize) < PART * 4 {
+            return Err(short(
+                "max_storage_buffer_binding_size",
+                have.max_storage_buffer_binding_size,
+                (PART * 4) as u64,
+            ));
+        }
+        let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         let period_ns = queue.get_timestamp_period();
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("params"),

@@ -184,3 +184,42 @@ fn the_interface_check_catches_a_mismatch() {
     assert!(!interface::<kmedoids::Params, kmedoids::UpdateBuffers>("assign.wgsl").is_empty());
     assert!(!interface::<super::scan::Params, kmedoids::AssignBuffers>("assign.wgsl").is_empty());
 }
+
+#[test]
+fn device_minimums_are_what_the_widest_kernels_use() {
+    // Storage buffers per module (a family's bind group layout holds every binding its module
+    // declares, and each of its pipelines uses that layout) and workgroup memory per entry point
+    // (what the kernel uses), the most over every kernel.
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
+    let (mut storage, mut workgroup) = (0u32, 0u32);
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        let file = p.file_name().unwrap().to_str().unwrap().to_string();
+        if p.extension().is_none_or(|x| x != "wgsl") || file == "prelude.wgsl" {
+            continue;
+        }
+        let (module, info) = parse(&file);
+        let declared = module
+            .global_variables
+            .iter()
+            .filter(|(_, v)| matches!(v.space, naga::AddressSpace::Storage { .. }))
+            .count() as u32;
+        storage = storage.max(declared);
+        for i in 0..module.entry_points.len() {
+            let used = info.get_entry_point(i);
+            let w: u32 = module
+                .global_variables
+                .iter()
+                .filter(|(h, v)| v.space == naga::AddressSpace::WorkGroup && !used[*h].is_empty())
+                .map(|(_, v)| module.types[v.ty].inner.size(module.to_ctx()))
+                .sum();
+            workgroup = workgroup.max(w);
+        }
+    }
+    assert_eq!(storage, super::MIN_STORAGE_BUFFERS);
+    assert!(
+        workgroup <= super::MIN_WORKGROUP_STORAGE
+            && super::MIN_WORKGROUP_STORAGE - workgroup < 1024,
+        "the widest kernel uses {workgroup} bytes of workgroup memory"
+    );
+}
