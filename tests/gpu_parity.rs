@@ -288,13 +288,8 @@ fn capacity_assignment_matches_on_wide_fans_and_conflict_chains() {
 /// requested with `Gpu::required_limits`.
 #[test]
 fn an_engines_own_device_runs_the_kernels_and_a_short_one_is_refused() {
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends = wgpu::Backends::VULKAN;
-    desc.flags = wgpu::InstanceFlags::empty();
-    let instance = wgpu::Instance::new(desc);
-    let adapter =
-        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
-            .unwrap_or_else(|e| panic!("no Vulkan adapter ({e}): run `make setup`"));
+    // The engine's adapter; here the one `Gpu::new` would open.
+    let adapter = Gpu::default_adapter().unwrap_or_else(|e| panic!("{e}"));
     let device_with = |limits: wgpu::Limits| {
         pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             required_features: Gpu::wanted_features(&adapter),

@@ -158,14 +158,7 @@ impl Profile {
 impl Gpu {
     /// Opens the default adapter (lavapipe on a machine without a GPU) with timestamps if offered.
     pub fn new() -> Result<Self, GpuError> {
-        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-        desc.backends = wgpu::Backends::VULKAN;
-        // DEBUG makes the validation layer log a false "Invalid source language operand" error.
-        desc.flags = wgpu::InstanceFlags::empty();
-        let instance = wgpu::Instance::new(desc);
-        let adapter =
-            pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
-                .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let adapter = Self::default_adapter()?;
         let info = adapter.get_info();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("meshletlab"),
@@ -178,6 +171,17 @@ impl Gpu {
             reason: e.to_string(),
         })?;
         Self::from_device(device, queue, info)
+    }
+
+    /// The adapter [`Gpu::new`] opens: Vulkan's default (lavapipe on a machine without a GPU).
+    pub fn default_adapter() -> Result<wgpu::Adapter, GpuError> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = wgpu::Backends::VULKAN;
+        // DEBUG makes the validation layer log a false "Invalid source language operand" error.
+        desc.flags = wgpu::InstanceFlags::empty();
+        let instance = wgpu::Instance::new(desc);
+        pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+            .map_err(|e| GpuError::NoAdapter(e.to_string()))
     }
 
     /// The optional features the kernels use where `adapter` offers them (GPU timestamps, for

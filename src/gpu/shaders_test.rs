@@ -105,16 +105,22 @@ fn interface<'b, P: ParamBlock, B: BindingSet<'b>>(file: &str) -> Vec<String> {
     bad
 }
 
+/// The kernel modules: every WGSL file but the prelude, by name.
+fn kernel_files() -> Vec<String> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
+    let mut files: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_str().unwrap().to_string())
+        .filter(|f| f.ends_with(".wgsl") && f != "prelude.wgsl")
+        .collect();
+    files.sort();
+    files
+}
+
 #[test]
 fn every_wgsl_file_validates_and_emits_spirv() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
     let mut n = 0;
-    for e in std::fs::read_dir(&dir).unwrap() {
-        let p = e.unwrap().path();
-        let file = p.file_name().unwrap().to_str().unwrap().to_string();
-        if p.extension().is_none_or(|x| x != "wgsl") || file == "prelude.wgsl" {
-            continue;
-        }
+    for file in kernel_files() {
         let (module, info) = parse(&file);
         // Override constants (workgroup sizes) at their defaults, as a pipeline without values.
         let (module, info) = naga::back::pipeline_constants::process_overrides(
@@ -129,7 +135,7 @@ fn every_wgsl_file_validates_and_emits_spirv() {
         assert_eq!(spv[0], 0x0723_0203, "{file}: SPIR-V magic");
         n += 1;
     }
-    assert_eq!(n, 10, "the kernel modules in {}", dir.display());
+    assert_eq!(n, 10, "the kernel modules in wgsl/");
 }
 
 #[test]
@@ -190,14 +196,8 @@ fn device_minimums_are_what_the_widest_kernels_use() {
     // Storage buffers per module (a family's bind group layout holds every binding its module
     // declares, and each of its pipelines uses that layout) and workgroup memory per entry point
     // (what the kernel uses), the most over every kernel.
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
     let (mut storage, mut workgroup) = (0u32, 0u32);
-    for e in std::fs::read_dir(&dir).unwrap() {
-        let p = e.unwrap().path();
-        let file = p.file_name().unwrap().to_str().unwrap().to_string();
-        if p.extension().is_none_or(|x| x != "wgsl") || file == "prelude.wgsl" {
-            continue;
-        }
+    for file in kernel_files() {
         let (module, info) = parse(&file);
         let declared = module
             .global_variables

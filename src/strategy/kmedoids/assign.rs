@@ -9,6 +9,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// Label of a triangle no medoid reaches (another component).
 pub const UNREACHED: u32 = NONE;
 
+/// Frontier size from which a BFS level is spread over the rayon pool.
+const PARALLEL_LEVEL: usize = 4096;
+
 /// Multi-source BFS from all medoids at once: (labels, distances). Level-synchronous; each
 /// relaxation is an order-independent `fetch_min` on `(distance << 32) | cluster`, so the lowest
 /// cluster wins ties and the result is the same on any number of threads.
@@ -22,18 +25,34 @@ pub fn assign(dual: &Csr, medoids: &[u32]) -> (Vec<u32>, Vec<u32>) {
     let mut d: u64 = 0;
     while !frontier.is_empty() {
         let next = (d + 1) << 32;
-        frontier.par_iter().for_each(|&u| {
+        let push = |&u: &u32| {
             let label = key[u as usize].load(Ordering::Relaxed) & 0xffff_ffff;
             for &n in dual.row(u as usize) {
                 key[n as usize].fetch_min(next | label, Ordering::Relaxed);
             }
-        });
-        let mut nf: Vec<u32> = frontier
-            .par_iter()
-            .flat_map_iter(|&u| dual.row(u as usize).iter().copied())
-            .filter(|&n| key[n as usize].load(Ordering::Relaxed) >> 32 == d + 1)
-            .collect();
-        nf.par_sort_unstable();
+        };
+        let reached = |n: &u32| key[*n as usize].load(Ordering::Relaxed) >> 32 == d + 1;
+        // Small levels (long thin meshes have hundreds of them) run on the calling thread: a
+        // fork and join per level costs more than the level. The result is the same either way.
+        let mut nf: Vec<u32> = if frontier.len() < PARALLEL_LEVEL {
+            frontier.iter().for_each(push);
+            let mut nf: Vec<u32> = frontier
+                .iter()
+                .flat_map(|&u| dual.row(u as usize).iter().copied())
+                .filter(reached)
+                .collect();
+            nf.sort_unstable();
+            nf
+        } else {
+            frontier.par_iter().for_each(push);
+            let mut nf: Vec<u32> = frontier
+                .par_iter()
+                .flat_map_iter(|&u| dual.row(u as usize).iter().copied())
+                .filter(reached)
+                .collect();
+            nf.par_sort_unstable();
+            nf
+        };
         nf.dedup();
         frontier = nf;
         d += 1;
