@@ -29,8 +29,13 @@
 //! filled cluster or two at its border, which step 3 recovers only in part (the sweep in
 //! results/kmedoids.md). Where it differs from the paper (section 3): as the capacity-aware
 //! method (k comes out of the growth, nothing is split), and the growth runs per region, so its
-//! order is local. Every cluster is edge-connected: regions are, growth and merges cross edges only.
-//! Determinism: regions, per-region runs and matching rounds depend on the input alone.
+//! order is local. Every cluster is edge-connected wherever the mesh is: the per-region method's
+//! clusters are (whole small pieces packed together are the exception it makes), and the border
+//! merges join clusters across an edge only. Determinism: regions, per-region runs and matching
+//! rounds depend on the input alone.
+//!
+//! No GPU path yet: step 2 is the sequential code. `docs/gpu-clustering.md` says what a kernel
+//! per region would run and which steps it still lacks.
 
 use super::assign::{assign, members, UNREACHED};
 use super::capacity;
