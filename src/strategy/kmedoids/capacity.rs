@@ -102,12 +102,7 @@ pub fn medoids_and_distances(dual: &Csr, labels: &[u32], k: usize) -> (Vec<u32>,
     let mem = members(labels, k);
     let rows: Vec<(u32, Vec<u32>)> = (0..k)
         .into_par_iter()
-        .map(|c| {
-            let m = mem.row(c);
-            let sub = LocalGraph::new(dual, labels, c as u32, m);
-            let best = sub.medoid_index();
-            (m[best], member_distances(&sub, best))
-        })
+        .map(|c| medoid_of(dual, labels, c as u32, mem.row(c)))
         .collect();
     let mut distances = vec![0; labels.len()];
     for (c, (_, d)) in rows.iter().enumerate() {
@@ -116,6 +111,14 @@ pub fn medoids_and_distances(dual: &Csr, labels: &[u32], k: usize) -> (Vec<u32>,
         }
     }
     (rows.into_iter().map(|r| r.0).collect(), Some(distances))
+}
+
+/// The paper's medoid of cluster `c` (members `m`, ascending) and each member's hop distance to
+/// it inside the cluster.
+pub(crate) fn medoid_of(dual: &Csr, labels: &[u32], c: u32, m: &[u32]) -> (u32, Vec<u32>) {
+    let sub = LocalGraph::new(dual, labels, c, m);
+    let best = sub.medoid_index();
+    (m[best], member_distances(&sub, best))
 }
 
 /// Step 3, the capacity-aware assignment: `(medoids, labels all FREE) -> labels`.

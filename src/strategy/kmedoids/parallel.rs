@@ -38,12 +38,11 @@
 //! per region would run and which steps it still lacks.
 
 use super::assign::{assign, members, UNREACHED};
-use super::capacity;
+use super::capacity::{self, medoid_of, Grown};
 use super::flat::morton_order;
-use super::local_graph::{member_distances, LocalGraph};
 use super::merge::renumber;
 use super::{mean, pack, Clustering, Config};
-use crate::adjacency::{dual_graph, vertex_triangles};
+use crate::adjacency::{dual_graph, pieces, vertex_triangles};
 use crate::common::{sorted, union_len, Csr};
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
@@ -64,14 +63,15 @@ pub fn cluster(
     let rows = members(&region, k_regions);
     // Step 2: every region on its own; results in region order. One region is the whole mesh:
     // its own copy would only cost time (the same triangles in the same order).
-    let runs: Vec<Region> = if k_regions == 1 {
-        let g = capacity::cluster(mesh, dual, vt, limits, cfg.grow, cfg.max_iterations);
-        vec![Region {
-            labels: g.labels,
-            distances: g.distances,
-            medoids: g.medoids,
-            iterations: g.iterations,
-        }]
+    let runs: Vec<Grown> = if k_regions == 1 {
+        vec![capacity::cluster(
+            mesh,
+            dual,
+            vt,
+            limits,
+            cfg.grow,
+            cfg.max_iterations,
+        )]
     } else {
         (0..k_regions)
             .into_par_iter()
@@ -100,10 +100,8 @@ pub fn cluster(
         .into_par_iter()
         .filter(|&c| merged[c as usize])
         .map(|c| {
-            let m = mem.row(c as usize);
-            let sub = LocalGraph::new(dual, &labels, c, m);
-            let best = sub.medoid_index();
-            (c, m[best], member_distances(&sub, best))
+            let (medoid, d) = medoid_of(dual, &labels, c, mem.row(c as usize));
+            (c, medoid, d)
         })
         .collect();
     for (c, medoid, d) in fresh {
@@ -152,58 +150,28 @@ pub fn regions(mesh: &Mesh, dual: &Csr, size: usize) -> (Vec<u32>, usize) {
     // Run j's region is the label its seed took (seeds are distinct triangles).
     let region_of_run: Vec<u32> = seeds.iter().map(|&s| labels[s as usize]).collect();
     if labels.contains(&UNREACHED) {
-        let mut rank = vec![0u32; t];
+        // Pieces no seed reached, each to the run of its first triangle in Morton order (the
+        // order visits a piece's first-ranked triangle before the rest of it).
+        let piece = pieces(dual);
+        let mut region_of_piece = vec![UNREACHED; t];
         for (i, &x) in order.iter().enumerate() {
-            rank[x as usize] = i as u32;
+            let p = piece[x as usize] as usize;
+            if labels[x as usize] == UNREACHED && region_of_piece[p] == UNREACHED {
+                region_of_piece[p] = region_of_run[i * k / t];
+            }
         }
-        let mut stack = Vec::new();
-        let mut piece = Vec::new();
-        for s in 0..t {
-            if labels[s] != UNREACHED {
-                continue;
-            }
-            // Flood the piece (marked with a placeholder), then label it all.
-            piece.clear();
-            labels[s] = 0;
-            stack.push(s as u32);
-            while let Some(u) = stack.pop() {
-                piece.push(u);
-                for &n in dual.row(u as usize) {
-                    if labels[n as usize] == UNREACHED {
-                        labels[n as usize] = 0;
-                        stack.push(n);
-                    }
-                }
-            }
-            let first = piece
-                .iter()
-                .map(|&u| rank[u as usize])
-                .min()
-                .expect("non-empty");
-            let region = region_of_run[first as usize * k / t];
-            for &u in &piece {
-                labels[u as usize] = region;
+        for (l, &p) in labels.iter_mut().zip(&piece) {
+            if *l == UNREACHED {
+                *l = region_of_piece[p as usize];
             }
         }
     }
     (labels, k)
 }
 
-/// Step 2's output for one region, in local numbers.
-struct Region {
-    /// Cluster of each region triangle (in the region's ascending order).
-    labels: Vec<u32>,
-    /// Hop distance of each to its medoid.
-    distances: Vec<u32>,
-    /// Medoid of each cluster, as an index into the region's triangles.
-    medoids: Vec<u32>,
-    /// Re-assignment rounds run.
-    iterations: u32,
-}
-
 /// Step 2 for one region (`tris`, ascending): its triangles as a mesh of their own, clustered by
-/// the capacity-aware method.
-fn cluster_region(mesh: &Mesh, tris: &[u32], limits: Limits, cfg: &Config) -> Region {
+/// the capacity-aware method (labels, distances and medoids in the region's local numbers).
+fn cluster_region(mesh: &Mesh, tris: &[u32], limits: Limits, cfg: &Config) -> Grown {
     let verts = sorted(
         tris.iter()
             .flat_map(|&t| mesh.triangle(t as usize))
@@ -219,13 +187,7 @@ fn cluster_region(mesh: &Mesh, tris: &[u32], limits: Limits, cfg: &Config) -> Re
     };
     let vt = vertex_triangles(&sub);
     let dual = dual_graph(&sub, &vt);
-    let g = capacity::cluster(&sub, &dual, &vt, limits, cfg.grow, cfg.max_iterations);
-    Region {
-        labels: g.labels,
-        distances: g.distances,
-        medoids: g.medoids,
-        iterations: g.iterations,
-    }
+    capacity::cluster(&sub, &dual, &vt, limits, cfg.grow, cfg.max_iterations)
 }
 
 /// Step 3: merges clusters that did not fill with a neighbour, in rounds of mutual proposals
