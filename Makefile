@@ -31,6 +31,7 @@ test: setup lint
 	for e in build_meshlets lod_cut laced_wires; do \
 	  $(CARGO) run --profile test --quiet --no-default-features --example $$e || exit 1; done
 	$(CARGO) run --profile test --quiet --example gpu_kmedoids
+	$(CARGO) run --profile test --quiet --example gpu_draw
 
 # Regenerates every table and plot in results/ from the shared real meshes.
 bench: setup

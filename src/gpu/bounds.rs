@@ -71,24 +71,11 @@ pub fn sphere_f32(mesh: &Mesh, ml: &Meshlets, i: usize) -> ([f32; 3], f32) {
 
 /// Spheres of all meshlets on the GPU: (centre, radius) per meshlet, and the kernel time.
 pub fn spheres(gpu: &Gpu, mesh: &Mesh, ml: &Meshlets) -> Result<(Vec<SphereF32>, f64), GpuError> {
-    let k = Kernels::new::<Buffers>(gpu, "bounds", wgsl!("bounds.wgsl"), &["sphere"]);
     let positions = gpu.upload("positions", &mesh.positions);
     let meshlets = gpu.upload("meshlets", &ml.meshlets);
     let vertices = gpu.upload("meshlet vertices", &ml.vertices);
-    let out = gpu.zeros("spheres", 4 * ml.len());
-    let bind = k.bind(
-        gpu,
-        &Buffers {
-            positions: &positions,
-            meshlets: &meshlets,
-            vertices: &vertices,
-            spheres: &out,
-        },
-    );
-    let mut b = Batch::new(gpu);
     let n = ml.len();
-    b.threads(&k, "sphere", &bind, Params { n: n as u32 }, n);
-    let time = b.run()?;
+    let (out, time) = spheres_on_device(gpu, &positions, &meshlets, &vertices, n)?;
     let raw = gpu.read(&out, 0, 4 * n)?;
     let s = raw
         .chunks_exact(4)
@@ -98,6 +85,33 @@ pub fn spheres(gpu: &Gpu, mesh: &Mesh, ml: &Meshlets) -> Result<(Vec<SphereF32>,
         })
         .collect();
     Ok((s, time))
+}
+
+/// The `sphere` kernel over meshlets already on the device (`n` records in `meshlets`, global
+/// indices in `vertices`, three f32 per vertex in `positions`): a buffer of four f32 per meshlet
+/// (centre, radius), left on the device, and the kernel time.
+pub fn spheres_on_device(
+    gpu: &Gpu,
+    positions: &wgpu::Buffer,
+    meshlets: &wgpu::Buffer,
+    vertices: &wgpu::Buffer,
+    n: usize,
+) -> Result<(wgpu::Buffer, f64), GpuError> {
+    let k = Kernels::new::<Buffers>(gpu, "bounds", wgsl!("bounds.wgsl"), &["sphere"]);
+    let out = gpu.zeros("spheres", 4 * n);
+    let bind = k.bind(
+        gpu,
+        &Buffers {
+            positions,
+            meshlets,
+            vertices,
+            spheres: &out,
+        },
+    );
+    let mut b = Batch::new(gpu);
+    b.threads(&k, "sphere", &bind, Params { n: n as u32 }, n);
+    let time = b.run()?;
+    Ok((out, time))
 }
 
 /// Compares GPU spheres with the CPU mirror: `None` if centres are within [`CENTRE_ULPS`] and radii

@@ -10,7 +10,9 @@
 //! build.
 
 use super::adjacency::Timing;
-use super::{Gpu, GpuError};
+use super::assemble::DeviceMeshlets;
+use super::bounds::spheres_on_device;
+use super::{timed_read, Gpu, GpuError};
 use crate::mesh::Mesh;
 use crate::meshlet::order::{optimize_triangle_order, order_meshlets};
 use crate::meshlet::{Limits, Meshlets};
@@ -51,17 +53,9 @@ pub fn build(
 ) -> Result<DeviceBuild, GpuError> {
     let kind = gpu_kind(name)?;
     let t0 = Instant::now();
-    let (mut meshlets, timing) = match kind {
-        Kind::KmedoidsFlat => {
-            let r = super::kmedoids::cluster_flat(gpu, mesh, limits, &opts.kmedoids)?;
-            (r.clustering.meshlets, r.timing)
-        }
-        Kind::BsphereParallel => {
-            let r = super::grow::grow(gpu, mesh, limits, grow::DEFAULT_SPACING)?;
-            (r.meshlets, r.timing)
-        }
-        _ => unreachable!("gpu_kind admits only GPU_STRATEGIES"),
-    };
+    // Assembled on the device; only the meshlets come back.
+    let (device, mut timing) = run_strategy(gpu, kind, mesh, limits, opts)?;
+    let mut meshlets = timed_read(&mut timing, || device.read(gpu))?;
     if opts.local_order {
         optimize_triangle_order(&mut meshlets);
     }
@@ -70,6 +64,76 @@ pub fn build(
         meshlets,
         timing,
         seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// Meshlets built on the GPU and left there ([`build_resident`]).
+pub struct ResidentBuild {
+    /// The meshlets, in [`Meshlets`]' layout, in build order (no ordering post-pass).
+    pub meshlets: DeviceMeshlets,
+    /// Bounding sphere per meshlet: centre and radius, four f32 (the `bounds` kernel; padded to
+    /// stay conservative, see [`super::bounds`]).
+    pub spheres: wgpu::Buffer,
+    /// Upload, kernel and readback time (the readbacks are the control words the kernels' loops
+    /// need), in seconds.
+    pub timing: Timing,
+    /// Wall time of the whole build, in seconds.
+    pub seconds: f64,
+}
+
+/// Builds `mesh`'s meshlets with strategy `name` on `gpu` and leaves them, with their bounding
+/// spheres over `positions` (the mesh's positions on the device, three f32 per vertex), in device
+/// buffers for a renderer: nothing of the result comes back to the host unless the caller reads
+/// it ([`DeviceMeshlets::read`]). The meshlets equal [`build`]'s where `opts` asks for no ordering
+/// post-pass (those run on the host, so they are not applied here). The strategy's own inputs
+/// (the index buffer, the quantised positions) are still uploaded from `mesh`.
+pub fn build_resident(
+    gpu: &Gpu,
+    name: &str,
+    mesh: &Mesh,
+    positions: &wgpu::Buffer,
+    limits: Limits,
+    opts: &Options,
+) -> Result<ResidentBuild, GpuError> {
+    let kind = gpu_kind(name)?;
+    let t0 = Instant::now();
+    let (meshlets, mut timing) = run_strategy(gpu, kind, mesh, limits, opts)?;
+    let (spheres, kernel) = spheres_on_device(
+        gpu,
+        positions,
+        &meshlets.meshlets,
+        &meshlets.vertices,
+        meshlets.count,
+    )?;
+    timing.kernel += kernel;
+    Ok(ResidentBuild {
+        meshlets,
+        spheres,
+        timing,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// Runs strategy `kind` (one of [`GPU_STRATEGIES`]) with its meshlets assembled on the device and
+/// nothing read back but the control words its loops need.
+fn run_strategy(
+    gpu: &Gpu,
+    kind: Kind,
+    mesh: &Mesh,
+    limits: Limits,
+    opts: &Options,
+) -> Result<(DeviceMeshlets, Timing), GpuError> {
+    Ok(match kind {
+        Kind::KmedoidsFlat => {
+            let (r, d) =
+                super::kmedoids::cluster_flat_with(gpu, mesh, limits, &opts.kmedoids, false)?;
+            (d, r.timing)
+        }
+        Kind::BsphereParallel => {
+            let (r, d) = super::grow::grow_with(gpu, mesh, limits, grow::DEFAULT_SPACING, false)?;
+            (d, r.timing)
+        }
+        _ => unreachable!("gpu_kind admits only GPU_STRATEGIES"),
     })
 }
 

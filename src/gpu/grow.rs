@@ -7,11 +7,14 @@
 //! counters; owners and orders come back once, at the end.
 
 use super::adjacency::{AdjacencyKernels, Timing};
+use super::assemble::{Assembly, DeviceMeshlets, Groups};
 use super::scan::ScanJob;
-use super::{binding_set, param_block, timed, wgsl, Batch, Gpu, GpuError, Kernels, Scan, PART};
+use super::{
+    binding_set, param_block, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan, PART,
+};
 use crate::mesh::Mesh;
 use crate::meshlet::{Limits, Meshlets};
-use crate::strategy::grow::{assemble, Setup};
+use crate::strategy::grow::Setup;
 use std::time::Instant;
 
 param_block! {
@@ -81,7 +84,7 @@ pub struct GpuGrowth {
     pub owner: Vec<u32>,
     /// Position of every triangle in its meshlet.
     pub order: Vec<u32>,
-    /// The meshlets (assembled on the host from owners and orders, as on the CPU).
+    /// The meshlets (assembled on the device, `wgsl/assemble.wgsl`, and read back).
     pub meshlets: Meshlets,
     /// Waves run.
     pub waves: u32,
@@ -123,6 +126,18 @@ impl WaveBuffers {
 /// Runs the parallel grower on the GPU with seed spacing `spacing` (see
 /// [`crate::strategy::grow::DEFAULT_SPACING`]).
 pub fn grow(gpu: &Gpu, mesh: &Mesh, limits: Limits, spacing: f64) -> Result<GpuGrowth, GpuError> {
+    grow_with(gpu, mesh, limits, spacing, true).map(|(g, _)| g)
+}
+
+/// [`grow`] that also returns the meshlets on the device; with `read` false nothing is read back
+/// (`owner`, `order` and `meshlets` stay empty).
+pub fn grow_with(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    limits: Limits,
+    spacing: f64,
+    read_back: bool,
+) -> Result<(GpuGrowth, DeviceMeshlets), GpuError> {
     let start = Instant::now();
     let t = mesh.triangle_count();
     if t + 1 > PART {
@@ -279,17 +294,33 @@ pub fn grow(gpu: &Gpu, mesh: &Mesh, limits: Limits, spacing: f64) -> Result<GpuG
         base += n as u32;
         waves += 1;
     }
-    let owner = read(&claim, 0, t)?;
-    let order = read(&order, 0, t)?;
+    let groups = Groups {
+        owner: &claim,
+        key: &order,
+        count: base as usize,
+    };
+    let (device, assembly) = Assembly::new(gpu).run(gpu, &scan, &adj.indices, groups, limits)?;
+    kernel += assembly;
+    let (owner, order, meshlets) = if read_back {
+        (
+            read(&claim, 0, t)?,
+            read(&order, 0, t)?,
+            timed_read(&mut timing, || device.read(gpu))?,
+        )
+    } else {
+        Default::default()
+    };
     timing.kernel += kernel;
-    let meshlets = assemble(mesh, &owner, &order, base as usize, limits);
-    Ok(GpuGrowth {
-        owner,
-        order,
-        meshlets,
-        waves,
-        rounds,
-        timing,
-        seconds: start.elapsed().as_secs_f64(),
-    })
+    Ok((
+        GpuGrowth {
+            owner,
+            order,
+            meshlets,
+            waves,
+            rounds,
+            timing,
+            seconds: start.elapsed().as_secs_f64(),
+        },
+        device,
+    ))
 }

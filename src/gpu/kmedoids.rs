@@ -15,15 +15,18 @@
 //! (`dirty_mark`) and updates only those: same results, same skipped work.
 
 use super::adjacency::{AdjacencyKernels, DeviceAdjacency, Timing};
+use super::assemble::{Assembly, DeviceMeshlets, Groups};
 use super::scan::ScanJob;
-use super::{binding_set, param_block, timed, wgsl, Batch, Gpu, GpuError, Kernels, Scan, PART};
+use super::{
+    binding_set, param_block, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan, PART,
+};
 use crate::adjacency::Csr;
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
 use crate::strategy::kmedoids::capacity::{assign_capacity, cluster_with};
 use crate::strategy::kmedoids::flat::{add_component_medoids, cluster_size, initial_medoids};
 use crate::strategy::kmedoids::split::{overflowing_from_counts, split_choice};
-use crate::strategy::kmedoids::{pack, Clustering, Config, Mode};
+use crate::strategy::kmedoids::{Clustering, Config, Mode};
 use std::time::Instant;
 
 param_block! {
@@ -372,6 +375,18 @@ pub fn cluster_flat(
     limits: Limits,
     cfg: &Config,
 ) -> Result<GpuClustering, GpuError> {
+    cluster_flat_with(gpu, mesh, limits, cfg, true).map(|(c, _)| c)
+}
+
+/// [`cluster_flat`] that also returns the meshlets on the device (`wgsl/assemble.wgsl`); with
+/// `read_back` false the labels, distances and meshlets are not read (left empty).
+pub fn cluster_flat_with(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    limits: Limits,
+    cfg: &Config,
+    read_back: bool,
+) -> Result<(GpuClustering, DeviceMeshlets), GpuError> {
     let start = Instant::now();
     let t = mesh.triangle_count();
     let (adj, adj_timing) = adjacency(gpu, mesh)?;
@@ -429,10 +444,24 @@ pub fn cluster_flat(
         )?;
         splits += 1;
     }
-    let labels = run.read(&run.labels, 0, t)?;
-    let distances = run.read(&run.dist, 0, t)?;
-    let meshlets = pack(mesh, &labels, &distances, medoids.len(), limits);
-    Ok(GpuClustering {
+    // Each cluster in BFS order from its medoid, as the CPU's `pack`.
+    let groups = Groups {
+        owner: &run.labels,
+        key: &run.dist,
+        count: medoids.len(),
+    };
+    let (device, assembly) = Assembly::new(gpu).run(gpu, scan, &adj.indices, groups, limits)?;
+    run.kernel.set(run.kernel.get() + assembly);
+    let (labels, distances, meshlets) = if read_back {
+        (
+            run.read(&run.labels, 0, t)?,
+            run.read(&run.dist, 0, t)?,
+            timed_read(&mut run.timing, || device.read(gpu))?,
+        )
+    } else {
+        Default::default()
+    };
+    let clustering = GpuClustering {
         clustering: Clustering {
             medoids,
             labels,
@@ -457,7 +486,8 @@ pub fn cluster_flat(
         deep_submissions: run.deep.get(),
         updates: run.updates,
         seconds: start.elapsed().as_secs_f64(),
-    })
+    };
+    Ok((clustering, device))
 }
 
 impl<'a> Run<'a> {

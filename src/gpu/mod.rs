@@ -11,13 +11,16 @@
 //! | [`kmedoids`] (`cluster_flat`, `cluster_capacity`) | `assign.wgsl`, `update.wgsl`, `split.wgsl` | `strategy::kmedoids::{assign, update, split}`, driven as `strategy::kmedoids::flat` |
 //! | [`capacity`] | `capacity.wgsl` | `strategy::kmedoids::capacity::assign_capacity` |
 //! | [`grow`] | `grow.wgsl` | `strategy::grow` (`bsphere-parallel`) |
+//! | [`assemble`] | `assemble.wgsl` | `meshlet::assemble` (meshlets from a clustering) |
 //! | [`bounds`] | `bounds.wgsl` | [`bounds::sphere_f32`], checked against `meshlet::bounds` |
 //! | [`select`] | `select.wgsl` | `lod::select` |
 //! | `scan` | `scan.wgsl` | a prefix sum (used by the others) |
 //! | [`copy`] | `copy.wgsl` | none: the bandwidth probe of `bench gpu` |
 //!
 //! [`build::build`] builds meshlets on the GPU with any strategy whose every step is a kernel
-//! (`meshletlab build --device gpu`).
+//! (`meshletlab build --device gpu`); [`build::build_resident`] leaves them, with their bounding
+//! spheres, in device buffers for a renderer (`examples/gpu_draw.rs` draws from them with no
+//! readback in between).
 //!
 //! Why integer keys and exactly rounded arithmetic make the parity exact: `docs/gpu-clustering.md`. Kernels run on any Vulkan adapter; on a machine without a GPU that is
 //! Mesa's lavapipe, which the project's setup installs.
@@ -28,6 +31,7 @@
 //! up to about 21 M triangles.
 
 pub mod adjacency;
+pub mod assemble;
 pub mod bounds;
 pub mod build;
 pub mod capacity;
@@ -904,6 +908,16 @@ impl<'a> Batch<'a> {
 /// Parameter slots per submission.
 const PARAM_SLOTS: u64 = 4096;
 const MAX_X: u32 = 65535;
+
+/// Runs `f` (a readback), adding its wall time to `timing`'s readback.
+pub(crate) fn timed_read<T>(
+    timing: &mut adjacency::Timing,
+    f: impl FnOnce() -> Result<T, GpuError>,
+) -> Result<T, GpuError> {
+    let (r, s) = timed(f);
+    timing.readback += s;
+    r
+}
 
 /// Wall time of `f` in seconds.
 pub fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {

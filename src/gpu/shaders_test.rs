@@ -135,14 +135,15 @@ fn every_wgsl_file_validates_and_emits_spirv() {
         assert_eq!(spv[0], 0x0723_0203, "{file}: SPIR-V magic");
         n += 1;
     }
-    assert_eq!(n, 10, "the kernel modules in wgsl/");
+    assert_eq!(n, 11, "the kernel modules in wgsl/");
 }
 
 #[test]
 fn every_module_matches_its_rust_interface() {
-    use super::{adjacency, bounds, capacity, copy, grow, kmedoids, scan, select};
+    use super::{adjacency, assemble, bounds, capacity, copy, grow, kmedoids, scan, select};
     let bad: Vec<String> = [
         interface::<adjacency::Params, adjacency::Buffers>("adjacency.wgsl"),
+        interface::<assemble::Params, assemble::Buffers>("assemble.wgsl"),
         interface::<bounds::Params, bounds::Buffers>("bounds.wgsl"),
         interface::<capacity::Params, capacity::Buffers>("capacity.wgsl"),
         interface::<copy::Params, copy::Buffers>("copy.wgsl"),

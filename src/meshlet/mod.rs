@@ -6,6 +6,7 @@
 //! `triangles` (three per triangle), as `meshopt_Meshlet` does, so converting to and from
 //! meshoptimizer is a copy. Renderers, compressed formats and LOD levels all start from this.
 
+pub mod assemble;
 pub mod bounds;
 mod builder;
 pub mod descriptor;

@@ -26,7 +26,8 @@ use super::Strategy;
 use crate::adjacency::{dual_graph, vertex_triangles, Csr};
 use crate::common::{distinct, NONE};
 use crate::mesh::Mesh;
-use crate::meshlet::{Limits, MeshletBuilder, Meshlets};
+use crate::meshlet::assemble::assemble;
+use crate::meshlet::{Limits, Meshlets};
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -330,29 +331,6 @@ pub fn grow(mesh: &Mesh, dual: &Csr, limits: Limits, spacing: f64) -> Growth {
         waves,
         rounds,
     }
-}
-
-/// Meshlets from per-triangle owners and orders (shared by the CPU and GPU paths).
-pub fn assemble(
-    mesh: &Mesh,
-    owner: &[u32],
-    order: &[u32],
-    count: usize,
-    limits: Limits,
-) -> Meshlets {
-    let mut tris: Vec<u32> = (0..owner.len() as u32).collect();
-    tris.sort_unstable_by_key(|&i| (owner[i as usize], order[i as usize]));
-    let mut b = MeshletBuilder::new(mesh.vertex_count(), limits);
-    let mut prev = NONE;
-    for &i in &tris {
-        debug_assert!((owner[i as usize] as usize) < count);
-        if owner[i as usize] != prev && prev != NONE {
-            b.flush();
-        }
-        prev = owner[i as usize];
-        b.push(mesh.triangle(i as usize));
-    }
-    b.finish()
 }
 
 #[cfg(test)]

@@ -49,7 +49,7 @@ impl Strategy for Qem {
         let owner = cluster(mesh, limits);
         let order: Vec<u32> = (0..owner.len() as u32).collect();
         let count = owner.iter().map(|&o| o as usize + 1).max().unwrap_or(0);
-        super::grow::assemble(mesh, &owner, &order, count, limits)
+        crate::meshlet::assemble::assemble(mesh, &owner, &order, count, limits)
     }
 }
 

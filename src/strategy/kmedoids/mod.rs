@@ -47,7 +47,7 @@ pub use seed::Grow;
 use super::Strategy;
 use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::mesh::Mesh;
-use crate::meshlet::{Limits, MeshletBuilder, Meshlets};
+use crate::meshlet::{Limits, Meshlets};
 use std::time::{Duration, Instant};
 
 /// Which k-medoids method runs; the strategy name selects it, so it is not a setting.
@@ -237,19 +237,8 @@ pub(crate) fn mean(d: &[u32]) -> f64 {
 }
 
 /// Meshlets from clusters: each cluster in BFS order from its medoid (distance, then id), chunked
-/// by the builder if it does not fit.
+/// by the builder if it does not fit ([`crate::meshlet::assemble::assemble`] with the distances as
+/// keys, which the GPU runs as `wgsl/assemble.wgsl`).
 pub fn pack(mesh: &Mesh, labels: &[u32], distances: &[u32], k: usize, limits: Limits) -> Meshlets {
-    let mem = members(labels, k);
-    let mut b = MeshletBuilder::new(mesh.vertex_count(), limits);
-    let mut order: Vec<(u32, u32)> = Vec::new();
-    for c in 0..k {
-        order.clear();
-        order.extend(mem.row(c).iter().map(|&t| (distances[t as usize], t)));
-        order.sort_unstable();
-        for &(_, t) in &order {
-            b.push(mesh.triangle(t as usize));
-        }
-        b.flush();
-    }
-    b.finish()
+    crate::meshlet::assemble::assemble(mesh, labels, distances, k, limits)
 }

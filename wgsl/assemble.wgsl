@@ -1,0 +1,180 @@
+// Meshlets assembled on the device from a clustering (a group per triangle and an order key),
+// step for step the CPU's meshlet::assemble_groups, with identical meshlets:
+//   count                      triangles per group (atomic add)
+//   scan(toff)                 group -> first triangle slot (exclusive)
+//   place                      triangle ids into their group's slots (any order within a group)
+//   sort_count                 per group: members sorted by (key, id), distinct vertices counted
+//   scan(voff), scan(mindex)   group -> first vertex; non-empty group -> meshlet index
+//   write                      per group: meshlet record, vertices in first-use order, local corners
+//
+// sort_count and write run one workgroup per group (a group fits the limits, so at most 256
+// triangles and 768 corners). The sort decides the order inside a group whatever order place left
+// it in, and first use is the lowest corner holding a vertex: nothing depends on scheduling.
+// Integers only. A group over the limits is counted in counters[0] (the host refuses the result;
+// the strategies that feed this never make one).
+
+struct Params { t: u32, g: u32, max_v: u32, max_t: u32 }
+
+@group(0) @binding(0) var<uniform> p: Params;
+@group(0) @binding(1) var<storage, read> idx_a: array<u32>;
+@group(0) @binding(2) var<storage, read> idx_b: array<u32>;
+// Group of each triangle (< g).
+@group(0) @binding(3) var<storage, read> owner: array<u32>;
+// Order key of each triangle inside its group (ties to the lower triangle id).
+@group(0) @binding(4) var<storage, read> key: array<u32>;
+// g + 1: triangles per group, scanned into first slots.
+@group(0) @binding(5) var<storage, read_write> toff: array<atomic<u32>>;
+@group(0) @binding(6) var<storage, read_write> cursor: array<atomic<u32>>;
+// Triangle ids by group; sorted within each group by sort_count.
+@group(0) @binding(7) var<storage, read_write> members: array<u32>;
+// g + 1: distinct vertices per group, scanned into first vertex slots.
+@group(0) @binding(8) var<storage, read_write> voff: array<u32>;
+// g + 1: 1 per non-empty group, scanned into meshlet indices.
+@group(0) @binding(9) var<storage, read_write> mindex: array<u32>;
+// Out: vertex_offset, triangle_offset (bytes), vertex_count, triangle_count per meshlet.
+@group(0) @binding(10) var<storage, read_write> meshlets: array<u32>;
+// Out: global vertex indices.
+@group(0) @binding(11) var<storage, read_write> vertices: array<u32>;
+// Out: local corners, one byte each, four to a word (little-endian), so ORed in.
+@group(0) @binding(12) var<storage, read_write> triangles: array<atomic<u32>>;
+// [0] groups over the limits.
+@group(0) @binding(13) var<storage, read_write> counters: array<atomic<u32>>;
+
+fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART]; }
+
+const SLOTS: u32 = 256u;
+const CORNERS: u32 = 768u;
+
+var<workgroup> sk: array<u32, SLOTS>;
+var<workgroup> st: array<u32, SLOTS>;
+// Per corner: its vertex, then the first corner with that vertex.
+var<workgroup> cv: array<u32, CORNERS>;
+var<workgroup> first: array<u32, CORNERS>;
+// Per corner: distinct vertices among the corners before it (the local index of a first use).
+var<workgroup> rank: array<u32, CORNERS>;
+var<workgroup> wn: u32;
+
+@compute @workgroup_size(64)
+fn count(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let t = flat(gid);
+    if (t < p.t) { atomicAdd(&toff[owner[t]], 1u); }
+}
+
+@compute @workgroup_size(64)
+fn place(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let t = flat(gid);
+    if (t >= p.t) { return; }
+    let o = owner[t];
+    members[atomicLoad(&toff[o]) + atomicAdd(&cursor[o], 1u)] = t;
+}
+
+// Triangles of group g, uniform across the workgroup; 0 for an empty group, NONE over the limit.
+fn group_size(g: u32, lid: u32) -> u32 {
+    if (lid == 0u) {
+        let n = atomicLoad(&toff[g + 1u]) - atomicLoad(&toff[g]);
+        wn = select(n, NONE, n > p.max_t);
+    }
+    return workgroupUniformLoad(&wn);
+}
+
+// Fills cv, first and rank for the n sorted triangles from slot s; returns the distinct vertices.
+fn first_uses(s: u32, n: u32, lid: u32) -> u32 {
+    for (var i = lid; i < 3u * n; i += 64u) {
+        cv[i] = idx(3u * members[s + i / 3u] + i % 3u);
+    }
+    workgroupBarrier();
+    for (var i = lid; i < 3u * n; i += 64u) {
+        var j = 0u;
+        while (cv[j] != cv[i]) { j++; }
+        first[i] = j;
+    }
+    workgroupBarrier();
+    if (lid == 0u) {
+        var d = 0u;
+        for (var i = 0u; i < 3u * n; i++) {
+            rank[i] = d;
+            if (first[i] == i) { d++; }
+        }
+        wn = d;
+    }
+    return workgroupUniformLoad(&wn);
+}
+
+@compute @workgroup_size(64)
+fn sort_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let g = group(wid);
+    if (g >= p.g) { return; }
+    let n = group_size(g, lid);
+    if (n == 0u || n == NONE) {
+        if (lid == 0u) {
+            voff[g] = 0u;
+            mindex[g] = 0u;
+            if (n == NONE) { atomicAdd(&counters[0], 1u); }
+        }
+        return;
+    }
+    let s = atomicLoad(&toff[g]);
+    for (var i = lid; i < SLOTS; i += 64u) {
+        if (i < n) {
+            st[i] = members[s + i];
+            sk[i] = key[st[i]];
+        } else {
+            st[i] = NONE;
+            sk[i] = NONE;
+        }
+    }
+    workgroupBarrier();
+    // Bitonic sort of (key, id) pairs, ascending; padding (NONE, NONE) sorts last.
+    for (var k = 2u; k <= SLOTS; k *= 2u) {
+        for (var j = k / 2u; j > 0u; j /= 2u) {
+            for (var i = lid; i < SLOTS; i += 64u) {
+                let l = i ^ j;
+                if (l > i) {
+                    let up = (i & k) == 0u;
+                    let after = sk[i] > sk[l] || (sk[i] == sk[l] && st[i] > st[l]);
+                    if (after == up) {
+                        let a = sk[i];
+                        sk[i] = sk[l];
+                        sk[l] = a;
+                        let b = st[i];
+                        st[i] = st[l];
+                        st[l] = b;
+                    }
+                }
+            }
+            workgroupBarrier();
+        }
+    }
+    for (var i = lid; i < n; i += 64u) { members[s + i] = st[i]; }
+    storageBarrier();
+    workgroupBarrier();
+    let d = first_uses(s, n, lid);
+    if (lid == 0u) {
+        voff[g] = d;
+        mindex[g] = 1u;
+        if (d > p.max_v) { atomicAdd(&counters[0], 1u); }
+    }
+}
+
+@compute @workgroup_size(64)
+fn write(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    let g = group(wid);
+    if (g >= p.g) { return; }
+    let n = group_size(g, lid);
+    if (n == 0u || n == NONE) { return; }
+    let s = atomicLoad(&toff[g]);
+    let d = first_uses(s, n, lid);
+    let v0 = voff[g];
+    if (lid == 0u) {
+        let m = 4u * mindex[g];
+        meshlets[m] = v0;
+        meshlets[m + 1u] = 3u * s;
+        meshlets[m + 2u] = d;
+        meshlets[m + 3u] = n;
+    }
+    for (var i = lid; i < 3u * n; i += 64u) {
+        if (first[i] == i) { vertices[v0 + rank[i]] = cv[i]; }
+        let b = 3u * s + i;
+        atomicOr(&triangles[b / 4u], rank[first[i]] << (8u * (b % 4u)));
+    }
+}
