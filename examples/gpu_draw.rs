@@ -1,7 +1,9 @@
 //! Meshlets built on the GPU and drawn from the buffers the build left there, with no readback in
 //! between, on a device the application owns (as an engine would hold it).
 //!
-//! The build (`gpu::build::build_resident`, `bsphere-parallel` and `kmedoids-flat`) leaves the
+//! `kmedoids-flat` builds from the application's vertex and index buffers
+//! (`gpu::build::build_on_device`: nothing of the mesh is read on the host), `bsphere-parallel`
+//! from the host mesh (`gpu::build::build_resident`: its setup runs on the host); both leave the
 //! meshlet records, vertex lists, packed local triangles and bounding spheres in device buffers.
 //! A vertex shader pulls each meshlet's corners from them (one instance per meshlet) and skips
 //! meshlets whose sphere lies outside the view; a second pipeline draws the mesh's plain index
@@ -10,8 +12,8 @@
 //!
 //!     cargo run --release --example gpu_draw -- [MESH] [OUT.png]
 
-use meshletlab::gpu::build::{build_resident, ResidentBuild};
-use meshletlab::gpu::Gpu;
+use meshletlab::gpu::build::{build_on_device, build_resident, ResidentBuild};
+use meshletlab::gpu::{DeviceMesh, Gpu};
 use meshletlab::mesh::{self, Mesh};
 use meshletlab::meshlet::Limits;
 use meshletlab::strategy::Options;
@@ -110,8 +112,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if covered == 0 {
         return Err("the mesh covers no pixel of the view".into());
     }
-    for name in ["bsphere-parallel", "kmedoids-flat"] {
-        let built = build_resident(&gpu, name, &mesh, &positions, limits, &Options::default())?;
+    // The mesh as the build sees it: the application's buffers, nothing read on the host.
+    let on_device = DeviceMesh {
+        positions: &positions,
+        vertices: mesh.vertex_count(),
+        indices: &indices,
+        triangles: mesh.triangle_count(),
+    };
+    let opts = Options::default();
+    for name in ["kmedoids-flat", "bsphere-parallel"] {
+        let built = if name == "kmedoids-flat" {
+            build_on_device(&gpu, name, on_device, limits, &opts)?
+        } else {
+            // Its setup (quantised positions, seed grid) runs on the host, from `mesh`.
+            build_resident(&gpu, name, &mesh, &positions, limits, &opts)?
+        };
         let image = draw(&device, &queue, &view, &positions, &indices, Some(&built));
         let same = image.depth == reference.depth;
         // After the draw, for the report only: how many meshlets the sphere test skipped.

@@ -322,3 +322,96 @@ fn an_engines_own_device_runs_the_kernels_and_a_short_one_is_refused() {
     // The caller's handle still works: the library took a clone, not the device.
     let _ = device.limits();
 }
+
+/// The Morton order of the flat k-medoids' seeding, sorted on the device (box, keys, a stable
+/// radix sort), is the CPU's triangle for triangle: on the stress meshes and on stressed copies
+/// (translated by 1e6, scaled by 1e-6 and 1e6, flattened, a copy at 1e9). The seeds follow.
+#[test]
+fn the_morton_order_and_the_seeds_match_the_cpu() {
+    use meshletlab::gpu::morton::{initial_medoids, pick, DeviceInput};
+    use meshletlab::gpu::Split;
+    use meshletlab::strategy::kmedoids::flat;
+    let gpu = gpu();
+    let mut meshes: Vec<(String, Mesh)> = generate::stress_set(3)
+        .into_iter()
+        .map(|g| (g.name.to_string(), g.mesh))
+        .collect();
+    for (name, m) in stability::cases(&generate::noisy_sphere(4, 0.2, 7)) {
+        meshes.push((format!("sphere {name}"), m));
+    }
+    for (name, m) in &meshes {
+        let positions = gpu.upload("positions", &m.positions);
+        let indices = Split::upload(&gpu, "indices", &m.indices).unwrap();
+        let input = || DeviceInput {
+            positions: &positions,
+            vertices: m.vertex_count(),
+            indices: &indices,
+        };
+        let order = pick(&gpu, input(), &[0], true).unwrap().order.unwrap();
+        same_labels(&order, &flat::morton_order(m), name);
+        for per in [1, 96, 1000] {
+            let (seeds, _) = initial_medoids(&gpu, input(), per).unwrap();
+            assert_eq!(
+                seeds,
+                flat::initial_medoids(m, per),
+                "{name}: seeds, {per} per cluster"
+            );
+        }
+    }
+}
+
+/// An engine's vertex and index buffers build `kmedoids-flat` meshlets on the device with nothing
+/// of the mesh read on the host, equal to the CPU's; the meshlets and spheres stay on the device
+/// until read. A strategy whose setup needs the host mesh is refused by name.
+#[test]
+fn a_mesh_already_on_the_device_builds_the_cpu_meshlets() {
+    use meshletlab::gpu::build::{build_on_device, build_resident};
+    use meshletlab::gpu::DeviceMesh;
+    let gpu = gpu();
+    let opts = meshletlab::strategy::Options::default();
+    for (m, limits) in [
+        (generate::knot_tube(200, 12, 3), Limits::DEFAULT),
+        (generate::cad_part(128, 1), Limits::new(64, 84).unwrap()),
+        (generate::terrain(40, 2), Limits::new(8, 6).unwrap()),
+    ] {
+        let positions = gpu.upload("positions", &m.positions);
+        let indices = gpu.upload("indices", &m.indices);
+        let on_device = DeviceMesh {
+            positions: &positions,
+            vertices: m.vertex_count(),
+            indices: &indices,
+            triangles: m.triangle_count(),
+        };
+        let cpu = meshletlab::strategy::by_name("kmedoids-flat", &opts)
+            .unwrap()
+            .build(&m, limits);
+        let built = build_on_device(&gpu, "kmedoids-flat", on_device, limits, &opts).unwrap();
+        assert_eq!(built.meshlets.count, cpu.len());
+        assert_eq!(
+            built.meshlets.read(&gpu).unwrap(),
+            cpu,
+            "kmedoids-flat at {limits}"
+        );
+        // The spheres left beside them are the bounds kernel's.
+        let spheres = gpu.read(&built.spheres, 0, 4 * cpu.len()).unwrap();
+        let (expected, _) = meshletlab::gpu::bounds::spheres(&gpu, &m, &cpu).unwrap();
+        for (i, e) in expected.iter().enumerate() {
+            let got = [0, 1, 2, 3].map(|k| f32::from_bits(spheres[4 * i + k]));
+            assert_eq!(got, [e.0[0], e.0[1], e.0[2], e.1], "sphere {i}");
+        }
+        let grown = meshletlab::strategy::by_name("bsphere-parallel", &opts)
+            .unwrap()
+            .build(&m, limits);
+        let r = build_resident(&gpu, "bsphere-parallel", &m, &positions, limits, &opts).unwrap();
+        assert_eq!(
+            r.meshlets.read(&gpu).unwrap(),
+            grown,
+            "bsphere-parallel at {limits}"
+        );
+        let err = build_on_device(&gpu, "bsphere-parallel", on_device, limits, &opts)
+            .err()
+            .expect("bsphere-parallel's setup needs the host mesh")
+            .to_string();
+        assert!(err.contains("bsphere-parallel"), "{err}");
+    }
+}

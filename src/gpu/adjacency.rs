@@ -126,13 +126,24 @@ impl AdjacencyKernels {
 
     /// Uploads the mesh and builds both CSRs on the GPU.
     pub fn build(&self, gpu: &Gpu, mesh: &Mesh) -> Result<(DeviceAdjacency, Timing), GpuError> {
-        let (n, t) = (mesh.vertex_count(), mesh.triangle_count());
+        let (indices, up) = timed(|| Split::upload(gpu, "indices", &mesh.indices));
+        let (adj, mut timing) = self.build_from(gpu, indices?, mesh.vertex_count())?;
+        timing.upload += up;
+        Ok((adj, timing))
+    }
+
+    /// Builds both CSRs over an index buffer already on the device (`vertices` vertices).
+    pub fn build_from(
+        &self,
+        gpu: &Gpu,
+        indices: Split,
+        vertices: usize,
+    ) -> Result<(DeviceAdjacency, Timing), GpuError> {
+        let (n, t) = (vertices, indices.len / 3);
         let mut timing = Timing::default();
         let (uploaded, up) = timed(|| -> Result<_, GpuError> {
-            let indices = Split::upload(gpu, "indices", &mesh.indices)?;
             let vt_items = Split::zeros(gpu, "vt items", 3 * t)?;
             let r = (
-                indices,
                 gpu.zeros("vt offsets", n + 1),
                 vt_items,
                 gpu.zeros("vt cursor", n),
@@ -144,8 +155,7 @@ impl AdjacencyKernels {
             gpu.wait()?;
             Ok(r)
         });
-        let (indices, vt_offsets, vt_items, cursor, dual_offsets, side_flags, degenerate, near) =
-            uploaded?;
+        let (vt_offsets, vt_items, cursor, dual_offsets, side_flags, degenerate, near) = uploaded?;
         timing.upload += up;
         let placeholder = (gpu.zeros("dual a", 1), gpu.zeros("dual b", 1));
         let bind = |da: &wgpu::Buffer, db: &wgpu::Buffer| {

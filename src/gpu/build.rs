@@ -12,7 +12,8 @@
 use super::adjacency::Timing;
 use super::assemble::DeviceMeshlets;
 use super::bounds::spheres_on_device;
-use super::{timed_read, Gpu, GpuError};
+use super::kmedoids::MeshSource;
+use super::{timed_read, DeviceMesh, Gpu, GpuError};
 use crate::mesh::Mesh;
 use crate::meshlet::order::{optimize_triangle_order, order_meshlets};
 use crate::meshlet::{Limits, Meshlets};
@@ -114,6 +115,54 @@ pub fn build_resident(
     })
 }
 
+/// The strategies [`build_on_device`] runs: those whose setup reads no mesh data on the host.
+/// `bsphere-parallel` is not one: its quantised positions and grid are computed on the host.
+pub const DEVICE_INPUT_STRATEGIES: [Kind; 1] = [Kind::KmedoidsFlat];
+
+/// [`build_resident`] from a mesh already on the device (an engine's vertex and index buffers):
+/// nothing of the mesh is read on the host, and nothing of the result comes back unless the
+/// caller reads it. The host reads only the control words the kernels' loops need (the box of
+/// the positions, the seeds, counts per round) and, where a piece of the mesh has no seed, the
+/// dual graph and labels to seed it, as [`build`] does. Strategies: [`DEVICE_INPUT_STRATEGIES`];
+/// the meshlets equal [`build_resident`]'s on the same mesh.
+pub fn build_on_device(
+    gpu: &Gpu,
+    name: &str,
+    mesh: DeviceMesh<'_>,
+    limits: Limits,
+    opts: &Options,
+) -> Result<ResidentBuild, GpuError> {
+    let kind = gpu_kind(name)?;
+    if !DEVICE_INPUT_STRATEGIES.contains(&kind) {
+        return Err(GpuError::Unsupported(
+            "only kmedoids-flat builds from a mesh on the device: bsphere-parallel's setup runs on the host (use build_resident)",
+        ));
+    }
+    let t0 = Instant::now();
+    let (r, meshlets) = super::kmedoids::cluster_flat_with(
+        gpu,
+        MeshSource::Device(mesh),
+        limits,
+        &opts.kmedoids,
+        false,
+    )?;
+    let mut timing = r.timing;
+    let (spheres, kernel) = spheres_on_device(
+        gpu,
+        mesh.positions,
+        &meshlets.meshlets,
+        &meshlets.vertices,
+        meshlets.count,
+    )?;
+    timing.kernel += kernel;
+    Ok(ResidentBuild {
+        meshlets,
+        spheres,
+        timing,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
 /// Runs strategy `kind` (one of [`GPU_STRATEGIES`]) with its meshlets assembled on the device and
 /// nothing read back but the control words its loops need.
 fn run_strategy(
@@ -125,8 +174,13 @@ fn run_strategy(
 ) -> Result<(DeviceMeshlets, Timing), GpuError> {
     Ok(match kind {
         Kind::KmedoidsFlat => {
-            let (r, d) =
-                super::kmedoids::cluster_flat_with(gpu, mesh, limits, &opts.kmedoids, false)?;
+            let (r, d) = super::kmedoids::cluster_flat_with(
+                gpu,
+                MeshSource::Host(mesh),
+                limits,
+                &opts.kmedoids,
+                false,
+            )?;
             (d, r.timing)
         }
         Kind::BsphereParallel => {

@@ -16,15 +16,17 @@
 
 use super::adjacency::{AdjacencyKernels, DeviceAdjacency, Timing};
 use super::assemble::{Assembly, DeviceMeshlets, Groups};
+use super::morton::{self, DeviceInput};
 use super::scan::ScanJob;
 use super::{
     binding_set, param_block, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan, PART,
 };
+use super::{DeviceMesh, Split};
 use crate::adjacency::Csr;
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
 use crate::strategy::kmedoids::capacity::{assign_capacity, cluster_with};
-use crate::strategy::kmedoids::flat::{add_component_medoids, cluster_size, initial_medoids};
+use crate::strategy::kmedoids::flat::{add_component_medoids, cluster_size};
 use crate::strategy::kmedoids::split::{overflowing_from_counts, split_choice};
 use crate::strategy::kmedoids::{Clustering, Config, Mode};
 use std::time::Instant;
@@ -375,26 +377,73 @@ pub fn cluster_flat(
     limits: Limits,
     cfg: &Config,
 ) -> Result<GpuClustering, GpuError> {
-    cluster_flat_with(gpu, mesh, limits, cfg, true).map(|(c, _)| c)
+    cluster_flat_with(gpu, MeshSource::Host(mesh), limits, cfg, true).map(|(c, _)| c)
+}
+
+/// Where a GPU run reads its mesh: uploaded from the host, or already on the device.
+#[derive(Clone, Copy)]
+pub enum MeshSource<'a> {
+    /// A mesh on the host (its index buffer and positions are uploaded).
+    Host(&'a Mesh),
+    /// A mesh the caller holds on the device: nothing of it is read on the host.
+    Device(DeviceMesh<'a>),
 }
 
 /// [`cluster_flat`] that also returns the meshlets on the device (`wgsl/assemble.wgsl`); with
 /// `read_back` false the labels, distances and meshlets are not read (left empty).
 pub fn cluster_flat_with(
     gpu: &Gpu,
-    mesh: &Mesh,
+    source: MeshSource<'_>,
     limits: Limits,
     cfg: &Config,
     read_back: bool,
 ) -> Result<(GpuClustering, DeviceMeshlets), GpuError> {
     let start = Instant::now();
-    let t = mesh.triangle_count();
-    let (adj, adj_timing) = adjacency(gpu, mesh)?;
+    let (t, n) = match source {
+        MeshSource::Host(m) => (m.triangle_count(), m.vertex_count()),
+        MeshSource::Device(d) => (d.triangles, d.vertices),
+    };
+    if 2 * t > PART {
+        return Err(GpuError::TooLarge {
+            what: "k-medoids triangles",
+            len: t,
+            max: PART / 2,
+        });
+    }
+    let (uploaded, upload) = timed(|| -> Result<_, GpuError> {
+        Ok(match source {
+            MeshSource::Host(m) => (
+                Split::upload(gpu, "indices", &m.indices)?,
+                Some(gpu.upload("positions", &m.positions)),
+            ),
+            MeshSource::Device(d) => (d.split_indices(gpu)?, None),
+        })
+    });
+    let (indices, uploaded_positions) = uploaded?;
+    let positions = match (&uploaded_positions, source) {
+        (Some(p), _) => p,
+        (None, MeshSource::Device(d)) => d.positions,
+        (None, MeshSource::Host(_)) => unreachable!("host meshes upload their positions"),
+    };
+    let (adj, mut adj_timing) = AdjacencyKernels::new(gpu).build_from(gpu, indices, n)?;
+    adj_timing.upload += upload;
+    // The seeds on the device, identical to `flat::initial_medoids`.
+    let (mut medoids, seed_timing) = morton::initial_medoids(
+        gpu,
+        DeviceInput {
+            positions,
+            vertices: n,
+            indices: &adj.indices,
+        },
+        cluster_size(limits, Mode::Flat),
+    )?;
+    adj_timing.upload += seed_timing.upload;
+    adj_timing.kernel += seed_timing.kernel;
+    adj_timing.readback += seed_timing.readback;
     let modules = Modules::new(gpu);
     let (family, scan) = modules.family();
     let mut run = Run::new(gpu, family, scan, &adj, limits, adj_timing)?;
 
-    let mut medoids = initial_medoids(mesh, cluster_size(limits, Mode::Flat));
     let mut host_dual: Option<Csr> = None;
     loop {
         run.upload_medoids(&medoids)?;

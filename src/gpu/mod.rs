@@ -9,6 +9,7 @@
 //! |---|---|---|
 //! | [`adjacency`] | `adjacency.wgsl` | `crate::adjacency` (and `mesh::edges`) |
 //! | [`kmedoids`] (`cluster_flat`, `cluster_capacity`) | `assign.wgsl`, `update.wgsl`, `split.wgsl` | `strategy::kmedoids::{assign, update, split}`, driven as `strategy::kmedoids::flat` |
+//! | [`morton`] | `morton.wgsl` | `strategy::kmedoids::flat::{morton_order, initial_medoids}` (the flat method's seeds) |
 //! | [`capacity`] | `capacity.wgsl` | `strategy::kmedoids::capacity::assign_capacity` |
 //! | [`grow`] | `grow.wgsl` | `strategy::grow` (`bsphere-parallel`) |
 //! | [`assemble`] | `assemble.wgsl` | `meshlet::assemble` (meshlets from a clustering) |
@@ -19,8 +20,9 @@
 //!
 //! [`build::build`] builds meshlets on the GPU with any strategy whose every step is a kernel
 //! (`meshletlab build --device gpu`); [`build::build_resident`] leaves them, with their bounding
-//! spheres, in device buffers for a renderer (`examples/gpu_draw.rs` draws from them with no
-//! readback in between).
+//! spheres, in device buffers for a renderer, and [`build::build_on_device`] builds them from a
+//! mesh already on the device ([`DeviceMesh`]: an engine's vertex and index buffers);
+//! `examples/gpu_draw.rs` draws from them with no readback in between.
 //!
 //! Why integer keys and exactly rounded arithmetic make the parity exact: `docs/gpu-clustering.md`. Kernels run on any Vulkan adapter; on a machine without a GPU that is
 //! Mesa's lavapipe, which the project's setup installs.
@@ -38,6 +40,7 @@ pub mod capacity;
 pub mod copy;
 pub mod grow;
 pub mod kmedoids;
+pub mod morton;
 pub mod parity;
 mod scan;
 pub mod select;
@@ -407,6 +410,42 @@ impl Gpu {
 const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_SRC)
     .union(wgpu::BufferUsages::COPY_DST);
+
+/// A mesh already on the device, as an engine holds it: `positions` three f32 per vertex, tightly
+/// packed, and `indices` three u32 per triangle, both created with `wgpu::BufferUsages::STORAGE`
+/// on the device the [`Gpu`] runs on ([`Gpu::from_device`]). The GPU paths that take one read
+/// nothing of the mesh on the host.
+#[derive(Clone, Copy)]
+pub struct DeviceMesh<'a> {
+    /// Three f32 per vertex.
+    pub positions: &'a wgpu::Buffer,
+    /// Vertices.
+    pub vertices: usize,
+    /// Three u32 per triangle.
+    pub indices: &'a wgpu::Buffer,
+    /// Triangles.
+    pub triangles: usize,
+}
+
+impl DeviceMesh<'_> {
+    /// The index buffer as a [`Split`] array (the caller's buffer and an empty second part);
+    /// refused above [`PART`] indices, one storage binding's worth.
+    pub fn split_indices(&self, gpu: &Gpu) -> Result<Split, GpuError> {
+        let len = 3 * self.triangles;
+        if len > PART {
+            return Err(GpuError::TooLarge {
+                what: "index buffer on the device (one binding)",
+                len,
+                max: PART,
+            });
+        }
+        Ok(Split {
+            a: self.indices.clone(),
+            b: gpu.zeros("indices (second part)", 0),
+            len,
+        })
+    }
+}
 
 /// An array stored as two buffers of at most [`PART`] u32 each; WGSL reads it through an accessor
 /// (`x < PART ? a[x] : b[x - PART]`).

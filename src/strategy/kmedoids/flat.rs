@@ -146,23 +146,46 @@ pub fn initial_medoids(mesh: &Mesh, per_cluster: usize) -> Vec<u32> {
 /// Triangles in the Morton order of their centroids (10 bits per axis over the bounding box's
 /// longest side), ties to the lower id.
 pub fn morton_order(mesh: &Mesh) -> Vec<u32> {
-    let t = mesh.triangle_count();
     let (lo, hi) = mesh.bounding_box();
-    let scale = (hi - lo).max_element().max(f32::MIN_POSITIVE);
-    let mut keyed: Vec<(u64, u32)> = (0..t)
+    let frame = MortonFrame::new(lo, hi);
+    let mut keyed: Vec<(u32, u32)> = (0..mesh.triangle_count())
         .map(|i| {
-            let c = mesh
-                .triangle(i)
-                .iter()
-                .map(|&v| mesh.position(v))
-                .sum::<glam::Vec3>()
-                / 3.0;
-            let q = ((c - lo) / scale * 1023.0).clamp(glam::Vec3::ZERO, glam::Vec3::splat(1023.0));
-            (morton3(q.x as u32, q.y as u32, q.z as u32), i as u32)
+            let [a, b, c] = mesh.triangle(i).map(|v| mesh.position(v));
+            (frame.key(a, b, c), i as u32)
         })
         .collect();
     keyed.sort_unstable();
     keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+/// The frame of the Morton keys, from the mesh's bounding box: a triangle's corner sum minus
+/// `lo3`, times `factor`, is its centroid in 0..=1023 along the box's longest side. Only `+`, `-`
+/// and `x` touch a triangle, in a fixed order, so `wgsl/morton.wgsl` computes the same keys on
+/// any device (the divisions happen once, here, and reach the GPU as these two values).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MortonFrame {
+    /// Three times the box's low corner.
+    pub lo3: glam::Vec3,
+    /// 1023 over three times the box's longest side.
+    pub factor: f32,
+}
+
+impl MortonFrame {
+    /// The frame of the box `lo`..`hi`.
+    pub fn new(lo: glam::Vec3, hi: glam::Vec3) -> Self {
+        let scale = (hi - lo).max_element().max(f32::MIN_POSITIVE);
+        Self {
+            lo3: lo * 3.0,
+            factor: 1023.0 / (3.0 * scale),
+        }
+    }
+
+    /// Morton key (30 bits) of the triangle with corners `a`, `b`, `c`.
+    pub fn key(&self, a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> u32 {
+        let q = (((a + b) + c - self.lo3) * self.factor)
+            .clamp(glam::Vec3::ZERO, glam::Vec3::splat(1023.0));
+        morton3(q.x as u32, q.y as u32, q.z as u32) as u32
+    }
 }
 
 /// Assigns, then adds a medoid (the lowest unreached triangle) to every dual-graph component that has
