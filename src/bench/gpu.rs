@@ -80,6 +80,67 @@ struct Row {
     cap: Cap,
     /// `kmedoids-parallel` (no GPU path): meshlets, one thread and rayon seconds.
     par: (usize, Option<f64>, f64),
+    /// The library's GPU builds, per GPU strategy that ran here.
+    resident: Vec<Resident>,
+}
+
+/// One GPU strategy built three ways through `gpu::build`: meshlets read back, left on the
+/// device, and (where it can) from a mesh already on the device. Wall seconds each.
+struct Resident {
+    strategy: &'static str,
+    /// `build`: meshlets read back (and its readback seconds).
+    read: (f64, f64),
+    /// `build_resident`: meshlets and spheres left on the device.
+    resident: f64,
+    /// `build_on_device`: from position and index buffers already on the device.
+    on_device: Option<f64>,
+}
+
+/// Times `gpu::build`'s three entry points for `name` on `m`, checking that each gives the CPU's
+/// meshlets `cpu` (read back after the timing).
+fn resident_builds(
+    g: &Gpu,
+    name: &'static str,
+    m: &Mesh,
+    limits: Limits,
+    cpu: &Meshlets,
+) -> Result<Resident> {
+    let opts = strategy::Options::default();
+    let read = gpu::build::build(g, name, m, limits, &opts)?;
+    if &read.meshlets != cpu {
+        bail!("{name}: GPU build differs from the CPU's");
+    }
+    // The mesh as an engine holds it: uploaded before the timed builds.
+    let positions = g.upload("positions", &m.positions);
+    let indices = g.upload("indices", &m.indices);
+    let r = gpu::build::build_resident(g, name, m, &positions, limits, &opts)?;
+    if &r.meshlets.read(g)? != cpu {
+        bail!("{name}: meshlets left on the device differ from the CPU's");
+    }
+    let on_device = if gpu::build::DEVICE_INPUT_STRATEGIES
+        .iter()
+        .any(|k| k.name() == name)
+    {
+        let mesh = gpu::DeviceMesh {
+            positions: &positions,
+            vertices: m.vertex_count(),
+            indices: &indices,
+            triangles: m.triangle_count(),
+        };
+        let d = gpu::build::build_on_device(g, name, mesh, limits, &opts)?;
+        if &d.meshlets.read(g)? != cpu {
+            bail!("{name}: meshlets built from the device mesh differ from the CPU's");
+        }
+        Some(d.seconds)
+    } else {
+        None
+    };
+    Ok(Resident {
+        strategy: name,
+        read: (read.seconds, read.timing.readback),
+        resident: r.seconds,
+        on_device,
+    })
 }
 
 /// Capacity-aware k-medoids on one mesh: CPU one thread and rayon, GPU (adjacency, medoid
@@ -188,6 +249,15 @@ pub fn run(cfg: &Config) -> Result<()> {
     gpu::adjacency::adjacency(&g, &warm)?;
     gpu::kmedoids::cluster_flat(&g, &warm, cfg.limits, &KConfig::default())?;
     gpu::grow::grow(&g, &warm, cfg.limits, grow::DEFAULT_SPACING)?;
+    let warm_positions = g.upload("positions", &warm.positions);
+    gpu::build::build_resident(
+        &g,
+        "kmedoids-flat",
+        &warm,
+        &warm_positions,
+        cfg.limits,
+        &strategy::Options::default(),
+    )?;
     // The bandwidths the physical limits are taken at (64 MiB copied on the GPU, 256 MiB on the
     // host; medians).
     say("measuring memory bandwidth".into());
@@ -339,6 +409,33 @@ pub fn run(cfg: &Config) -> Result<()> {
             })
             .transpose()?;
         let par = (par_r.meshlets.len(), par_cpu1, par_rayon);
+        let mut resident = Vec::new();
+        if t <= cfg.kmedoids_gpu_max.min(cfg.flat_gpu_max) {
+            pb.set_message(format!("{name} ({t} triangles): builds left on the device"));
+            resident.push(resident_builds(
+                &g,
+                "kmedoids-flat",
+                m,
+                cfg.limits,
+                &cr.meshlets,
+            )?);
+        }
+        if t <= cfg.one_thread_max {
+            let cpu = grow::grow(
+                m,
+                &dual_graph(m, &vertex_triangles(m)),
+                cfg.limits,
+                grow::DEFAULT_SPACING,
+            )
+            .meshlets;
+            resident.push(resident_builds(
+                &g,
+                "bsphere-parallel",
+                m,
+                cfg.limits,
+                &cpu,
+            )?);
+        }
         pb.finish_and_clear();
         say(format!("{name}: adjacency cpu {adj_cpu:.3}s gpu kernel {:.3}s; k-medoids rayon {km_rayon:.2}s gpu {:?}", adj_gpu.kernel, km_gpu.as_ref().map(|k| k.seconds)));
         rows.push(Row {
@@ -358,6 +455,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             grow,
             cap,
             par,
+            resident,
         });
     }
 
@@ -763,7 +861,7 @@ fn write(
         md,
         "## `kmedoids-parallel` (CPU only), whole run including adjacency\n"
     )?;
-    writeln!(md, "The capacity-aware method on regions of the mesh at once, border clusters merged in matching rounds (src/strategy/kmedoids/parallel.rs). It has no GPU path yet: the per-region growth is host code. One thread checked identical to the pool.\n")?;
+    writeln!(md, "The capacity-aware method on regions of the mesh at once, border clusters merged in matching rounds (src/strategy/kmedoids/parallel.rs). It has no GPU path yet: the per-region growth is host code (`docs/gpu-clustering.md` measures a GPU-portable form of it). One thread checked identical to the pool.\n")?;
     writeln!(
         md,
         "| mesh | triangles | meshlets | CPU 1 thread s | CPU rayon s | 1 thread / rayon | rayon / kmedoids rayon |"
@@ -782,6 +880,29 @@ fn write(
             opt(one.map(|x| x / pool), &|x| format!("{x:.2}")),
             pool / r.cap.rayon,
         )?;
+    }
+    writeln!(md)?;
+    writeln!(
+        md,
+        "## Meshlets left on the device (the library's GPU builds)\n"
+    )?;
+    writeln!(md, "Wall seconds of `gpu::build`'s entry points, each checked equal to the CPU build: `build` reads the meshlets back (the `--device gpu` path; its readback apart), `build_resident` leaves them and their bounding spheres in device buffers (assembled by `wgsl/assemble.wgsl`), `build_on_device` also takes the mesh from position and index buffers already on the device (the seeds from `wgsl/morton.wgsl`; `kmedoids-flat` only: `bsphere-parallel` quantises on the host, hence `-`). Device creation and pipeline compilation are not in these times (a warm-up build runs first).\n")?;
+    writeln!(md, "| mesh | triangles | strategy | build s | of which readback s | build_resident s | build_on_device s |")?;
+    writeln!(md, "|---|---:|---|---:|---:|---:|---:|")?;
+    for r in rows {
+        for b in &r.resident {
+            writeln!(
+                md,
+                "| {} | {} | `{}` | {:.3} | {:.3} | {:.3} | {} |",
+                r.mesh,
+                r.triangles,
+                b.strategy,
+                b.read.0,
+                b.read.1,
+                b.resident,
+                b.on_device.map_or("-".into(), |x| format!("{x:.3}")),
+            )?;
+        }
     }
     writeln!(md)?;
     write_profile(&mut md, rows)?;
