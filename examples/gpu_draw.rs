@@ -4,18 +4,21 @@
 //! `kmedoids-flat` builds from the application's vertex and index buffers
 //! (`gpu::build::build_on_device`: nothing of the mesh is read on the host), `bsphere-parallel`
 //! from the host mesh (`gpu::build::build_resident`: its setup runs on the host); both leave the
-//! meshlet records, vertex lists, packed local triangles and bounding spheres in device buffers.
+//! meshlet records, vertex lists, packed local triangles and culling bounds (sphere and normal
+//! cone, the mesh-shader pass's split layout) in device buffers.
 //! A vertex shader pulls each meshlet's corners from them (one instance per meshlet) and skips
-//! meshlets whose sphere lies outside the view; a second pipeline draws the mesh's plain index
-//! buffer. The depth images of the two draws must be bit-identical: the meshlets cover the mesh
-//! exactly and the sphere test never drops a visible meshlet. Exit 1 on any difference.
+//! meshlets whose sphere lies outside the view or whose cone faces away; a second pipeline draws
+//! the mesh's plain index buffer. Both cull back faces. The depth images of the two draws must be
+//! bit-identical: the meshlets cover the mesh exactly and neither test drops a visible triangle.
+//! Exit 1 on any difference.
 //!
 //!     cargo run --release --example gpu_draw -- [MESH] [OUT.png]
 
+use meshletlab::gpu::bounds::{cones_from_task, TASK_WORDS};
 use meshletlab::gpu::build::{build_on_device, build_resident, ResidentBuild};
 use meshletlab::gpu::{DeviceMesh, Gpu};
 use meshletlab::mesh::{self, Mesh};
-use meshletlab::meshlet::Limits;
+use meshletlab::meshlet::{Cone, Limits};
 use meshletlab::strategy::Options;
 use wgpu::util::DeviceExt;
 
@@ -29,7 +32,8 @@ struct View { scale: vec4<f32>, offset: vec4<f32> }
 @group(0) @binding(2) var<storage, read> meshlets: array<vec4<u32>>;
 @group(0) @binding(3) var<storage, read> vertices: array<u32>;
 @group(0) @binding(4) var<storage, read> triangles: array<u32>;
-@group(0) @binding(5) var<storage, read> spheres: array<vec4<f32>>;
+// Per meshlet: (sphere centre, radius), (cone apex, cutoff), (cone axis, triangle count).
+@group(0) @binding(5) var<storage, read> task: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read> indices: array<u32>;
 
 struct Out { @builtin(position) clip: vec4<f32>, @location(0) @interpolate(flat) id: u32 }
@@ -41,12 +45,15 @@ fn project(v: u32) -> vec4<f32> {
     return vec4<f32>(p * view.scale.xyz + view.offset.xyz, 1.0);
 }
 
-// A meshlet whose sphere is wholly outside the view in x or y.
-fn outside(m: u32) -> bool {
-    let s = spheres[m];
+// A meshlet whose sphere is wholly outside the view in x or y, or whose every triangle faces away
+// from the camera (its normal cone, for a view along +z: the axis within the cutoff of it).
+fn skipped(m: u32) -> bool {
+    let s = task[3u * m];
     let c = s.xyz * view.scale.xyz + view.offset.xyz;
     let r = s.w * abs(view.scale.x);
-    return abs(c.x) - r > 1.0 || abs(c.y) - r > 1.0;
+    let cone = task[3u * m + 2u];
+    let cutoff = task[3u * m + 1u].w;
+    return abs(c.x) - r > 1.0 || abs(c.y) - r > 1.0 || (cutoff < 1.0 && cone.z >= cutoff);
 }
 
 @vertex
@@ -55,7 +62,7 @@ fn meshlet_corner(@builtin(vertex_index) i: u32, @builtin(instance_index) m: u32
     var out: Out;
     out.id = m;
     // Corners past the meshlet's triangles, and culled meshlets, collapse to one point.
-    if (i / 3u >= d.w || outside(m)) {
+    if (i / 3u >= d.w || skipped(m)) {
         out.clip = vec4<f32>(2.0, 2.0, 2.0, 1.0);
         return out;
     }
@@ -129,14 +136,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let image = draw(&device, &queue, &view, &positions, &indices, Some(&built));
         let same = image.depth == reference.depth;
-        // After the draw, for the report only: how many meshlets the sphere test skipped.
-        let spheres = gpu.read(&built.spheres, 0, 4 * built.meshlets.count)?;
-        let skipped = spheres
-            .chunks_exact(4)
-            .filter(|s| view.outside([0, 1, 2, 3].map(|i| f32::from_bits(s[i]))))
+        // After the draw, for the report only: how many meshlets the shader skipped.
+        let words = gpu.read(&built.task, 0, TASK_WORDS * built.meshlets.count)?;
+        let skipped = cones_from_task(&words)
+            .iter()
+            .filter(|(s, c)| view.skips(*s, c))
             .count();
         println!(
-            "{name}: {} triangles -> {} meshlets built in {:.1} ms, drawn from the device ({skipped} outside the view skipped): depth image {} ({covered} pixels covered)",
+            "{name}: {} triangles -> {} meshlets built in {:.1} ms, drawn from the device ({skipped} outside the view or facing away skipped): depth image {} ({covered} pixels covered)",
             mesh.triangle_count(),
             built.meshlets.count,
             built.seconds * 1e3,
@@ -189,10 +196,12 @@ impl View {
 }
 
 impl View {
-    /// The shader's `outside`: a sphere (centre, radius) wholly outside the view in x or y.
-    fn outside(&self, s: [f32; 4]) -> bool {
-        let r = s[3] * self.scale[0].abs();
-        (0..2).any(|a| (s[a] * self.scale[a] + self.offset[a]).abs() - r > 1.0)
+    /// The shader's `skipped`: a sphere (centre, radius) wholly outside the view in x or y, or a
+    /// cone that faces away from a view along +z.
+    fn skips(&self, (c, r): ([f32; 3], f32), cone: &Cone) -> bool {
+        let r = r * self.scale[0].abs();
+        (0..2).any(|a| (c[a] * self.scale[a] + self.offset[a]).abs() - r > 1.0)
+            || (cone.cutoff < 1.0 && cone.axis[2] >= cone.cutoff)
     }
 }
 
@@ -251,7 +260,12 @@ fn draw(
             compilation_options: Default::default(),
             buffers: &[],
         },
-        primitive: wgpu::PrimitiveState::default(),
+        // The camera looks along +z with x and y kept, so a face turned to it winds clockwise.
+        primitive: wgpu::PrimitiveState {
+            front_face: wgpu::FrontFace::Cw,
+            cull_mode: Some(wgpu::Face::Back),
+            ..Default::default()
+        },
         depth_stencil: Some(wgpu::DepthStencilState {
             format: wgpu::TextureFormat::Depth32Float,
             depth_write_enabled: Some(true),
@@ -284,7 +298,7 @@ fn draw(
             &b.meshlets.meshlets,
             &b.meshlets.vertices,
             &b.meshlets.triangles,
-            &b.spheres,
+            &b.task,
         ),
         None => (indices, indices, indices, positions),
     };

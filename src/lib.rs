@@ -33,7 +33,7 @@
 //! | smallest spheres at meshoptimizer's count | [`Kind::Kmedoids`](strategy::Kind::Kmedoids) (`kmedoids`, capacity-aware k-medoids) | about meshoptimizer's time |
 //! | k-medoids spheres on many cores | [`Kind::KmedoidsParallel`](strategy::Kind::KmedoidsParallel) (`kmedoids-parallel`): `kmedoids` on regions at once | about a percent more meshlets than `kmedoids`; faster than it from a few hundred thousand triangles with several cores |
 //! | fewest meshlets, offline | `meshopt+refine` or `meshopt+refine-max` ([`strategy::Kind::refined`]) | tens of times meshoptimizer's time |
-//! | clustering on the GPU | `kmedoids-flat` (every step a kernel, `gpu::build::build`; on an engine's own device through `gpu::Gpu::from_device`; meshlets and spheres left in device buffers by `gpu::build::build_resident`) | more meshlets |
+//! | clustering on the GPU | `kmedoids-flat` (every step a kernel, `gpu::build::build`; on an engine's own device through `gpu::Gpu::from_device`; meshlets and their culling bounds left in device buffers by `gpu::build::build_resident`, from an engine's own vertex and index buffers by `gpu::build::build_on_device`) | more meshlets |
 //! | the JCGT paper's strategies, for comparison | `greedy`, `bsphere`, `kmedoids-paper`, `nvidia` | |
 //!
 //! # After building

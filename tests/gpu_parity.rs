@@ -5,8 +5,9 @@
 mod common;
 
 use meshletlab::bench::stability;
-use meshletlab::gpu::{parity, Gpu};
+use meshletlab::gpu::{bounds, parity, Gpu};
 use meshletlab::mesh::{generate, Mesh};
+use meshletlab::meshlet::bounds::{check_cones, compute_bounds};
 use meshletlab::meshlet::Limits;
 
 fn gpu() -> Gpu {
@@ -360,6 +361,61 @@ fn the_morton_order_and_the_seeds_match_the_cpu() {
     }
 }
 
+/// The GPU's normal cones (`task_bounds`, over meshlets on the device) are conservative on the
+/// bunny and its stressed copies (translated by 1e6, scaled, flattened to slivers, duplicated, a
+/// copy at 1e9) and still cull: at least half as many (meshlet, camera) pairs as the CPU's
+/// minimal-sphere cones on the bunny as loaded.
+#[test]
+fn device_cones_are_conservative_and_cull() {
+    use meshletlab::gpu::assemble::DeviceMeshlets;
+    let gpu = gpu();
+    let base = common::load("stanford_bunny");
+    for (name, m) in stability::cases(&base) {
+        let ml = meshletlab::strategy::by_name("meshopt", &Default::default())
+            .unwrap()
+            .build(&m, Limits::DEFAULT);
+        let mut words: Vec<u32> = Vec::new();
+        for b in ml.triangles.chunks(4) {
+            let mut w = [0u8; 4];
+            w[..b.len()].copy_from_slice(b);
+            words.push(u32::from_le_bytes(w));
+        }
+        let on_device = DeviceMeshlets {
+            meshlets: gpu.upload("meshlets", &ml.meshlets),
+            vertices: gpu.upload("vertices", &ml.vertices),
+            triangles: gpu.upload("triangles", &words),
+            count: ml.len(),
+            vertex_count: ml.vertices.len(),
+            triangle_count: ml.triangles.len() / 3,
+        };
+        let positions = gpu.upload("positions", &m.positions);
+        let (task, _) = bounds::task_on_device(&gpu, &positions, &on_device).unwrap();
+        let words = gpu.read(&task, 0, bounds::TASK_WORDS * ml.len()).unwrap();
+        let task = bounds::cones_from_task(&words);
+        assert!(
+            task.iter().all(|(s, c)| s.1.is_finite()
+                && s.0
+                    .iter()
+                    .chain(&c.apex)
+                    .chain(&c.axis)
+                    .all(|x| x.is_finite())
+                && c.cutoff.is_finite()),
+            "{name}: NaN or Inf in the bounds"
+        );
+        let cones: Vec<_> = task.iter().map(|t| t.1).collect();
+        let (culls, violations) = check_cones(&m, &ml, &cones);
+        assert_eq!(violations, 0, "{name}: front faces in culled meshlets");
+        if name == "as loaded" {
+            let cpu: Vec<_> = compute_bounds(&m, &ml).iter().map(|b| b.cone).collect();
+            let (cpu_culls, _) = check_cones(&m, &ml, &cpu);
+            assert!(
+                2 * culls >= cpu_culls && culls > 0,
+                "GPU cones cull {culls} pairs, the CPU's {cpu_culls}"
+            );
+        }
+    }
+}
+
 /// An engine's vertex and index buffers build `kmedoids-flat` meshlets on the device with nothing
 /// of the mesh read on the host, equal to the CPU's; the meshlets and spheres stay on the device
 /// until read. A strategy whose setup needs the host mesh is refused by name.
@@ -392,13 +448,23 @@ fn a_mesh_already_on_the_device_builds_the_cpu_meshlets() {
             cpu,
             "kmedoids-flat at {limits}"
         );
-        // The spheres left beside them are the bounds kernel's.
-        let spheres = gpu.read(&built.spheres, 0, 4 * cpu.len()).unwrap();
-        let (expected, _) = meshletlab::gpu::bounds::spheres(&gpu, &m, &cpu).unwrap();
-        for (i, e) in expected.iter().enumerate() {
-            let got = [0, 1, 2, 3].map(|k| f32::from_bits(spheres[4 * i + k]));
-            assert_eq!(got, [e.0[0], e.0[1], e.0[2], e.1], "sphere {i}");
+        // The bounds left beside them: the `sphere` kernel's spheres, the triangle counts, and
+        // cones that never cull a meshlet with a triangle facing the camera.
+        let words = gpu
+            .read(&built.task, 0, bounds::TASK_WORDS * cpu.len())
+            .unwrap();
+        let task = bounds::cones_from_task(&words);
+        let (expected, _) = bounds::spheres(&gpu, &m, &cpu).unwrap();
+        for (i, (got, e)) in task.iter().zip(&expected).enumerate() {
+            assert_eq!(got.0, *e, "sphere {i}");
+            assert_eq!(words[12 * i + 11], cpu.meshlets[i].triangle_count);
         }
+        let cones: Vec<_> = task.iter().map(|t| t.1).collect();
+        let (_, violations) = check_cones(&m, &cpu, &cones);
+        assert_eq!(
+            violations, 0,
+            "front faces in meshlets the GPU cones culled"
+        );
         let grown = meshletlab::strategy::by_name("bsphere-parallel", &opts)
             .unwrap()
             .build(&m, limits);

@@ -90,7 +90,7 @@ struct Resident {
     strategy: &'static str,
     /// `build`: meshlets read back (and its readback seconds).
     read: (f64, f64),
-    /// `build_resident`: meshlets and spheres left on the device.
+    /// `build_resident`: meshlets and their bounds left on the device.
     resident: f64,
     /// `build_on_device`: from position and index buffers already on the device.
     on_device: Option<f64>,
@@ -886,7 +886,7 @@ fn write(
         md,
         "## Meshlets left on the device (the library's GPU builds)\n"
     )?;
-    writeln!(md, "Wall seconds of `gpu::build`'s entry points, each checked equal to the CPU build: `build` reads the meshlets back (the `--device gpu` path; its readback apart), `build_resident` leaves them and their bounding spheres in device buffers (assembled by `wgsl/assemble.wgsl`), `build_on_device` also takes the mesh from position and index buffers already on the device (the seeds from `wgsl/morton.wgsl`; `kmedoids-flat` only: `bsphere-parallel` quantises on the host, hence `-`). Device creation and pipeline compilation are not in these times (a warm-up build runs first).\n")?;
+    writeln!(md, "Wall seconds of `gpu::build`'s entry points, each checked equal to the CPU build: `build` reads the meshlets back (the `--device gpu` path; its readback apart), `build_resident` leaves them and their culling bounds (sphere and cone, the split task layout) in device buffers (assembled by `wgsl/assemble.wgsl`), `build_on_device` also takes the mesh from position and index buffers already on the device (the seeds from `wgsl/morton.wgsl`; `kmedoids-flat` only: `bsphere-parallel` quantises on the host, hence `-`). Device creation and pipeline compilation are not in these times (a warm-up build runs first).\n")?;
     writeln!(md, "| mesh | triangles | strategy | build s | of which readback s | build_resident s | build_on_device s |")?;
     writeln!(md, "|---|---:|---|---:|---:|---:|---:|")?;
     for r in rows {

@@ -13,9 +13,8 @@
 use super::{machine_note, today, Common};
 use crate::gpu::{self, Gpu, GpuError};
 use crate::mesh::Mesh;
-use crate::meshlet::bounds::compute_bounds;
+use crate::meshlet::bounds::{check_cones, compute_bounds};
 use crate::meshlet::Limits;
-use glam::DVec3;
 use std::fmt::Write as _;
 
 /// What to run: the arguments of `meshletlab bench stability`.
@@ -169,33 +168,8 @@ pub fn check(g: &Gpu, name: &'static str, mesh: &Mesh, limits: Limits) -> Result
             !c.cutoff.is_finite() || c.apex.iter().chain(&c.axis).any(|x| !x.is_finite())
         })
         .count();
-    // Cameras on a grid around the mesh, some inside its box.
-    let (lo, hi) = mesh.bounding_box();
-    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
-    let mut cone_violations = 0;
-    let mut cone_culls = 0;
-    for k in 0..27u32 {
-        let t = DVec3::new((k % 3) as f64, ((k / 3) % 3) as f64, (k / 9) as f64) / 2.0;
-        let cam = (lo - (hi - lo) * 0.5) + (hi - lo) * 2.0 * t;
-        let camf = cam.as_vec3().to_array();
-        for (i, b) in bounds.iter().enumerate() {
-            if !b.cone.culls(camf) {
-                continue;
-            }
-            cone_culls += 1;
-            for tri in ml.global_triangles(i) {
-                let p = tri.map(|v| DVec3::from_array(mesh.positions[v as usize].map(f64::from)));
-                let n = (p[1] - p[0]).cross(p[2] - p[0]);
-                // The camera as the cone saw it (f32). A triangle seen edge-on within f32
-                // resolution (|cos| < 1e-6: the flattened variant seen from its own plane) has no
-                // reliable facing, for a rasteriser either, so it does not count.
-                let v = p[0] - cam.as_vec3().as_dvec3();
-                if n.dot(v) < -1e-6 * n.length() * v.length() {
-                    cone_violations += 1;
-                }
-            }
-        }
-    }
+    let cones: Vec<_> = bounds.iter().map(|b| b.cone).collect();
+    let (cone_culls, cone_violations) = check_cones(mesh, ml, &cones);
     Ok(Report {
         name,
         triangles: mesh.triangle_count(),

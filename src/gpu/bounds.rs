@@ -6,9 +6,10 @@
 //! by about 18 ulps, 1.1e-6 relative): the check allows a relative 2^-16 (1.5e-5), which is also
 //! the padding that keeps the sphere conservative on both sides. For a 1 m meshlet that is 15 um.
 
+use super::assemble::DeviceMeshlets;
 use super::{binding_set, param_block, wgsl, Batch, Gpu, GpuError, Kernels};
 use crate::mesh::Mesh;
-use crate::meshlet::Meshlets;
+use crate::meshlet::{Cone, Meshlets};
 use glam::Vec3;
 
 param_block! {
@@ -30,6 +31,10 @@ binding_set! {
         vertices: Read,
         /// Out: centre and radius per meshlet.
         spheres: ReadWrite,
+        /// The meshlets' local corners, four bytes to a word (`task_bounds` only).
+        triangles: Read,
+        /// Out: the split task layout, three vec4 per meshlet (`task_bounds` only).
+        task: ReadWrite,
     }
 }
 
@@ -97,8 +102,9 @@ pub fn spheres_on_device(
     vertices: &wgpu::Buffer,
     n: usize,
 ) -> Result<(wgpu::Buffer, f64), GpuError> {
-    let k = Kernels::new::<Buffers>(gpu, "bounds", wgsl!("bounds.wgsl"), &["sphere"]);
+    let k = kernels(gpu);
     let out = gpu.zeros("spheres", 4 * n);
+    let unused = gpu.zeros("unused", 1);
     let bind = k.bind(
         gpu,
         &Buffers {
@@ -106,12 +112,74 @@ pub fn spheres_on_device(
             meshlets,
             vertices,
             spheres: &out,
+            triangles: &unused,
+            task: &gpu.zeros("unused", 4),
         },
     );
     let mut b = Batch::new(gpu);
     b.threads(&k, "sphere", &bind, Params { n: n as u32 }, n);
     let time = b.run()?;
     Ok((out, time))
+}
+
+fn kernels(gpu: &Gpu) -> Kernels<Params> {
+    Kernels::new::<Buffers>(
+        gpu,
+        "bounds",
+        wgsl!("bounds.wgsl"),
+        &["sphere", "task_bounds"],
+    )
+}
+
+/// Words per meshlet of the split task layout (three vec4: sphere, apex and cutoff, axis and
+/// triangle count), as `meshlet::descriptor` packs it for the mesh-shader pass.
+pub const TASK_WORDS: usize = 12;
+
+/// The `task_bounds` kernel over meshlets on the device (`positions`: three f32 per vertex):
+/// sphere, normal cone and triangle count per meshlet in the split task layout ([`TASK_WORDS`]
+/// each), left on the device, and the kernel time. The sphere is the `sphere` kernel's; the cone
+/// is conservative (see [`cones_from_task`] and `meshlet::bounds::check_cones`).
+pub fn task_on_device(
+    gpu: &Gpu,
+    positions: &wgpu::Buffer,
+    ml: &DeviceMeshlets,
+) -> Result<(wgpu::Buffer, f64), GpuError> {
+    let k = kernels(gpu);
+    let n = ml.count;
+    let out = gpu.zeros("task bounds", TASK_WORDS * n);
+    let bind = k.bind(
+        gpu,
+        &Buffers {
+            positions,
+            meshlets: &ml.meshlets,
+            vertices: &ml.vertices,
+            spheres: &gpu.zeros("unused", 4),
+            triangles: &ml.triangles,
+            task: &out,
+        },
+    );
+    let mut b = Batch::new(gpu);
+    b.threads(&k, "task_bounds", &bind, Params { n: n as u32 }, n);
+    let time = b.run()?;
+    Ok((out, time))
+}
+
+/// Sphere and cone of every meshlet from split task words (read back from [`task_on_device`]).
+pub fn cones_from_task(words: &[u32]) -> Vec<(SphereF32, Cone)> {
+    let f = |x: u32| f32::from_bits(x);
+    words
+        .chunks_exact(TASK_WORDS)
+        .map(|w| {
+            (
+                ([f(w[0]), f(w[1]), f(w[2])], f(w[3])),
+                Cone {
+                    apex: [f(w[4]), f(w[5]), f(w[6])],
+                    cutoff: f(w[7]),
+                    axis: [f(w[8]), f(w[9]), f(w[10])],
+                },
+            )
+        })
+        .collect()
 }
 
 /// Compares GPU spheres with the CPU mirror: `None` if centres are within [`CENTRE_ULPS`] and radii

@@ -11,7 +11,7 @@
 
 use super::adjacency::Timing;
 use super::assemble::DeviceMeshlets;
-use super::bounds::spheres_on_device;
+use super::bounds::task_on_device;
 use super::kmedoids::MeshSource;
 use super::{timed_read, DeviceMesh, Gpu, GpuError};
 use crate::mesh::Mesh;
@@ -72,9 +72,10 @@ pub fn build(
 pub struct ResidentBuild {
     /// The meshlets, in [`Meshlets`]' layout, in build order (no ordering post-pass).
     pub meshlets: DeviceMeshlets,
-    /// Bounding sphere per meshlet: centre and radius, four f32 (the `bounds` kernel; padded to
-    /// stay conservative, see [`super::bounds`]).
-    pub spheres: wgpu::Buffer,
+    /// Culling bounds in the mesh-shader pass's split task layout: per meshlet three vec4 of f32,
+    /// (sphere centre, radius), (cone apex, cutoff), (cone axis, triangle count as bits)
+    /// ([`super::bounds::task_on_device`]; conservative: see [`super::bounds`]).
+    pub task: wgpu::Buffer,
     /// Upload, kernel and readback time (the readbacks are the control words the kernels' loops
     /// need), in seconds.
     pub timing: Timing,
@@ -82,8 +83,8 @@ pub struct ResidentBuild {
     pub seconds: f64,
 }
 
-/// Builds `mesh`'s meshlets with strategy `name` on `gpu` and leaves them, with their bounding
-/// spheres over `positions` (the mesh's positions on the device, three f32 per vertex), in device
+/// Builds `mesh`'s meshlets with strategy `name` on `gpu` and leaves them, with their culling
+/// bounds (sphere and normal cone) over `positions` (the mesh's positions on the device, three f32 per vertex), in device
 /// buffers for a renderer: nothing of the result comes back to the host unless the caller reads
 /// it ([`DeviceMeshlets::read`]). The meshlets equal [`build`]'s where `opts` asks for no ordering
 /// post-pass (those run on the host, so they are not applied here). The strategy's own inputs
@@ -99,17 +100,11 @@ pub fn build_resident(
     let kind = gpu_kind(name)?;
     let t0 = Instant::now();
     let (meshlets, mut timing) = run_strategy(gpu, kind, mesh, limits, opts)?;
-    let (spheres, kernel) = spheres_on_device(
-        gpu,
-        positions,
-        &meshlets.meshlets,
-        &meshlets.vertices,
-        meshlets.count,
-    )?;
+    let (task, kernel) = task_on_device(gpu, positions, &meshlets)?;
     timing.kernel += kernel;
     Ok(ResidentBuild {
         meshlets,
-        spheres,
+        task,
         timing,
         seconds: t0.elapsed().as_secs_f64(),
     })
@@ -147,17 +142,11 @@ pub fn build_on_device(
         false,
     )?;
     let mut timing = r.timing;
-    let (spheres, kernel) = spheres_on_device(
-        gpu,
-        mesh.positions,
-        &meshlets.meshlets,
-        &meshlets.vertices,
-        meshlets.count,
-    )?;
+    let (task, kernel) = task_on_device(gpu, mesh.positions, &meshlets)?;
     timing.kernel += kernel;
     Ok(ResidentBuild {
         meshlets,
-        spheres,
+        task,
         timing,
         seconds: t0.elapsed().as_secs_f64(),
     })

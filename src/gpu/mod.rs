@@ -13,14 +13,14 @@
 //! | [`capacity`] | `capacity.wgsl` | `strategy::kmedoids::capacity::assign_capacity` |
 //! | [`grow`] | `grow.wgsl` | `strategy::grow` (`bsphere-parallel`) |
 //! | [`assemble`] | `assemble.wgsl` | `meshlet::assemble` (meshlets from a clustering) |
-//! | [`bounds`] | `bounds.wgsl` | [`bounds::sphere_f32`], checked against `meshlet::bounds` |
+//! | [`bounds`] | `bounds.wgsl` | [`bounds::sphere_f32`], checked against `meshlet::bounds`; the cones of `task_bounds` checked conservative (`meshlet::bounds::check_cones`) |
 //! | [`select`] | `select.wgsl` | `lod::select` |
 //! | `scan` | `scan.wgsl` | a prefix sum (used by the others) |
 //! | [`copy`] | `copy.wgsl` | none: the bandwidth probe of `bench gpu` |
 //!
 //! [`build::build`] builds meshlets on the GPU with any strategy whose every step is a kernel
-//! (`meshletlab build --device gpu`); [`build::build_resident`] leaves them, with their bounding
-//! spheres, in device buffers for a renderer, and [`build::build_on_device`] builds them from a
+//! (`meshletlab build --device gpu`); [`build::build_resident`] leaves them, with their culling
+//! bounds (sphere and cone), in device buffers for a renderer, and [`build::build_on_device`] builds them from a
 //! mesh already on the device ([`DeviceMesh`]: an engine's vertex and index buffers);
 //! `examples/gpu_draw.rs` draws from them with no readback in between.
 //!

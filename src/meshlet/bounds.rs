@@ -320,6 +320,38 @@ fn normal_cone(tris: &[[DVec3; 3]], sphere: Sphere) -> Cone {
     Cone::NEVER
 }
 
+/// Checks normal cones for conservativeness from 27 cameras on a grid around and inside the mesh's
+/// box: `(culls, violations)`, the (meshlet, camera) pairs a cone culled ([`Cone::culls`], in f32
+/// as a shader tests it) and, among their triangles, those facing the camera in f64. A triangle
+/// seen edge-on within f32 resolution (|cos| < 1e-6) has no reliable facing, for a rasteriser
+/// either, and does not count.
+pub fn check_cones(mesh: &Mesh, ml: &Meshlets, cones: &[Cone]) -> (usize, usize) {
+    let (lo, hi) = mesh.bounding_box();
+    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+    let (mut culls, mut violations) = (0, 0);
+    for k in 0..27u32 {
+        let t = DVec3::new((k % 3) as f64, ((k / 3) % 3) as f64, (k / 9) as f64) / 2.0;
+        let cam = (lo - (hi - lo) * 0.5) + (hi - lo) * 2.0 * t;
+        let camf = cam.as_vec3().to_array();
+        for (i, cone) in cones.iter().enumerate() {
+            if !cone.culls(camf) {
+                continue;
+            }
+            culls += 1;
+            for tri in ml.global_triangles(i) {
+                let p = tri.map(|v| dvec(mesh.positions[v as usize]));
+                let n = (p[1] - p[0]).cross(p[2] - p[0]);
+                // The camera as the cone saw it (f32).
+                let v = p[0] - cam.as_vec3().as_dvec3();
+                if n.dot(v) < -1e-6 * n.length() * v.length() {
+                    violations += 1;
+                }
+            }
+        }
+    }
+    (culls, violations)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
