@@ -3,12 +3,13 @@
 //   count                      triangles per group (atomic add)
 //   scan(toff)                 group -> first triangle slot (exclusive)
 //   place                      triangle ids into their group's slots (any order within a group)
-//   sort_count                 per group: members sorted by (key, id), distinct vertices counted
+//   sort_count                 per group: members sorted by (key, id) (each one's rank among
+//                              them), distinct vertices counted
 //   scan(voff), scan(mindex)   group -> first vertex; non-empty group -> meshlet index
 //   write                      per group: meshlet record, vertices in first-use order, local corners
 //
 // sort_count and write run one workgroup per group (a group fits the limits, so at most 256
-// triangles and 768 corners). The sort decides the order inside a group whatever order place left
+// triangles and 768 corners). The ranks decide the order inside a group whatever order place left
 // it in, and first use is the lowest corner holding a vertex: nothing depends on scheduling.
 // Integers only. A group over the limits is counted in counters[0] (the host refuses the result;
 // the strategies that feed this never make one).
@@ -53,6 +54,10 @@ var<workgroup> first: array<u32, CORNERS>;
 // Per corner: distinct vertices among the corners before it (the local index of a first use).
 var<workgroup> rank: array<u32, CORNERS>;
 var<workgroup> wn: u32;
+// First-use table: 1024 slots (2^10, hence the shift in the hash) for at most 768 corners.
+const TABLE: u32 = 1024u;
+var<workgroup> table_vertex: array<atomic<u32>, TABLE>;
+var<workgroup> table_first: array<atomic<u32>, TABLE>;
 
 @compute @workgroup_size(64)
 fn count(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -78,15 +83,34 @@ fn group_size(g: u32, lid: u32) -> u32 {
 }
 
 // Fills cv, first and rank for the n sorted triangles from slot s; returns the distinct vertices.
+// First uses through a hash table in workgroup memory: each corner inserts its vertex (linear
+// probing) and lowers the slot's corner to its own, so a slot ends holding the vertex's first
+// corner whatever the order of the threads (which slot a vertex lands in may vary; its first
+// corner does not).
 fn first_uses(s: u32, n: u32, lid: u32) -> u32 {
+    for (var h = lid; h < TABLE; h += 64u) {
+        atomicStore(&table_vertex[h], NONE);
+        atomicStore(&table_first[h], NONE);
+    }
     for (var i = lid; i < 3u * n; i += 64u) {
         cv[i] = idx(3u * members[s + i / 3u] + i % 3u);
     }
     workgroupBarrier();
     for (var i = lid; i < 3u * n; i += 64u) {
-        var j = 0u;
-        while (cv[j] != cv[i]) { j++; }
-        first[i] = j;
+        let v = cv[i];
+        var h = (v * 2654435761u) >> 22u;
+        loop {
+            let r = atomicCompareExchangeWeak(&table_vertex[h], NONE, v);
+            if (r.exchanged || r.old_value == v) { break; }
+            // A weak exchange may fail on an empty slot: try it again.
+            if (r.old_value != NONE) { h = (h + 1u) % TABLE; }
+        }
+        atomicMin(&table_first[h], i);
+        first[i] = h;
+    }
+    workgroupBarrier();
+    for (var i = lid; i < 3u * n; i += 64u) {
+        first[i] = atomicLoad(&table_first[first[i]]);
     }
     workgroupBarrier();
     if (lid == 0u) {
@@ -114,38 +138,20 @@ fn sort_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_i
         return;
     }
     let s = atomicLoad(&toff[g]);
-    for (var i = lid; i < SLOTS; i += 64u) {
-        if (i < n) {
-            st[i] = members[s + i];
-            sk[i] = key[st[i]];
-        } else {
-            st[i] = NONE;
-            sk[i] = NONE;
-        }
+    for (var i = lid; i < n; i += 64u) {
+        st[i] = members[s + i];
+        sk[i] = key[st[i]];
     }
     workgroupBarrier();
-    // Bitonic sort of (key, id) pairs, ascending; padding (NONE, NONE) sorts last.
-    for (var k = 2u; k <= SLOTS; k *= 2u) {
-        for (var j = k / 2u; j > 0u; j /= 2u) {
-            for (var i = lid; i < SLOTS; i += 64u) {
-                let l = i ^ j;
-                if (l > i) {
-                    let up = (i & k) == 0u;
-                    let after = sk[i] > sk[l] || (sk[i] == sk[l] && st[i] > st[l]);
-                    if (after == up) {
-                        let a = sk[i];
-                        sk[i] = sk[l];
-                        sk[l] = a;
-                        let b = st[i];
-                        st[i] = st[l];
-                        st[l] = b;
-                    }
-                }
-            }
-            workgroupBarrier();
+    // Each member's place is the number of members before it in (key, id) order: the pairs are
+    // distinct, so the places are too.
+    for (var i = lid; i < n; i += 64u) {
+        var r = 0u;
+        for (var j = 0u; j < n; j++) {
+            r += u32(sk[j] < sk[i] || (sk[j] == sk[i] && st[j] < st[i]));
         }
+        members[s + r] = st[i];
     }
-    for (var i = lid; i < n; i += 64u) { members[s + i] = st[i]; }
     storageBarrier();
     workgroupBarrier();
     let d = first_uses(s, n, lid);
