@@ -84,9 +84,9 @@ pub struct ResidentBuild {
 }
 
 /// Builds `mesh`'s meshlets with strategy `name` on `gpu` and leaves them, with their culling
-/// bounds (sphere and normal cone) over `positions` (the mesh's positions on the device, three f32 per vertex), in device
-/// buffers for a renderer: nothing of the result comes back to the host unless the caller reads
-/// it ([`DeviceMeshlets::read`]). The meshlets equal [`build`]'s where `opts` asks for no ordering
+/// bounds (sphere and normal cone) over `positions` (the mesh's positions on the device, three
+/// f32 per vertex), in device buffers for a renderer: nothing of the result comes back to the
+/// host unless the caller reads it ([`DeviceMeshlets::read`]). The meshlets equal [`build`]'s where `opts` asks for no ordering
 /// post-pass (those run on the host, so they are not applied here). The strategy's own inputs
 /// (the index buffer, the quantised positions) are still uploaded from `mesh`.
 pub fn build_resident(
@@ -99,7 +99,18 @@ pub fn build_resident(
 ) -> Result<ResidentBuild, GpuError> {
     let kind = gpu_kind(name)?;
     let t0 = Instant::now();
-    let (meshlets, mut timing) = run_strategy(gpu, kind, mesh, limits, opts)?;
+    let (meshlets, timing) = run_strategy(gpu, kind, mesh, limits, opts)?;
+    with_bounds(gpu, positions, meshlets, timing, t0)
+}
+
+/// The culling bounds of `meshlets` added on the device: the end of both resident builds.
+fn with_bounds(
+    gpu: &Gpu,
+    positions: &wgpu::Buffer,
+    meshlets: DeviceMeshlets,
+    mut timing: Timing,
+    t0: Instant,
+) -> Result<ResidentBuild, GpuError> {
     let (task, kernel) = task_on_device(gpu, positions, &meshlets)?;
     timing.kernel += kernel;
     Ok(ResidentBuild {
@@ -141,15 +152,7 @@ pub fn build_on_device(
         &opts.kmedoids,
         false,
     )?;
-    let mut timing = r.timing;
-    let (task, kernel) = task_on_device(gpu, mesh.positions, &meshlets)?;
-    timing.kernel += kernel;
-    Ok(ResidentBuild {
-        meshlets,
-        task,
-        timing,
-        seconds: t0.elapsed().as_secs_f64(),
-    })
+    with_bounds(gpu, mesh.positions, meshlets, r.timing, t0)
 }
 
 /// Runs strategy `kind` (one of [`GPU_STRATEGIES`]) with its meshlets assembled on the device and

@@ -356,10 +356,8 @@ pub fn cluster_capacity(
     })
 }
 
-/// Checks the mesh fits the k-medoids buffers (two words per triangle in one binding), then builds
-/// its adjacency on the GPU.
-fn adjacency(gpu: &Gpu, mesh: &Mesh) -> Result<(DeviceAdjacency, Timing), GpuError> {
-    let t = mesh.triangle_count();
+/// Checks that `t` triangles fit the k-medoids buffers (two words per triangle in one binding).
+fn check_triangles(t: usize) -> Result<(), GpuError> {
     if 2 * t > PART {
         return Err(GpuError::TooLarge {
             what: "k-medoids triangles",
@@ -367,6 +365,12 @@ fn adjacency(gpu: &Gpu, mesh: &Mesh) -> Result<(DeviceAdjacency, Timing), GpuErr
             max: PART / 2,
         });
     }
+    Ok(())
+}
+
+/// Checks the mesh fits the k-medoids buffers, then builds its adjacency on the GPU.
+fn adjacency(gpu: &Gpu, mesh: &Mesh) -> Result<(DeviceAdjacency, Timing), GpuError> {
+    check_triangles(mesh.triangle_count())?;
     AdjacencyKernels::new(gpu).build(gpu, mesh)
 }
 
@@ -403,13 +407,7 @@ pub fn cluster_flat_with(
         MeshSource::Host(m) => (m.triangle_count(), m.vertex_count()),
         MeshSource::Device(d) => (d.triangles, d.vertices),
     };
-    if 2 * t > PART {
-        return Err(GpuError::TooLarge {
-            what: "k-medoids triangles",
-            len: t,
-            max: PART / 2,
-        });
-    }
+    check_triangles(t)?;
     let (uploaded, upload) = timed(|| -> Result<_, GpuError> {
         Ok(match source {
             MeshSource::Host(m) => (
