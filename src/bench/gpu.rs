@@ -310,8 +310,9 @@ pub fn run(cfg: &Config) -> Result<()> {
         let dual_items = dual.items.len();
         drop((vt, host));
         pb.set_message(format!("{name} ({t} triangles): growers"));
-        let grow = growers(&g, m, &dual, cfg.limits, t <= cfg.one_thread_max, &one)
-            .with_context(|| format!("{name}: parallel grower"))?;
+        let (grow, grow_meshlets) =
+            growers(&g, m, &dual, cfg.limits, t <= cfg.one_thread_max, &one)
+                .with_context(|| format!("{name}: parallel grower"))?;
         drop(dual);
         pb.set_message(format!("{name} ({t} triangles): k-medoids, rayon"));
         let (cr, km_rayon) = secs(|| cluster(m, cfg.limits, Mode::Flat, &kc));
@@ -421,19 +422,12 @@ pub fn run(cfg: &Config) -> Result<()> {
             )?);
         }
         if t <= cfg.one_thread_max {
-            let cpu = grow::grow(
-                m,
-                &dual_graph(m, &vertex_triangles(m)),
-                cfg.limits,
-                grow::DEFAULT_SPACING,
-            )
-            .meshlets;
             resident.push(resident_builds(
                 &g,
                 "bsphere-parallel",
                 m,
                 cfg.limits,
-                &cpu,
+                &grow_meshlets,
             )?);
         }
         pb.finish_and_clear();
@@ -510,7 +504,8 @@ struct Floors {
 }
 
 /// The serial growers, meshoptimizer and the parallel grower (CPU one thread, rayon, GPU; the
-/// GPU's result checked identical) on one mesh.
+/// GPU's result checked identical) on one mesh, and the CPU grower's meshlets (the reference
+/// of the resident builds).
 fn growers(
     g: &Gpu,
     m: &Mesh,
@@ -518,7 +513,7 @@ fn growers(
     limits: Limits,
     small: bool,
     one: &rayon::ThreadPool,
-) -> Result<Vec<GrowRow>> {
+) -> Result<(Vec<GrowRow>, Meshlets)> {
     let mut out = Vec::new();
     for name in ["bsphere", "bsphere-coherent", "meshopt"] {
         let s = strategy::by_name(name, &strategy::Options::default())?;
@@ -555,7 +550,7 @@ fn growers(
             depth,
         ));
     }
-    Ok(out)
+    Ok((out, cpu.meshlets))
 }
 
 type Curve = (u32, f64, f64, f64, f64, f64);
