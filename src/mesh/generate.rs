@@ -7,8 +7,9 @@
 //! 100-400 ([`cad_part`]) and thin struts that touch only at shared vertices ([`strut_lattice`]),
 //! beside a smaller open terrain.
 
+use super::scene::{Instance, Scene};
 use super::{subdivide, Mesh};
-use glam::Vec3;
+use glam::{Mat4, Quat, Vec3};
 
 /// A named generated mesh.
 pub struct Generated {
@@ -97,6 +98,64 @@ pub fn named(name: &str) -> Option<Mesh> {
         "terrain" => terrain(160, s),
         _ => return None,
     })
+}
+
+/// The names `gen:NAME` accepts for scenes ([`named_scene`]); commands that draw one mesh get
+/// the scene baked ([`Scene::flatten`]).
+pub const SCENE_NAMES: &[&str] = &["scene-grid", "scene-small"];
+
+/// The generated scene called `name` (one of [`SCENE_NAMES`]); `None` for any other name.
+///
+/// - `scene-grid`: a 4 x 4 x 4 grid of interpenetrating noisy spheres (5120 triangles each,
+///   spaced at 0.7 of their extent, so from any view outside most of them are hidden), each
+///   rotated, every fifth mirrored and every seventh stretched unevenly, beside a knotted tube
+///   threaded through the grid: two meshes, 65 instances.
+/// - `scene-small`: the same rules on a 2 x 2 x 2 grid of 1280-triangle spheres (tests).
+pub fn named_scene(name: &str) -> Option<Scene> {
+    let (n, levels) = match name {
+        "scene-grid" => (4, 4),
+        "scene-small" => (2, 3),
+        _ => return None,
+    };
+    Some(sphere_grid(n, levels, NAMED_SEED))
+}
+
+/// `n`^3 noisy spheres (`levels` subdivisions) on a grid at 0.7 of their extent, plus one knotted
+/// tube through them; see [`named_scene`].
+pub fn sphere_grid(n: usize, levels: u32, seed: u64) -> Scene {
+    let sphere = noisy_sphere(levels, 0.15, seed);
+    let knot = knot_tube(80 * n, 12, seed);
+    // The spheres' extent is about 2 (radius 1 +- the noise): spacing 0.7 of it.
+    let spacing = 1.4;
+    let mut instances = Vec::with_capacity(n * n * n + 1);
+    for k in 0..n * n * n {
+        let (x, y, z) = (k % n, (k / n) % n, k / (n * n));
+        let h = splitmix64(seed ^ (k as u64 + 1));
+        let angle = |s: u32| ((h >> s) & 0xffff) as f32 / 65536.0 * std::f32::consts::TAU;
+        let rotation = Quat::from_euler(glam::EulerRot::XYZ, angle(0), angle(16), angle(32));
+        let mut scale = Vec3::ONE;
+        if k % 5 == 4 {
+            scale.x = -1.0;
+        }
+        if k % 7 == 6 {
+            scale *= Vec3::new(1.25, 0.8, 1.0);
+        }
+        let centre = (Vec3::new(x as f32, y as f32, z as f32) - (n as f32 - 1.0) / 2.0) * spacing;
+        instances.push(Instance {
+            mesh: 0,
+            transform: Mat4::from_scale_rotation_translation(scale, rotation, centre),
+        });
+    }
+    // The knot's extent is about 6 across: scaled to span the grid.
+    let span = spacing * n as f32 / 6.0;
+    instances.push(Instance {
+        mesh: 1,
+        transform: Mat4::from_scale(Vec3::splat(span)),
+    });
+    Scene {
+        meshes: vec![sphere, knot],
+        instances,
+    }
 }
 
 /// Revolves `profile` ((radius, height) points, bottom to top) around the z axis in `segments`

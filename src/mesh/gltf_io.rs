@@ -40,8 +40,9 @@ use std::path::{Path, PathBuf};
 use std::rc::Rc;
 
 /// Extensions this reader applies to the geometry it reads.
-pub const READ_EXTENSIONS: [&str; 3] = [
+pub const READ_EXTENSIONS: [&str; 4] = [
     "KHR_mesh_quantization",
+    INSTANCING,
     gltf_meshopt::EXTENSIONS[0],
     gltf_meshopt::EXTENSIONS[1],
 ];
@@ -73,7 +74,6 @@ fn check_required(root: &json::Root) -> Result<(), MeshErrorKind> {
         }
         let hint = match name.as_str() {
             DRACO => DRACO_HINT.to_string(),
-            "EXT_mesh_gpu_instancing" => "; re-export without GPU instancing (gltfpack without -mi)".into(),
             _ => format!(
                 " (it reads {}, and ignores extensions that change only materials, textures or lights)",
                 READ_EXTENSIONS.join(", ")
@@ -86,6 +86,10 @@ fn check_required(root: &json::Root) -> Result<(), MeshErrorKind> {
     }
     Ok(())
 }
+
+/// `EXT_mesh_gpu_instancing`: a node's mesh placed once per entry of its TRANSLATION, ROTATION
+/// and SCALE accessors, each after the node's own transform.
+pub const INSTANCING: &str = "EXT_mesh_gpu_instancing";
 
 /// Baked positions and indices may take at most this many times the file's bytes (plus
 /// [`EXPANSION_SLACK`]); real files instance far less, a hostile one could ask for any amount.
@@ -108,6 +112,44 @@ pub fn parse(data: &[u8], base: Option<&Path>) -> Result<(Vec<[f32; 3]>, Vec<u32
         doc.append_mesh(mesh, world, &mut positions, &mut indices)?;
     }
     Ok((positions, indices))
+}
+
+/// Each instanced mesh once (untransformed positions and indices, in the order instances first
+/// name them) and every instance as (index into that list, world transform): what a renderer
+/// draws per instance. The budget counts the meshes once and each instance's transform, so many
+/// instances of small meshes are not refused as [`parse`] (which bakes them all) would.
+#[allow(clippy::type_complexity)]
+pub fn parse_scene(
+    data: &[u8],
+    base: Option<&Path>,
+) -> Result<(Vec<(Vec<[f32; 3]>, Vec<u32>)>, Vec<(u32, Mat4)>), MeshErrorKind> {
+    let doc = Document::parse(data, base)?;
+    let instances = doc.instances()?;
+    let mut slot = vec![u32::MAX; doc.root.meshes.len()];
+    let mut unique = Vec::new();
+    let mut placed = Vec::with_capacity(instances.len());
+    for &(mesh, world) in &instances {
+        if !world.is_finite() {
+            return Err(parse_err(
+                format!("mesh {mesh}"),
+                "an instance's transform is not finite",
+            ));
+        }
+        if slot[mesh] == u32::MAX {
+            slot[mesh] = unique.len() as u32;
+            unique.push((mesh, Mat4::IDENTITY));
+        }
+        placed.push((slot[mesh], world));
+    }
+    doc.check_budget(&unique)?;
+    doc.spend(64 * placed.len() as u64, "instances")?;
+    let mut meshes = Vec::with_capacity(unique.len());
+    for (mesh, _) in unique {
+        let (mut positions, mut indices) = (Vec::new(), Vec::new());
+        doc.append_mesh(mesh, Mat4::IDENTITY, &mut positions, &mut indices)?;
+        meshes.push((positions, indices));
+    }
+    Ok((meshes, placed))
 }
 
 /// `COLOR_0` of every triangle primitive, in the order [`parse`] emits their vertices (RGBA; RGB gets
@@ -472,7 +514,10 @@ impl Document {
                         ));
                     }
                     instanced[m] = true;
-                    out.push((m, world));
+                    match self.gpu_instances(node, n)? {
+                        Some(each) => out.extend(each.into_iter().map(|t| (m, world * t))),
+                        None => out.push((m, world)),
+                    }
                 }
                 for c in node.children.iter().flatten().rev() {
                     stack.push((self.node_index(c.value(), &format!("node {n}"))?, world));
@@ -485,6 +530,66 @@ impl Document {
                 .map(|m| (m, Mat4::IDENTITY)),
         );
         Ok(out)
+    }
+
+    /// The transforms `EXT_mesh_gpu_instancing` gives node `n` (translation * rotation * scale
+    /// per entry), or `None` without the extension.
+    fn gpu_instances(
+        &self,
+        node: &json::Node,
+        n: usize,
+    ) -> Result<Option<Vec<Mat4>>, MeshErrorKind> {
+        let Some(ext) = node
+            .extensions
+            .as_ref()
+            .and_then(|e| e.others.get(INSTANCING))
+        else {
+            return Ok(None);
+        };
+        let loc = format!("node {n} {INSTANCING}");
+        let attributes = ext
+            .get("attributes")
+            .and_then(|a| a.as_object())
+            .ok_or_else(|| parse_err(&loc, "no attributes object"))?;
+        let mut count = None;
+        let mut read = |name: &str, ty: Type| -> Result<Option<Vec<f32>>, MeshErrorKind> {
+            let Some(index) = attributes.get(name) else {
+                return Ok(None);
+            };
+            let index = index
+                .as_u64()
+                .ok_or_else(|| parse_err(&loc, format!("{name} is not an accessor index")))?;
+            let acc = self.accessor(usize::try_from(index).unwrap_or(usize::MAX), &loc)?;
+            if acc.ty != ty {
+                return Err(parse_err(
+                    &loc,
+                    format!("{name} must be {ty:?}, found {:?}", acc.ty),
+                ));
+            }
+            if *count.get_or_insert(acc.count) != acc.count {
+                return Err(parse_err(&loc, "attributes of different counts"));
+            }
+            self.spend(acc.count as u64 * 64, &loc)?;
+            acc.read_f32(type_len(ty)).map(Some)
+        };
+        let t = read("TRANSLATION", Type::Vec3)?;
+        let r = read("ROTATION", Type::Vec4)?;
+        let s = read("SCALE", Type::Vec3)?;
+        let count = count.ok_or_else(|| parse_err(&loc, "no TRANSLATION, ROTATION or SCALE"))?;
+        let at3 = |v: &Option<Vec<f32>>, i: usize, d: f32| {
+            v.as_ref()
+                .map_or(Vec3::splat(d), |v| Vec3::from_slice(&v[3 * i..3 * i + 3]))
+        };
+        Ok(Some(
+            (0..count)
+                .map(|i| {
+                    let q = r.as_ref().map_or(Quat::IDENTITY, |r| {
+                        Quat::from_slice(&r[4 * i..4 * i + 4]).normalize()
+                    });
+                    Mat4::from_scale_rotation_translation(at3(&s, i, 1.0), q, at3(&t, i, 0.0))
+                })
+                .collect(),
+        ))
     }
 
     fn node_index(&self, n: usize, loc: &str) -> Result<usize, MeshErrorKind> {

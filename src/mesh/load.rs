@@ -1,7 +1,8 @@
 //! Format dispatch by file extension, with in-process zstd decompression of `*.zst`.
 
 use super::error::{MeshError, MeshErrorKind};
-use super::{gltf_io, obj, ply, stl, Mesh};
+use super::scene::{Instance, Scene};
+use super::{generate, gltf_io, obj, ply, stl, Mesh};
 use std::path::Path;
 
 /// A supported mesh container.
@@ -49,10 +50,15 @@ pub const GENERATED_PREFIX: &str = "gen:";
 /// Loads and validates a mesh from a file, or generates one named `gen:NAME`. Errors name the file.
 pub fn load(path: &Path) -> Result<Mesh, MeshError> {
     if let Some(name) = path.to_str().and_then(|p| p.strip_prefix(GENERATED_PREFIX)) {
-        return super::generate::named(name).ok_or_else(|| {
+        if let Some(scene) = generate::named_scene(name) {
+            return Ok(scene.flatten());
+        }
+        return generate::named(name).ok_or_else(|| {
             MeshError::new(
                 path,
-                MeshErrorKind::UnknownGenerated(super::generate::NAMES.join(", ")),
+                MeshErrorKind::UnknownGenerated(
+                    [generate::NAMES, generate::SCENE_NAMES].concat().join(", "),
+                ),
             )
         });
     }
@@ -83,6 +89,50 @@ pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
     }
     .map_err(err)?;
     Mesh::new(positions, indices, path)
+}
+
+/// Loads a scene: a glTF file's meshes and instances, a generated scene (`gen:NAME`, one of
+/// [`generate::SCENE_NAMES`]), or any other mesh placed once. Errors name the file.
+pub fn load_scene(path: &Path) -> Result<Scene, MeshError> {
+    if let Some(name) = path.to_str().and_then(|p| p.strip_prefix(GENERATED_PREFIX)) {
+        if let Some(scene) = generate::named_scene(name) {
+            return Ok(scene);
+        }
+        return load(path).map(Scene::single);
+    }
+    let gltf = matches!(Format::of(path), Some((Format::Gltf | Format::Glb, _)));
+    if !gltf {
+        return load(path).map(Scene::single);
+    }
+    let bytes = std::fs::read(path).map_err(|e| MeshError::new(path, MeshErrorKind::Io(e)))?;
+    scene_from_bytes(&bytes, path)
+}
+
+/// [`load_scene`] of a glTF file's bytes (`path` labels errors and resolves external buffers).
+pub fn scene_from_bytes(bytes: &[u8], path: &Path) -> Result<Scene, MeshError> {
+    let err = |k| MeshError::new(path, k);
+    let Some((Format::Gltf | Format::Glb, zst)) = Format::of(path) else {
+        return load_bytes(bytes, path).map(Scene::single);
+    };
+    let owned;
+    let data: &[u8] = if zst {
+        owned = decompress(bytes).map_err(err)?;
+        &owned
+    } else {
+        bytes
+    };
+    let (meshes, instances) = gltf_io::parse_scene(data, path.parent()).map_err(err)?;
+    let meshes = meshes
+        .into_iter()
+        .map(|(p, i)| Mesh::new(p, i, path))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Scene {
+        meshes,
+        instances: instances
+            .into_iter()
+            .map(|(mesh, transform)| Instance { mesh, transform })
+            .collect(),
+    })
 }
 
 /// A `.zst` input may decompress to at most this many times its size (plus [`ZSTD_SLACK`]). Real

@@ -13,6 +13,7 @@ mod gltf_meshopt;
 mod load;
 mod obj;
 pub mod ply;
+pub mod scene;
 mod stats;
 pub mod stl;
 pub mod subdivide;
@@ -21,8 +22,10 @@ mod tokens;
 
 pub use error::{MeshError, MeshErrorKind};
 pub use load::{
-    decompress, load, load_bytes, save_ply, Format, GENERATED_PREFIX, MAX_ZSTD_RATIO, ZSTD_SLACK,
+    decompress, load, load_bytes, load_scene, save_ply, scene_from_bytes, Format, GENERATED_PREFIX,
+    MAX_ZSTD_RATIO, ZSTD_SLACK,
 };
+pub use scene::{Instance, Scene};
 pub use stats::MeshStats;
 
 use glam::Vec3;
