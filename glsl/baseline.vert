@@ -7,6 +7,7 @@ layout(location = 0) in vec3 in_position;
 layout(location = 0) out vec3 world;
 
 void main() {
-    gl_Position = pc.view_proj * vec4(in_position, 1.0);
-    world = in_position;
+    vec3 p = to_world(in_position);
+    gl_Position = pc.view_proj * vec4(p, 1.0);
+    world = p;
 }

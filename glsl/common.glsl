@@ -11,8 +11,12 @@ layout(push_constant) uniform Push {
     vec4 box_min;
     vec4 box_step;
     uint meshlet_count;
-    // FLAG_FRUSTUM, FLAG_CONE, FLAG_UNLIT (shade.frag), FLAG_RECORD_IDS (the LOD task shader).
+    // FLAG_FRUSTUM, FLAG_CONE, FLAG_UNLIT (shade.frag), FLAG_RECORD_IDS (the LOD task shader),
+    // FLAG_INSTANCED.
     uint flags;
+    // Instanced passes: the instance drawn, and its mesh's first meshlet.
+    uint instance;
+    uint meshlet_first;
 } pc;
 
 layout(std430, set = 0, binding = BINDING_POSITIONS) readonly buffer Positions { float positions[]; };
@@ -20,4 +24,27 @@ layout(std430, set = 0, binding = BINDING_POSITIONS) readonly buffer Positions {
 layout(std430, set = 0, binding = BINDING_COUNTERS) buffer Counters { uint counters[]; };
 
 vec3 position(uint v) { return vec3(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]); }
+
+// Per instance: object-to-world rows, world-to-object rows, (largest stretch, 0, 0, 0).
+struct Instance { vec4 to_world[3]; vec4 to_object[3]; vec4 extra; };
+layout(std430, set = 0, binding = BINDING_INSTANCES) readonly buffer Instances { Instance instances[]; };
+
+bool instanced() { return (pc.flags & FLAG_INSTANCED) != 0u; }
+
+// An object-space point in world space: the same expression in every pipeline, so the mesh and
+// vertex pipelines place a vertex identically.
+vec3 to_world(vec3 p) {
+    if (!instanced()) { return p; }
+    Instance s = instances[pc.instance];
+    vec4 q = vec4(p, 1.0);
+    return vec3(dot(s.to_world[0], q), dot(s.to_world[1], q), dot(s.to_world[2], q));
+}
+
+// The camera in the space the bounds are in (the instance's object space when instanced).
+vec3 eye() {
+    if (!instanced()) { return pc.camera.xyz; }
+    Instance s = instances[pc.instance];
+    vec4 q = vec4(pc.camera.xyz, 1.0);
+    return vec3(dot(s.to_object[0], q), dot(s.to_object[1], q), dot(s.to_object[2], q));
+}
 

@@ -12,8 +12,10 @@ vec4 frustum_plane(int i) {
     return planes[i];
 }
 
-// Sphere entirely outside one of the six clip planes.
+// Sphere entirely outside one of the six clip planes. An instance's sphere moves to world space
+// with its radius scaled by the instance's largest stretch (rounded up on the host).
 bool sphere_outside(vec4 s) {
+    if (instanced()) { s = vec4(to_world(s.xyz), s.w * instances[pc.instance].extra.x * 1.00001); }
     for (int i = 0; i < 6; i++) {
         vec4 p = frustum_plane(i);
         if (dot(p.xyz, s.xyz) + p.w < -s.w * length(p.xyz) * 1.00001 - slack(p, s.xyz)) { return true; }
@@ -23,6 +25,7 @@ bool sphere_outside(vec4 s) {
 
 // Box (centre, half extent) entirely outside one of the six clip planes.
 bool box_outside(vec3 c, vec3 h) {
+    if (instanced()) { return sphere_outside(vec4(c, length(h) * 1.00001)); }
     for (int i = 0; i < 6; i++) {
         vec4 p = frustum_plane(i);
         if (dot(p.xyz, c) + p.w < -dot(abs(p.xyz), h) * 1.00001 - slack(p, c)) { return true; }
@@ -30,10 +33,12 @@ bool box_outside(vec3 c, vec3 h) {
     return false;
 }
 
-// meshletlab::meshlet::Cone::culls, the same f32 expression.
+// meshletlab::meshlet::Cone::culls, the same f32 expression. An instance's cone is tested in its
+// object space (eye()): whether a triangle faces the camera survives any invertible affine map
+// once mirrored instances flip their front face.
 bool apex_backfacing(vec4 apex_cutoff, vec3 axis) {
     if (apex_cutoff.w >= 1.0) { return false; }
-    vec3 d = apex_cutoff.xyz - pc.camera.xyz;
+    vec3 d = apex_cutoff.xyz - eye();
     float len = length(d);
     return len > 0.0 && dot(d, axis) >= apex_cutoff.w * len;
 }
@@ -41,7 +46,7 @@ bool apex_backfacing(vec4 apex_cutoff, vec3 axis) {
 // meshlet::descriptor::sphere_cone_backfacing: no apex, so meshoptimizer's sphere-centre test.
 bool sphere_backfacing(vec3 c, float r, vec3 axis, float cutoff) {
     if (cutoff >= 1.0) { return false; }
-    vec3 d = c - pc.camera.xyz;
+    vec3 d = c - eye();
     float len = length(d);
     return dot(d, axis) > cutoff * len + r + 1e-5 * len;
 }

@@ -334,3 +334,113 @@ fn the_validation_layer_counts_a_deliberate_misuse() {
         "not the expected message: {first:#?}"
     );
 }
+
+/// An instanced scene (`gen:scene-small`: nine instances of two meshes, one mirrored, one
+/// stretched unevenly) drawn per instance: the same samples as the vertex pipeline, culling that
+/// removes nothing visible, counters that add up over the instances, and, against the scene baked
+/// into one mesh, the same picture (a wrong front face or transform would show other surfaces).
+#[test]
+fn an_instanced_scene_draws_what_its_baked_mesh_draws() {
+    use meshletlab::mesh::{load_scene, Instance, Scene};
+    let ctx = Context::new(true).expect("lavapipe with VK_EXT_mesh_shader (make setup)");
+    let small = load_scene("gen:scene-small".as_ref()).unwrap();
+    assert!(small.instances.iter().any(Instance::mirrored));
+    // One mirrored instance alone: a wrong front face would show the far, inner side.
+    let mirrored = Scene {
+        meshes: vec![small.meshes[0].clone()],
+        instances: vec![Instance {
+            mesh: 0,
+            transform: glam::Mat4::from_scale_rotation_translation(
+                glam::Vec3::new(-1.0, 1.2, 0.9),
+                glam::Quat::from_rotation_y(0.4),
+                glam::Vec3::new(0.5, 0.0, 0.0),
+            ),
+        }],
+    };
+    for scene in [&small, &mirrored] {
+        let corners = scene.box_corners();
+        let mut views = Camera::random_views(&corners, 3, 7, 2.5);
+        views.extend(Camera::random_views(&corners, 2, 11, 0.5));
+        // From a corner, looking along one edge: the instances away from it are outside.
+        let (lo, hi) = corners.bounding_box();
+        views.extend((scene.instances.len() > 1).then_some(Camera {
+            eye: hi + (hi - lo) * 0.02,
+            target: hi - glam::Vec3::X * (hi - lo).x,
+            near: 0.01,
+            far: 100.0,
+        }));
+        let ml: Vec<Meshlets> = scene
+            .meshes
+            .iter()
+            .map(|m| meshlets(m, "meshopt", Limits::DEFAULT))
+            .collect();
+        let total: u32 = scene
+            .instances
+            .iter()
+            .map(|i| ml[i.mesh as usize].len() as u32)
+            .sum();
+        let pass = Pass::instanced(&ctx, scene, &ml).unwrap();
+        assert_eq!(pass.instance_count(), scene.instances.len());
+        let baked = scene.flatten();
+        let baked_pass =
+            Pass::new(&ctx, &baked, &meshlets(&baked, "meshopt", Limits::DEFAULT)).unwrap();
+        let (mut culled, mut culled_instances) = (0, 0);
+        for (i, v) in views.iter().enumerate() {
+            let a = pass.render(v, MESH_CULL, Shading::Unlit).unwrap();
+            let b = pass.render(v, Pipeline::Vertex, Shading::Unlit).unwrap();
+            assert_eq!(
+                differing_pixels(&a.pixels, &b.pixels),
+                0,
+                "view {i}: coverage differs"
+            );
+            let a = pass.render(v, MESH_CULL, Shading::Lit).unwrap();
+            let c = pass.render(v, MESH_NO_CULL, Shading::Lit).unwrap();
+            assert_eq!(
+                differing_pixels(&a.pixels, &c.pixels),
+                0,
+                "view {i}: culling changed the image"
+            );
+            assert_eq!(
+                (c.culled_frustum, c.culled_cone, c.culled_instances, c.drawn),
+                (0, 0, 0, total)
+            );
+            assert!(a.drawn + a.culled_frustum + a.culled_cone <= total);
+            culled += a.culled_frustum + a.culled_cone;
+            culled_instances += a.culled_instances;
+            // The baked mesh went through f32 transforms on the CPU, the instances on the GPU:
+            // last-bit differences move silhouettes by a pixel here and there and, where
+            // triangles cross the near plane, shade a few percent of the pixels a few levels
+            // apart. A wrong front face or transform changes the surface seen: far more pixels
+            // by far more.
+            let d = baked_pass.render(v, MESH_NO_CULL, Shading::Lit).unwrap();
+            let n = c
+                .pixels
+                .chunks_exact(4)
+                .zip(d.pixels.chunks_exact(4))
+                .filter(|(x, y)| x.iter().zip(y.iter()).any(|(p, q)| p.abs_diff(*q) > 24))
+                .count();
+            let covered = d
+                .pixels
+                .chunks_exact(4)
+                .filter(|p| p[..3] != d.pixels[..3])
+                .count();
+            assert!(
+                covered > 1000,
+                "view {i}: the scene is hardly in the picture"
+            );
+            assert!(
+                n * 200 < covered,
+                "view {i}: {n} of {covered} pixels differ from the baked scene"
+            );
+        }
+        assert!(culled > 0, "nothing culled");
+        if scene.instances.len() > 1 {
+            assert!(
+                culled_instances > 0,
+                "no instance left the frustum in the close views"
+            );
+        }
+    }
+    let (errors, first) = ctx.validation.as_ref().unwrap().errors();
+    assert_eq!(errors, 0, "validation layer errors: {first:#?}");
+}

@@ -265,6 +265,14 @@ fn load(path: &Path, quiet: bool) -> Result<Mesh> {
     Ok(m?)
 }
 
+/// [`mesh::load_scene`] behind a spinner.
+fn load_scene(path: &Path, quiet: bool) -> Result<mesh::Scene> {
+    let pb = spinner(quiet, format!("loading {}", path.display()));
+    let s = mesh::load_scene(path);
+    pb.finish_and_clear();
+    Ok(s?)
+}
+
 fn strategies(spec: &str, opts: &Options) -> Result<Vec<Box<dyn Strategy>>> {
     if spec == "all" {
         return Ok(strategy::all(opts));

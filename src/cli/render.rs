@@ -1,8 +1,9 @@
 //! `meshletlab render`: task + mesh shaders beside the vertex pipeline from seeded random views.
 
-use super::{build_validated, load, StrategyArgs};
+use super::{build_validated, load, load_scene, StrategyArgs};
 use crate::compress::file::{CompressedFile, Format as CompressedFormat};
 use crate::lod::flat::Flat;
+use crate::mesh::Scene;
 use crate::meshlet::descriptor::Format;
 use crate::render::{Camera, Context, Pass, Pipeline, Shading, HEIGHT, WIDTH};
 use anyhow::{bail, Context as _, Result};
@@ -98,7 +99,11 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
     }
     let name = &a.strategy;
     crate::strategy::by_name(name, &a.args.options())?;
-    let m = load(&a.mesh, quiet)?;
+    let scene = load_scene(&a.mesh, quiet)?;
+    if scene.is_instanced() {
+        return run_scene(a, scene, quiet);
+    }
+    let m = scene.meshes.into_iter().next().expect("one mesh");
     let ml = build_validated(&m, &a.mesh, name, &a.args)?;
     let ctx = Context::new(a.validate)?;
     let pass = Pass::with_format(&ctx, &m, &ml, a.descriptor)
@@ -167,6 +172,120 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
             "meshlets": ml.len(),
             "descriptor": a.descriptor.to_string(),
             "device_bytes_per_triangle": bytes_per_triangle,
+        });
+        print_json(out, &ctx, cull, &a, &validation_errors, &rows)?;
+    }
+    if let (Some(p), false) = (&a.output, a.json) {
+        println!("wrote {}", p.display());
+    }
+    report_validation(validation_errors, a.json)
+}
+
+/// One view of an instanced scene.
+#[derive(serde::Serialize)]
+struct SceneRow {
+    view: usize,
+    mesh_ms: f64,
+    vertex_ms: f64,
+    instances_culled_frustum: u32,
+    meshlets_culled_frustum: u32,
+    meshlets_culled_backface: u32,
+    meshlets_drawn: u32,
+    mesh_primitives_generated: Option<u64>,
+}
+
+/// `render` of an instanced scene: meshlets built once per mesh, drawn once per instance.
+fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
+    if a.descriptor != Format::Split {
+        bail!("an instanced scene is drawn in the split descriptor layout only");
+    }
+    let name = &a.strategy;
+    let pb = super::spinner(
+        quiet || a.json,
+        format!("building {name} meshlets per mesh"),
+    );
+    let meshlets = scene
+        .meshes
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            build_validated(m, &a.mesh, name, &a.args).with_context(|| format!("mesh {i}"))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    pb.finish_and_clear();
+    let built: usize = meshlets.iter().map(|m| m.len()).sum();
+    let per_instance: usize = scene
+        .instances
+        .iter()
+        .map(|i| meshlets[i.mesh as usize].len())
+        .sum();
+    let ctx = Context::new(a.validate)?;
+    let pass = Pass::instanced(&ctx, &scene, &meshlets)
+        .with_context(|| format!("{}: {name}", a.mesh.display()))?;
+    if !a.json {
+        println!(
+            "{}: {} meshes, {} instances: {} triangles built, {} drawn; {name}: {built} meshlets built, {per_instance} drawn over the instances; device: {}",
+            a.mesh.display(),
+            scene.meshes.len(),
+            scene.instances.len(),
+            scene.triangles_built(),
+            scene.triangles_drawn(),
+            ctx.name
+        );
+    }
+    let cull = !a.no_cull;
+    let how = Pipeline::Mesh {
+        frustum: cull,
+        cone: cull,
+        colour_ids: false,
+    };
+    let (views, _) = cameras(&a, &scene.box_corners());
+    let mut rows = Vec::new();
+    for (i, cam) in views.iter().enumerate() {
+        let f = pass.render(cam, how, Shading::Lit)?;
+        let v = pass.render(cam, Pipeline::Vertex, Shading::Lit)?;
+        let row = SceneRow {
+            view: i,
+            mesh_ms: f.gpu_ns * 1e-6,
+            vertex_ms: v.gpu_ns * 1e-6,
+            instances_culled_frustum: f.culled_instances,
+            meshlets_culled_frustum: f.culled_frustum,
+            meshlets_culled_backface: f.culled_cone,
+            meshlets_drawn: f.drawn,
+            mesh_primitives_generated: f.queries.map(|q| q.primitives),
+        };
+        if !a.json {
+            println!(
+                "view {i}: mesh shaders {:8.3} ms  vertex pipeline {:8.3} ms  instances culled {}  meshlets culled: frustum {}  backface {}  drawn {}",
+                row.mesh_ms,
+                row.vertex_ms,
+                row.instances_culled_frustum,
+                row.meshlets_culled_frustum,
+                row.meshlets_culled_backface,
+                row.meshlets_drawn
+            );
+        }
+        rows.push(row);
+        if i == 0 {
+            if let Some(p) = &a.output {
+                crate::render::write_meshlet_png(&pass, cam, cull, p)?;
+            }
+        }
+    }
+    let validation_errors = ctx.validation.as_ref().map(|v| v.errors());
+    if a.json {
+        let out = serde_json::json!({
+            "mesh": a.mesh.display().to_string(),
+            "meshes": scene.meshes.len(),
+            "instances": scene.instances.len(),
+            "triangles_built": scene.triangles_built(),
+            "triangles_drawn": scene.triangles_drawn(),
+            "strategy": name,
+            "limits": a.args.limits.to_string(),
+            "meshlets_built": built,
+            "meshlets_over_instances": per_instance,
+            "descriptor": a.descriptor.to_string(),
+            "device_bytes": pass.device_bytes(),
         });
         print_json(out, &ctx, cull, &a, &validation_errors, &rows)?;
     }

@@ -115,11 +115,11 @@ impl Scene {
         out
     }
 
-    /// The world-space box of every instance's (transformed) mesh box.
-    pub fn bounding_box(&self) -> (Vec3, Vec3) {
+    /// The corners of every instance's (transformed) mesh box, as a mesh of one triangle: what
+    /// cameras are framed on, without baking the scene.
+    pub fn box_corners(&self) -> Mesh {
         let boxes: Vec<(Vec3, Vec3)> = self.meshes.iter().map(Mesh::bounding_box).collect();
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        let mut positions = Vec::with_capacity(8 * self.instances.len());
         for inst in &self.instances {
             let (a, b) = boxes[inst.mesh as usize];
             for k in 0..8 {
@@ -128,12 +128,13 @@ impl Scene {
                     if k & 2 == 0 { a.y } else { b.y },
                     if k & 4 == 0 { a.z } else { b.z },
                 );
-                let w = inst.transform.transform_point3(corner);
-                lo = lo.min(w);
-                hi = hi.max(w);
+                positions.push(inst.transform.transform_point3(corner).to_array());
             }
         }
-        (lo, hi)
+        Mesh {
+            positions,
+            indices: vec![0, 1, 2],
+        }
     }
 }
 

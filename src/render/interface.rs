@@ -8,7 +8,7 @@
 
 /// Storage bindings of descriptor set 0, in binding order (the GLSL names them `BINDING_<NAME>`
 /// in upper case).
-pub const BINDINGS: [&str; 8] = [
+pub const BINDINGS: [&str; 9] = [
     // f32 x 3 per vertex (also the baseline's vertex buffer).
     "positions",
     // Meshlet descriptors, or a compressed format's per-meshlet offsets.
@@ -25,6 +25,9 @@ pub const BINDINGS: [&str; 8] = [
     "lod_records",
     // A LOD pass's view (`lod::flat::ViewData`).
     "lod_view",
+    // Instanced passes: per instance, object-to-world rows, world-to-object rows and its largest
+    // stretch (`render::pass::InstanceRecord`).
+    "instances",
 ];
 
 /// Binding of `name` in [`BINDINGS`] (a build-time constant where used in consts).
@@ -62,6 +65,9 @@ pub const FLAG_CONE: u32 = 1 << 1;
 pub const FLAG_UNLIT: u32 = 1 << 2;
 /// Push-constant `flags`: the LOD task shader records each drawn meshlet's bit after the counters.
 pub const FLAG_RECORD_IDS: u32 = 1 << 3;
+/// Push-constant `flags`: positions and bounds are in the object space of instance
+/// `pc.instance` (an instanced pass); without it they are world positions.
+pub const FLAG_INSTANCED: u32 = 1 << 4;
 
 /// Counter slot: meshlets culled by the frustum.
 pub const COUNTER_CULLED_FRUSTUM: usize = 0;
@@ -95,6 +101,7 @@ pub fn glsl_header() -> String {
         ("FLAG_CONE", FLAG_CONE),
         ("FLAG_UNLIT", FLAG_UNLIT),
         ("FLAG_RECORD_IDS", FLAG_RECORD_IDS),
+        ("FLAG_INSTANCED", FLAG_INSTANCED),
     ];
     for (name, v) in flags {
         s += &format!("const uint {name} = {v}u;\n");

@@ -46,6 +46,33 @@ impl Pass<'_> {
                 } else {
                     0
                 },
+            instance: 0,
+            meshlet_first: 0,
+        };
+        // One draw per instance the frustum meets (instanced passes), else one of everything.
+        let view_proj = camera.view_proj(WIDTH as f32 / HEIGHT as f32);
+        let mut culled_instances = 0;
+        let draws: Vec<(Push, u32, u32, bool)> = match &self.draws {
+            None => vec![(push, 0, self.index_count, false)],
+            Some(draws) => draws
+                .iter()
+                .filter(|d| {
+                    let out = flags & FLAG_FRUSTUM != 0
+                        && instances::outside_frustum(view_proj, d.sphere);
+                    culled_instances += u32::from(out);
+                    !out
+                })
+                .map(|d| {
+                    let p = Push {
+                        meshlet_count: d.meshlet_count,
+                        flags: push.flags | FLAG_INSTANCED,
+                        instance: d.instance,
+                        meshlet_first: d.meshlet_first,
+                        ..push
+                    };
+                    (p, d.index_first, d.index_count, d.mirrored)
+                })
+                .collect(),
         };
         let [msaa, resolve, depth] = &self.targets;
         let (msaa, resolve, depth) = (
@@ -181,25 +208,43 @@ impl Pass<'_> {
                 &[self.set],
                 &[],
             );
-            d.cmd_push_constants(
-                cmd,
-                self.layout.get(),
-                vk::ShaderStageFlags::TASK_EXT
-                    | vk::ShaderStageFlags::MESH_EXT
-                    | vk::ShaderStageFlags::VERTEX
-                    | vk::ShaderStageFlags::FRAGMENT,
-                0,
-                bytemuck::bytes_of(&push),
-            );
-            if mesh {
-                ctx.mesh
-                    .cmd_draw_mesh_tasks(cmd, meshlet_count.div_ceil(TASK_GROUP), 1, 1);
-            } else if matches!(self.drawn, Drawn::Compressed(..)) {
-                d.cmd_draw(cmd, self.index_count, 1, 0, 0);
-            } else {
+            if !mesh && !matches!(self.drawn, Drawn::Compressed(..)) {
                 d.cmd_bind_vertex_buffers(cmd, 0, &[self.bindings.positions.buf], &[0]);
                 d.cmd_bind_index_buffer(cmd, self.index.buf, 0, vk::IndexType::UINT32);
-                d.cmd_draw_indexed(cmd, self.index_count, 1, 0, 0, 0);
+            }
+            for &(push, index_first, index_count, mirrored) in &draws {
+                d.cmd_set_front_face(
+                    cmd,
+                    if mirrored {
+                        vk::FrontFace::CLOCKWISE
+                    } else {
+                        vk::FrontFace::COUNTER_CLOCKWISE
+                    },
+                );
+                d.cmd_push_constants(
+                    cmd,
+                    self.layout.get(),
+                    vk::ShaderStageFlags::TASK_EXT
+                        | vk::ShaderStageFlags::MESH_EXT
+                        | vk::ShaderStageFlags::VERTEX
+                        | vk::ShaderStageFlags::FRAGMENT,
+                    0,
+                    bytemuck::bytes_of(&push),
+                );
+                if mesh {
+                    if push.meshlet_count > 0 {
+                        ctx.mesh.cmd_draw_mesh_tasks(
+                            cmd,
+                            push.meshlet_count.div_ceil(TASK_GROUP),
+                            1,
+                            1,
+                        );
+                    }
+                } else if matches!(self.drawn, Drawn::Compressed(..)) {
+                    d.cmd_draw(cmd, self.index_count, 1, 0, 0);
+                } else {
+                    d.cmd_draw_indexed(cmd, index_count, 1, index_first, 0, 0);
+                }
             }
             d.cmd_end_rendering(cmd);
             if let Some((stats, prims)) = mesh_queries {
@@ -290,6 +335,7 @@ impl Pass<'_> {
                 c[interface::COUNTER_TRIANGLES_CONE],
             ],
             not_selected: c[interface::COUNTER_NOT_SELECTED],
+            culled_instances,
             queries,
         })
     }

@@ -9,19 +9,22 @@ use super::{vk_err, Camera, RenderError, HEIGHT, WIDTH};
 use crate::lod::flat::{loaded, Flat, Query, ViewData};
 use crate::mesh::Mesh;
 use crate::meshlet::descriptor::{self, Format};
-use crate::meshlet::{Limits, Meshlets};
+use crate::meshlet::{Limits, Meshlet, Meshlets};
 use ash::vk;
 
 mod frame;
+mod instances;
 mod objects;
 mod setup;
+
+pub use instances::InstanceRecord;
 
 use objects::{pipeline, target};
 
 const SAMPLES: vk::SampleCountFlags = vk::SampleCountFlags::TYPE_4;
 const COLOR: vk::Format = vk::Format::R8G8B8A8_UNORM;
 const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
-use interface::{FLAG_CONE, FLAG_FRUSTUM, FLAG_RECORD_IDS, FLAG_UNLIT, TASK_GROUP};
+use interface::{FLAG_CONE, FLAG_FRUSTUM, FLAG_INSTANCED, FLAG_RECORD_IDS, FLAG_UNLIT, TASK_GROUP};
 
 /// Which pipeline draws, and how.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -85,6 +88,9 @@ pub struct Frame {
     pub culled_triangles: [u32; 2],
     /// LOD passes: loaded meshlets not on the cut for the view (0 otherwise).
     pub not_selected: u32,
+    /// Instanced passes: instances whose whole mesh is outside the frustum, not drawn (their
+    /// meshlets are in no other count).
+    pub culled_instances: u32,
     /// Mesh-pipeline queries, when the device has `meshShaderQueries` (lavapipe does).
     pub queries: Option<MeshQueries>,
 }
@@ -109,6 +115,8 @@ struct Push {
     box_step: [f32; 4],
     meshlet_count: u32,
     flags: u32,
+    instance: u32,
+    meshlet_first: u32,
 }
 
 /// Bytes of the task shader's counters; a LOD pass's drawn-id bitmap follows.
@@ -162,12 +170,13 @@ struct Bindings {
     counters: Buffer,
     lod_records: Buffer,
     lod_view: Buffer,
+    instances: Buffer,
 }
 
 impl Bindings {
     /// The field names, in declaration order.
     #[cfg(test)]
-    const NAMES: [&'static str; 8] = [
+    const NAMES: [&'static str; 9] = [
         "positions",
         "descriptors",
         "data",
@@ -176,10 +185,11 @@ impl Bindings {
         "counters",
         "lod_records",
         "lod_view",
+        "instances",
     ];
 
     /// The buffers in binding order.
-    fn in_order(&self) -> [&Buffer; 8] {
+    fn in_order(&self) -> [&Buffer; 9] {
         [
             &self.positions,
             &self.descriptors,
@@ -189,6 +199,7 @@ impl Bindings {
             &self.counters,
             &self.lod_records,
             &self.lod_view,
+            &self.instances,
         ]
     }
 }
@@ -204,6 +215,7 @@ struct Uploads {
     index: Buffer,
     lod_records: Buffer,
     lod_view: Buffer,
+    instances: Buffer,
 }
 
 /// What a pass holds on the device.
@@ -222,6 +234,8 @@ enum Source<'s> {
         ml: &'s Meshlets,
         format: Format,
         lod: Option<&'s Flat>,
+        /// Instanced passes: one record per instance (empty otherwise).
+        instances: &'s [InstanceRecord],
     },
     /// The upload, and whether laced wires' scans use subgroup operations.
     Compressed(&'s Upload, bool),
@@ -272,6 +286,8 @@ pub struct Pass<'a> {
     bindings: Bindings,
     index: Buffer,
     readback: Buffer,
+    /// Instanced passes: one draw per instance ([`Pass::instanced`]).
+    draws: Option<Vec<instances::Draw>>,
 }
 
 /// Vulkan has no empty buffers: an unused binding gets one zero vec4.
@@ -326,6 +342,7 @@ impl<'a> Pass<'a> {
                 ml,
                 format,
                 lod: None,
+                instances: &[],
             },
         )
     }
@@ -361,6 +378,7 @@ impl<'a> Pass<'a> {
                 ml: &flat.meshlets,
                 format: Format::Split,
                 lod: Some(flat),
+                instances: &[],
             },
         )
     }
@@ -371,13 +389,14 @@ impl<'a> Pass<'a> {
             v.0 <= Limits::DEFAULT.max_vertices as usize
                 && v.1 <= Limits::DEFAULT.max_triangles as usize
         };
-        let (mesh, ml, format, lod) = match source {
+        let (mesh, ml, format, lod, instances) = match source {
             Source::Descriptors {
                 mesh,
                 ml,
                 format,
                 lod,
-            } => (mesh, ml, format, lod),
+                instances,
+            } => (mesh, ml, format, lod, instances),
             Source::Compressed(up, subgroups) => {
                 return Self::build_compressed(ctx, up, small(up.max_counts), subgroups)
             }
@@ -416,6 +435,10 @@ impl<'a> Pass<'a> {
                 _ => ctx.upload(&[0u32; 4], storage)?,
             },
             lod_view: ctx.buffer(std::mem::size_of::<ViewData>() as u64, storage)?,
+            instances: match instances {
+                [] => ctx.upload(&[0u32; 4], storage)?,
+                r => ctx.upload(r, storage)?,
+            },
         };
         let lod_task = lod.map(|_| shader(Shader::LodTask));
         let modules = Modules {
@@ -485,6 +508,7 @@ impl<'a> Pass<'a> {
             index: ctx.upload(&dummy, vk::BufferUsageFlags::INDEX_BUFFER)?,
             lod_records: ctx.upload(&dummy, storage)?,
             lod_view: ctx.upload(&dummy, storage)?,
+            instances: ctx.upload(&dummy, storage)?,
         };
         let modules = Modules {
             task,

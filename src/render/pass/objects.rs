@@ -118,7 +118,12 @@ pub(super) fn pipeline(
     let blend = [vk::PipelineColorBlendAttachmentState::default()
         .color_write_mask(vk::ColorComponentFlags::RGBA)];
     let cb = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
-    let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+    // The front face is set per draw: a mirrored instance's is clockwise (core in Vulkan 1.3).
+    let dynamic = [
+        vk::DynamicState::VIEWPORT,
+        vk::DynamicState::SCISSOR,
+        vk::DynamicState::FRONT_FACE,
+    ];
     let dy = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
     let formats = [COLOR];
     let mut rendering = vk::PipelineRenderingCreateInfo::default()

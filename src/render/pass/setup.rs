@@ -42,6 +42,7 @@ impl<'a> Pass<'a> {
             index,
             lod_records,
             lod_view,
+            instances,
         } = up;
         let bindings = Bindings {
             positions,
@@ -52,6 +53,7 @@ impl<'a> Pass<'a> {
             counters,
             lod_records,
             lod_view,
+            instances,
         };
         let readback = ctx.buffer(
             WIDTH as u64 * HEIGHT as u64 * 4,
@@ -271,6 +273,7 @@ impl<'a> Pass<'a> {
             bindings,
             index,
             readback,
+            draws: None,
         })
     }
 }
