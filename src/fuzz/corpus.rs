@@ -140,6 +140,7 @@ impl Corpus {
             seeds.push(gltf(&pos, &quads, glb));
             seeds.push(gltf_quantised(&pos, &quads, glb));
             seeds.push(gltf_meshopt(&pos, &quads, glb));
+            seeds.push(gltf_instanced(&pos, &quads, glb));
         }
         for rich in [false, true] {
             seeds.push(stl_ascii(&pos, &quads, rich));
@@ -716,6 +717,92 @@ fn gltf(pos: &[[f32; 3]], quads: &[[u32; 4]], glb: bool) -> Seed {
         "buffers": [{"byteLength": bin.len()}]
     });
     gltf_seed("scene", doc, bin, floats, glb)
+}
+
+/// An instanced scene: mesh 0 placed by two nodes (one mirrored) and by a third node's
+/// `EXT_mesh_gpu_instancing` (three instances: f32 translations, normalised i16 rotations, f32
+/// scales), so both the baking reader and the scene reader see node and GPU instancing.
+fn gltf_instanced(pos: &[[f32; 3]], quads: &[[u32; 4]], glb: bool) -> Seed {
+    let mut bin = Vec::new();
+    let mut floats = Vec::new();
+    let mut push_f32 = |bin: &mut Vec<u8>, v: f32| {
+        floats.push(bin.len());
+        bin.extend_from_slice(&v.to_le_bytes());
+    };
+    for p in pos {
+        for &c in p {
+            push_f32(&mut bin, c);
+        }
+    }
+    let pos_len = bin.len();
+    let tris: Vec<u32> = quads
+        .iter()
+        .flat_map(|q| [q[0], q[1], q[2], q[0], q[2], q[3]])
+        .collect();
+    for t in &tris {
+        bin.extend_from_slice(&t.to_le_bytes());
+    }
+    let translations_at = bin.len();
+    for k in 0..3 {
+        for c in [2.0 * k as f32, 0.5, -1.0] {
+            push_f32(&mut bin, c);
+        }
+    }
+    let rotations_at = bin.len();
+    // Unit quaternions as normalised i16: identity, a quarter turn about y, a half turn about x.
+    for q in [[0i16, 0, 0, 32767], [0, 23170, 0, 23170], [32767, 0, 0, 0]] {
+        for c in q {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    let scales_at = bin.len();
+    for s in [[1.0f32, 1.0, 1.0], [0.5, 2.0, 1.0], [-1.0, 1.0, 1.0]] {
+        for c in s {
+            push_f32(&mut bin, c);
+        }
+    }
+    let end = bin.len();
+    let (lo, hi) = pos
+        .iter()
+        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(mut lo, mut hi), p| {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+            (lo, hi)
+        });
+    let doc = json!({
+        "asset": {"version": "2.0", "generator": "meshletlab fuzz seed"},
+        "extensionsUsed": ["EXT_mesh_gpu_instancing"],
+        "extensionsRequired": ["EXT_mesh_gpu_instancing"],
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1, 2]}],
+        "nodes": [
+            {"mesh": 0},
+            {"mesh": 0, "scale": [-1.0, 1.0, 1.0], "translation": [0.0, 3.0, 0.0]},
+            {"mesh": 0, "translation": [0.0, 0.0, 4.0], "extensions": {"EXT_mesh_gpu_instancing":
+                {"attributes": {"TRANSLATION": 2, "ROTATION": 3, "SCALE": 4}}}}
+        ],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "mode": 4}]}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": pos.len(), "type": "VEC3", "min": lo, "max": hi},
+            {"bufferView": 1, "componentType": 5125, "count": tris.len(), "type": "SCALAR"},
+            {"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC3"},
+            {"bufferView": 3, "componentType": 5122, "normalized": true, "count": 3, "type": "VEC4"},
+            {"bufferView": 4, "componentType": 5126, "count": 3, "type": "VEC3"}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": pos_len},
+            {"buffer": 0, "byteOffset": pos_len, "byteLength": translations_at - pos_len},
+            {"buffer": 0, "byteOffset": translations_at, "byteLength": rotations_at - translations_at},
+            {"buffer": 0, "byteOffset": rotations_at, "byteLength": scales_at - rotations_at},
+            {"buffer": 0, "byteOffset": scales_at, "byteLength": end - scales_at}
+        ],
+        "buffers": [{"byteLength": bin.len()}]
+    });
+    gltf_seed("instanced", doc, bin, floats, glb)
 }
 
 /// Pads `bin` with zeros to a multiple of 4 bytes (glTF aligns every view's start).
