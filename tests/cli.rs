@@ -656,3 +656,62 @@ fn kmedoids_regions_knob_reaches_kmedoids_parallel() {
     ]);
     assert!(!out.status.success());
 }
+
+#[test]
+fn an_instanced_scene_is_built_once_per_mesh_by_stats_export_and_render() {
+    let dir = common::scratch("scene-cli");
+    let scene = meshletlab::mesh::load_scene("gen:scene-small".as_ref()).unwrap();
+    let ml = |m: &meshletlab::mesh::Mesh| {
+        meshletlab::strategy::by_name("meshopt", &Default::default())
+            .unwrap()
+            .build(m, meshletlab::meshlet::Limits::DEFAULT)
+            .len()
+    };
+    let built: usize = scene.meshes.iter().map(ml).sum();
+    let over: usize = scene
+        .instances
+        .iter()
+        .map(|i| ml(&scene.meshes[i.mesh as usize]))
+        .sum();
+    let stats: serde_json::Value = serde_json::from_str(&ok(&[
+        "stats",
+        "-q",
+        "gen:scene-small",
+        "-s",
+        "meshopt",
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(stats["instances"], 9);
+    assert_eq!(stats["strategies"][0]["meshlets_built"], built);
+    assert_eq!(stats["strategies"][0]["meshlets_over_instances"], over);
+    assert_eq!(stats["per_mesh"].as_array().unwrap().len(), 2);
+    // Export keeps the instances; the file reads back as the same scene.
+    let out = dir.join("scene.glb");
+    ok(&[
+        "export",
+        "-q",
+        "gen:scene-small",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let back = meshletlab::mesh::load_scene(&out).unwrap();
+    assert_eq!((back.meshes.len(), back.instances.len()), (2, 9));
+    assert_eq!(back.triangles_drawn(), scene.triangles_drawn());
+    // Render draws each mesh's meshlets per instance.
+    let r: serde_json::Value = serde_json::from_str(&ok(&[
+        "render",
+        "-q",
+        "gen:scene-small",
+        "--views",
+        "2",
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(r["meshlets_built"], built);
+    assert_eq!(r["meshlets_over_instances"], over);
+    for v in r["views"].as_array().unwrap() {
+        let drawn = v["meshlets_drawn"].as_u64().unwrap();
+        assert!(drawn > 0 && drawn <= over as u64, "{v}");
+    }
+}

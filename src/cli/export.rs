@@ -1,6 +1,6 @@
 //! `meshletlab export`: meshlets as a glTF binary with one flat colour per meshlet.
 
-use super::{build_validated, build_validated_on_gpu, gpu_for, load};
+use super::{build_validated, build_validated_on_gpu, gpu_for, load_scene};
 use super::{Device, DeviceArgs, StrategyArgs};
 use anyhow::{Context, Result};
 use clap::Args;
@@ -9,7 +9,8 @@ use std::path::PathBuf;
 /// Arguments of `export`.
 #[derive(Args, Debug)]
 pub struct ExportArgs {
-    /// Mesh file.
+    /// Mesh file (an instanced glTF scene or `gen:` scene is written with one mesh per scene
+    /// mesh and one node per instance).
     mesh: PathBuf,
     /// Strategy name (`meshletlab --help` lists them, e.g. meshopt, kmedoids, partition).
     #[arg(short, long, default_value = "meshopt")]
@@ -29,11 +30,34 @@ pub(super) fn run(a: ExportArgs, quiet: bool) -> Result<()> {
         Device::Cpu => None,
         Device::Gpu => Some(gpu_for(&[&a.strategy])?),
     };
-    let m = load(&a.mesh, quiet)?;
-    let ml = match &gpu {
-        None => build_validated(&m, &a.mesh, &a.strategy, &a.args)?,
-        Some((gpu, ms)) => build_validated_on_gpu(gpu, *ms, &m, &a.mesh, &a.strategy, &a.args)?.0,
+    let scene = load_scene(&a.mesh, quiet)?;
+    let build = |m: &crate::mesh::Mesh| match &gpu {
+        None => build_validated(m, &a.mesh, &a.strategy, &a.args),
+        Some((gpu, ms)) => {
+            build_validated_on_gpu(gpu, *ms, m, &a.mesh, &a.strategy, &a.args).map(|b| b.0)
+        }
     };
+    if scene.is_instanced() {
+        // Each mesh's meshlets once, placed by one node per instance.
+        let meshlets = scene.meshes.iter().map(build).collect::<Result<Vec<_>>>()?;
+        let glb = crate::meshlet::export::glb_scene(&scene, &meshlets);
+        crate::atomic::write(&a.output, &glb)
+            .with_context(|| format!("cannot write {}", a.output.display()))?;
+        println!(
+            "{}: {} meshes, {} instances: {} meshlets built ({}, {}) -> {} ({:.1} KiB)",
+            a.mesh.display(),
+            scene.meshes.len(),
+            scene.instances.len(),
+            meshlets.iter().map(|m| m.len()).sum::<usize>(),
+            a.strategy,
+            a.args.limits,
+            a.output.display(),
+            glb.len() as f64 / 1024.0
+        );
+        return Ok(());
+    }
+    let m = scene.meshes.into_iter().next().expect("one mesh");
+    let ml = build(&m)?;
     let glb = crate::meshlet::export::glb(&m, &ml);
     crate::atomic::write(&a.output, &glb)
         .with_context(|| format!("cannot write {}", a.output.display()))?;

@@ -1,10 +1,10 @@
 //! `meshletlab stats`: mesh topology counts, then one validated metrics row per strategy.
 
-use super::{describe, evaluate_all, fail_on_invalid, gpu_for, load, strategies};
+use super::{describe, evaluate_all, fail_on_invalid, gpu_for, load_scene, strategies};
 use super::{Device, DeviceArgs, StrategyArgs};
 use crate::bench::{evaluate_builds, metrics_table, Evaluation};
 use crate::gpu::build::{build, warm_up, GPU_STRATEGIES};
-use crate::mesh::MeshStats;
+use crate::mesh::{MeshStats, Scene};
 use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
@@ -12,7 +12,7 @@ use std::path::PathBuf;
 /// Arguments of `stats`.
 #[derive(Args, Debug)]
 pub struct StatsArgs {
-    /// Mesh file.
+    /// Mesh file (an instanced glTF scene or `gen:` scene is measured per mesh).
     mesh: PathBuf,
     /// Strategy name (`meshletlab --help` lists them), a comma-separated list, or "all" (with
     /// `--device gpu`: every strategy with a GPU path).
@@ -32,14 +32,22 @@ pub struct StatsArgs {
 
 pub(super) fn run(a: StatsArgs, quiet: bool) -> Result<()> {
     let label = a.mesh.display().to_string();
+    let scene = load_scene(&a.mesh, quiet)?;
+    if scene.is_instanced() {
+        return run_scene(&a, scene, &label, quiet);
+    }
     let (m, rows) = match a.device.device {
         Device::Cpu => {
             let list = strategies(&a.strategy, &a.args.options())?;
-            let m = load(&a.mesh, quiet)?;
+            let m = scene.meshes.into_iter().next().expect("one mesh");
             let rows = evaluate_all(&m, &list, a.args.limits, a.runs.max(1), &label, quiet);
             (m, rows)
         }
-        Device::Gpu => on_gpu(&a, quiet)?,
+        Device::Gpu => {
+            let m = scene.meshes.into_iter().next().expect("one mesh");
+            let rows = on_gpu(&a, &m)?;
+            (m, rows)
+        }
     };
     let st = MeshStats::of(&m);
     if a.json {
@@ -61,7 +69,7 @@ pub(super) fn run(a: StatsArgs, quiet: bool) -> Result<()> {
 
 /// `stats --device gpu`: the mesh and one row per strategy, each built on the GPU `--runs` times
 /// after a warm-up; `setup_ms` is the device's creation plus that warm-up.
-fn on_gpu(a: &StatsArgs, quiet: bool) -> Result<(crate::mesh::Mesh, Vec<Evaluation>)> {
+fn on_gpu(a: &StatsArgs, m: &crate::mesh::Mesh) -> Result<Vec<Evaluation>> {
     let opts = a.args.options();
     let names: Vec<&str> = if a.strategy == "all" {
         GPU_STRATEGIES.iter().map(|k| k.name()).collect()
@@ -72,16 +80,83 @@ fn on_gpu(a: &StatsArgs, quiet: bool) -> Result<(crate::mesh::Mesh, Vec<Evaluati
         crate::strategy::by_name(name, &opts)?;
     }
     let (gpu, device_ms) = gpu_for(&names)?;
-    let m = load(&a.mesh, quiet)?;
     let limits = a.args.limits;
     let mut rows = Vec::new();
     for name in names {
         let warm_ms = warm_up(&gpu, name, limits, &opts)? * 1e3;
-        let run = || build(&gpu, name, &m, limits, &opts).map(|b| b.meshlets);
-        let mut e = evaluate_builds(&m, name, limits, a.runs.max(1), run)?;
+        let run = || build(&gpu, name, m, limits, &opts).map(|b| b.meshlets);
+        let mut e = evaluate_builds(m, name, limits, a.runs.max(1), run)?;
         e.device = "gpu";
         e.setup_ms = Some(device_ms + warm_ms);
         rows.push(e);
     }
-    Ok((m, rows))
+    Ok(rows)
+}
+
+/// `stats` of an instanced scene: each mesh's statistics and one row per strategy (its meshlets
+/// are built once per mesh), then, per strategy, the meshlets built and drawn over the instances.
+fn run_scene(a: &StatsArgs, scene: Scene, label: &str, quiet: bool) -> Result<()> {
+    let mut per_mesh = Vec::new();
+    for (i, m) in scene.meshes.iter().enumerate() {
+        let mesh_label = format!("{label} mesh {i}");
+        let rows = match a.device.device {
+            Device::Cpu => {
+                let list = strategies(&a.strategy, &a.args.options())?;
+                evaluate_all(m, &list, a.args.limits, a.runs.max(1), &mesh_label, quiet)
+            }
+            Device::Gpu => on_gpu(a, m)?,
+        };
+        fail_on_invalid(&rows, &mesh_label)?;
+        per_mesh.push((mesh_label, MeshStats::of(m), rows));
+    }
+    // Per strategy: (meshlets built, meshlets over the instances).
+    let names: Vec<&str> = per_mesh[0].2.iter().map(|e| e.strategy.as_str()).collect();
+    let totals: Vec<(String, usize, usize)> = names
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let built = per_mesh.iter().map(|p| p.2[k].metrics.meshlets).sum();
+            let drawn = scene
+                .instances
+                .iter()
+                .map(|i| per_mesh[i.mesh as usize].2[k].metrics.meshlets)
+                .sum();
+            (name.to_string(), built, drawn)
+        })
+        .collect();
+    if a.json {
+        let out = serde_json::json!({
+            "mesh": label,
+            "limits": a.args.limits.to_string(),
+            "device": if a.device.device == Device::Gpu { "gpu" } else { "cpu" },
+            "meshes": scene.meshes.len(),
+            "instances": scene.instances.len(),
+            "triangles_built": scene.triangles_built(),
+            "triangles_drawn": scene.triangles_drawn(),
+            "per_mesh": per_mesh.iter().map(|(l, st, rows)| serde_json::json!({
+                "mesh": l, "stats": st, "strategies": rows,
+            })).collect::<Vec<_>>(),
+            "strategies": totals.iter().map(|(n, b, d)| serde_json::json!({
+                "name": n, "meshlets_built": b, "meshlets_over_instances": d,
+            })).collect::<Vec<_>>(),
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(());
+    }
+    println!(
+        "{label}: {} meshes, {} instances, {} triangles built, {} drawn; limits {}\n",
+        scene.meshes.len(),
+        scene.instances.len(),
+        scene.triangles_built(),
+        scene.triangles_drawn(),
+        a.args.limits
+    );
+    for (l, st, rows) in &per_mesh {
+        println!("{}", describe(l, st));
+        println!("{}", metrics_table(rows));
+    }
+    for (n, b, d) in totals {
+        println!("{n}: {b} meshlets built, {d} drawn over the instances");
+    }
+    Ok(())
 }

@@ -402,7 +402,11 @@ mod tests {
     fn the_instanced_seed_keeps_its_five_instances_of_one_mesh() {
         let c = Corpus::new();
         for glb in ["gltf", "glb"] {
-            let s = c.seeds.iter().find(|s| s.name == format!("{glb}/instanced")).unwrap();
+            let s = c
+                .seeds
+                .iter()
+                .find(|s| s.name == format!("{glb}/instanced"))
+                .unwrap();
             let path = format!("seed.{}", s.target.extension());
             let scene = crate::mesh::scene_from_bytes(&s.bytes, Path::new(&path)).unwrap();
             assert_eq!((scene.meshes.len(), scene.instances.len()), (1, 5));
