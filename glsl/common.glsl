@@ -25,7 +25,8 @@ layout(std430, set = 0, binding = BINDING_COUNTERS) buffer Counters { uint count
 
 vec3 position(uint v) { return vec3(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]); }
 
-// Per instance: object-to-world rows, world-to-object rows, (largest stretch, 0, 0, 0).
+// Per instance: object-to-world rows, world-to-object rows, (largest stretch, first slot as
+// bits, 0, 0).
 struct Instance { vec4 to_world[3]; vec4 to_object[3]; vec4 extra; };
 layout(std430, set = 0, binding = BINDING_INSTANCES) readonly buffer Instances { Instance instances[]; };
 
@@ -38,6 +39,13 @@ vec3 to_world(vec3 p) {
     Instance s = instances[pc.instance];
     vec4 q = vec4(p, 1.0);
     return vec3(dot(s.to_world[0], q), dot(s.to_world[1], q), dot(s.to_world[2], q));
+}
+
+// The (instance, meshlet) slot of meshlet i: what occlusion culling keeps a visibility word for
+// and the exactness check's id image names. Without instances, the meshlet.
+uint slot_of(uint i) {
+    if (!instanced()) { return i; }
+    return floatBitsToUint(instances[pc.instance].extra.y) + (i - pc.meshlet_first);
 }
 
 // The camera in the space the bounds are in (the instance's object space when instanced).

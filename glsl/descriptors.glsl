@@ -127,6 +127,19 @@ vec4 block_vec4(uint i, uint k) {
 }
 #endif
 
+// The meshlet's bounding sphere (a quantised box's circumscribed sphere for NVIDIA A and B).
+vec4 task_sphere(uint i) {
+#if DESC == 0
+    return task[3 * i];
+#elif DESC <= 2
+    vec3 c, h;
+    decode_box(desc[i], c, h);
+    return vec4(c, length(h) * 1.00001);
+#else
+    return block_vec4(i, 0u);
+#endif
+}
+
 bool task_outside_frustum(uint i) {
 #if DESC == 0
     return sphere_outside(task[3 * i]);

@@ -444,3 +444,69 @@ fn an_instanced_scene_draws_what_its_baked_mesh_draws() {
     let (errors, first) = ctx.validation.as_ref().unwrap().errors();
     assert_eq!(errors, 0, "validation layer errors: {first:#?}");
 }
+
+/// Two-phase occlusion culling along a camera path: every frame's depth samples and (depth, slot)
+/// id image equal those of the frustum-and-cone render, the pyramid hides a share of the scene,
+/// and a pyramid read at a single texel is caught by the same check.
+#[test]
+fn occlusion_culling_hides_nothing_and_the_check_catches_a_wrong_pyramid() {
+    let ctx = Context::new(true).expect("lavapipe with VK_EXT_mesh_shader (make setup)");
+    let scene = meshletlab::mesh::load_scene("gen:scene-small".as_ref()).unwrap();
+    let ml: Vec<Meshlets> = scene
+        .meshes
+        .iter()
+        .map(|m| meshlets(m, "meshopt", Limits::DEFAULT))
+        .collect();
+    let pass = Pass::instanced(&ctx, &scene, &ml).unwrap();
+    let corners = scene.box_corners();
+    let views = Camera::random_views(&corners, 2, 5, 1.6);
+    let (mut occluded, mut triangles, mut reference_triangles) = (0, 0, 0);
+    for (v, view) in views.iter().enumerate() {
+        pass.reset_visibility();
+        for (f, cam) in view.approach(4).iter().enumerate() {
+            let occ = pass.render_occlusion(cam, Shading::Unlit, true).unwrap();
+            let full = pass.render_reference(cam, Shading::Unlit, true).unwrap();
+            let (a, b) = (
+                occ.checked.as_ref().unwrap(),
+                full.checked.as_ref().unwrap(),
+            );
+            assert_eq!(a.differences(b), (0, 0), "view {v} frame {f}");
+            assert!(
+                a.ids.iter().any(|&x| x != u64::MAX),
+                "view {v} frame {f}: empty image"
+            );
+            assert_eq!(differing_pixels(&occ.pixels, &full.pixels), 0);
+            if f > 0 {
+                occluded += occ.occluded;
+                triangles += occ.triangles();
+                reference_triangles += full.triangles();
+            } else {
+                assert_eq!(
+                    occ.drawn_early, 0,
+                    "nothing was visible before the first frame"
+                );
+            }
+            // Every meshlet that owns a pixel was drawn.
+            assert!(a.owners().len() as u32 <= occ.drawn());
+        }
+    }
+    assert!(
+        occluded > 0 && triangles < reference_triangles,
+        "the pyramid hid nothing"
+    );
+    // A pyramid read at one pixel instead of the texels covering the footprint hides visible
+    // meshlets: caught.
+    let mut caught = 0;
+    for view in &views {
+        pass.reset_visibility();
+        for cam in view.approach(4) {
+            let occ = pass.render_occlusion_one_texel(&cam, true).unwrap();
+            let full = pass.render_reference(&cam, Shading::Unlit, true).unwrap();
+            let (d, i) = occ.checked.unwrap().differences(&full.checked.unwrap());
+            caught += d + i;
+        }
+    }
+    assert!(caught > 0, "a non-conservative pyramid went unnoticed");
+    let (errors, first) = ctx.validation.as_ref().unwrap().errors();
+    assert_eq!(errors, 0, "validation layer errors: {first:#?}");
+}

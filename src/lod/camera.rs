@@ -59,6 +59,28 @@ impl Camera {
         }
     }
 
+    /// A short camera path that closes in on this camera: `frames` cameras on the ray from the
+    /// target through the eye, the first half again as far away, the last this camera, evenly
+    /// spaced (the far plane moved out with the eye). What occlusion culling is measured on: each
+    /// frame starts from the visibility of the one before.
+    pub fn approach(&self, frames: usize) -> Vec<Self> {
+        let offset = self.eye - self.target;
+        (0..frames)
+            .map(|f| {
+                let k = if frames > 1 {
+                    1.0 + 0.5 * (frames - 1 - f) as f32 / (frames - 1) as f32
+                } else {
+                    1.0
+                };
+                Self {
+                    eye: self.target + offset * k,
+                    far: self.far + (k - 1.0) * offset.length(),
+                    ..*self
+                }
+            })
+            .collect()
+    }
+
     /// A camera at `eye` looking at `mesh`'s bounding-sphere centre, with planes that enclose it.
     pub fn looking_at(mesh: &Mesh, eye: Vec3) -> Self {
         let (lo, hi) = mesh.bounding_box();

@@ -35,6 +35,9 @@ pub struct Context {
     pub mesh_subgroups: bool,
     /// Device name and driver.
     pub name: String,
+    /// Whether fragment shaders have 64-bit buffer atomics: what the occlusion exactness check's
+    /// id image needs (lavapipe has them).
+    pub id_check: bool,
     /// Errors reported by the validation layer (when enabled).
     pub validation: Option<super::validation::Messenger>,
     memory: vk::PhysicalDeviceMemoryProperties,
@@ -169,13 +172,27 @@ impl Context {
             .dynamic_rendering(true)
             .maintenance4(true)
             .synchronization2(true);
-        let core = vk::PhysicalDeviceFeatures::default().pipeline_statistics_query(true);
+        // The occlusion exactness check's id image: 64-bit atomics from fragment shaders.
+        let mut have12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut have12);
+        // SAFETY: `physical` comes from this instance; `f2` chains only live structs.
+        unsafe { instance.get_physical_device_features2(physical, &mut f2) };
+        let id_check = f2.features.fragment_stores_and_atomics == vk::TRUE
+            && f2.features.shader_int64 == vk::TRUE
+            && have12.shader_buffer_int64_atomics == vk::TRUE;
+        let mut v12 =
+            vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(id_check);
+        let core = vk::PhysicalDeviceFeatures::default()
+            .pipeline_statistics_query(true)
+            .fragment_stores_and_atomics(id_check)
+            .shader_int64(id_check);
         let dev_exts = [MESH_EXT.as_ptr()];
         let info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queues)
             .enabled_extension_names(&dev_exts)
             .enabled_features(&core)
             .push_next(&mut ms)
+            .push_next(&mut v12)
             .push_next(&mut v13);
         // SAFETY: a valid create info for a device of this instance; destroyed in Drop.
         let device = unsafe { instance.create_device(physical, &info, None) }
@@ -210,6 +227,7 @@ impl Context {
             subgroup_size,
             mesh_subgroups,
             name,
+            id_check,
             validation,
             memory,
         })
@@ -429,6 +447,11 @@ pub fn destroy_descriptor_set_layout(d: &ash::Device, h: vk::DescriptorSetLayout
 pub fn destroy_shader_module(d: &ash::Device, h: vk::ShaderModule) {
     // SAFETY: see the note above the destroyers.
     unsafe { d.destroy_shader_module(h, None) }
+}
+/// Destroys a sampler.
+pub fn destroy_sampler(d: &ash::Device, h: vk::Sampler) {
+    // SAFETY: see the note above the destroyers.
+    unsafe { d.destroy_sampler(h, None) }
 }
 /// Destroys a query pool.
 pub fn destroy_query_pool(d: &ash::Device, h: vk::QueryPool) {

@@ -8,7 +8,7 @@
 
 /// Storage bindings of descriptor set 0, in binding order (the GLSL names them `BINDING_<NAME>`
 /// in upper case).
-pub const BINDINGS: [&str; 9] = [
+pub const BINDINGS: [&str; 12] = [
     // f32 x 3 per vertex (also the baseline's vertex buffer).
     "positions",
     // Meshlet descriptors, or a compressed format's per-meshlet offsets.
@@ -28,6 +28,13 @@ pub const BINDINGS: [&str; 9] = [
     // Instanced passes: per instance, object-to-world rows, world-to-object rows and its largest
     // stretch (`render::pass::InstanceRecord`).
     "instances",
+    // Occlusion culling: one word per (instance, meshlet) slot, 1 where it was visible in the
+    // last frame.
+    "visibility",
+    // Occlusion culling: the depth pyramid, levels end to end (`PYRAMID_*`).
+    "pyramid",
+    // Exactness checks: per pixel, the least (depth bits << 32 | slot) of every fragment drawn.
+    "ids",
 ];
 
 /// Binding of `name` in [`BINDINGS`] (a build-time constant where used in consts).
@@ -68,6 +75,23 @@ pub const FLAG_RECORD_IDS: u32 = 1 << 3;
 /// Push-constant `flags`: positions and bounds are in the object space of instance
 /// `pc.instance` (an instanced pass); without it they are world positions.
 pub const FLAG_INSTANCED: u32 = 1 << 4;
+/// Push-constant `flags`: the early phase of occlusion culling (draw what was visible last
+/// frame, after the frustum and cone tests).
+pub const FLAG_EARLY: u32 = 1 << 5;
+/// Push-constant `flags`: the late phase (test everything against the pyramid, draw what is
+/// newly visible, record every meshlet's visibility for the next frame).
+pub const FLAG_LATE: u32 = 1 << 6;
+/// Push-constant `flags`, for the tests only: read one pyramid texel (level 0, at the
+/// footprint's centre) instead of the 2 x 2 that cover it, so the test is no longer conservative.
+pub const FLAG_PYRAMID_ONE_TEXEL: u32 = 1 << 7;
+
+/// The image the pass renders (`render::WIDTH` x `render::HEIGHT`; a test checks they agree).
+pub const IMAGE_WIDTH: u32 = 1280;
+/// See [`IMAGE_WIDTH`].
+pub const IMAGE_HEIGHT: u32 = 720;
+/// Levels of the depth pyramid: level 0 is the image, each next one half as wide and high
+/// (rounded up), down to 1 x 1.
+pub const PYRAMID_LEVELS: u32 = 12;
 
 /// Counter slot: meshlets culled by the frustum.
 pub const COUNTER_CULLED_FRUSTUM: usize = 0;
@@ -81,8 +105,18 @@ pub const COUNTER_TRIANGLES_FRUSTUM: usize = 3;
 pub const COUNTER_TRIANGLES_CONE: usize = 4;
 /// Counter slot: LOD meshlets loaded but not on the cut.
 pub const COUNTER_NOT_SELECTED: usize = 5;
-/// Counter words before the drawn-meshlet bitmap (slots 6 and 7 are spare).
-pub const COUNTER_WORDS: usize = 8;
+/// Counter slot: meshlets the late phase found hidden behind the pyramid.
+pub const COUNTER_OCCLUDED: usize = 6;
+/// Counter slot: their triangles.
+pub const COUNTER_TRIANGLES_OCCLUDED: usize = 7;
+/// Counter slot: triangles in the meshlets drawn (both phases).
+pub const COUNTER_TRIANGLES_DRAWN: usize = 8;
+/// Counter slot: meshlets the late phase drew.
+pub const COUNTER_DRAWN_LATE: usize = 9;
+/// Counter slot: their triangles.
+pub const COUNTER_TRIANGLES_DRAWN_LATE: usize = 10;
+/// Counter words before the drawn-meshlet bitmap (slots 11 to 15 are spare).
+pub const COUNTER_WORDS: usize = 16;
 
 /// Meshlets per task workgroup (one task invocation each).
 pub const TASK_GROUP: u32 = 32;
@@ -102,6 +136,12 @@ pub fn glsl_header() -> String {
         ("FLAG_UNLIT", FLAG_UNLIT),
         ("FLAG_RECORD_IDS", FLAG_RECORD_IDS),
         ("FLAG_INSTANCED", FLAG_INSTANCED),
+        ("FLAG_EARLY", FLAG_EARLY),
+        ("FLAG_LATE", FLAG_LATE),
+        ("FLAG_PYRAMID_ONE_TEXEL", FLAG_PYRAMID_ONE_TEXEL),
+        ("IMAGE_WIDTH", IMAGE_WIDTH),
+        ("IMAGE_HEIGHT", IMAGE_HEIGHT),
+        ("PYRAMID_LEVELS", PYRAMID_LEVELS),
     ];
     for (name, v) in flags {
         s += &format!("const uint {name} = {v}u;\n");
@@ -113,6 +153,11 @@ pub fn glsl_header() -> String {
         ("COUNTER_TRIANGLES_FRUSTUM", COUNTER_TRIANGLES_FRUSTUM),
         ("COUNTER_TRIANGLES_CONE", COUNTER_TRIANGLES_CONE),
         ("COUNTER_NOT_SELECTED", COUNTER_NOT_SELECTED),
+        ("COUNTER_OCCLUDED", COUNTER_OCCLUDED),
+        ("COUNTER_TRIANGLES_OCCLUDED", COUNTER_TRIANGLES_OCCLUDED),
+        ("COUNTER_TRIANGLES_DRAWN", COUNTER_TRIANGLES_DRAWN),
+        ("COUNTER_DRAWN_LATE", COUNTER_DRAWN_LATE),
+        ("COUNTER_TRIANGLES_DRAWN_LATE", COUNTER_TRIANGLES_DRAWN_LATE),
         ("COUNTER_WORDS", COUNTER_WORDS),
     ];
     for (name, v) in counters {
@@ -200,6 +245,10 @@ pub enum Shader {
     ShadeFrag,
     /// Colour by meshlet id.
     MeshletIdFrag,
+    /// The exactness check's fragment shader: per pixel, the least (depth, slot) drawn.
+    DepthIdFrag,
+    /// The depth pyramid's compute shader.
+    PyramidComp,
 }
 
 const LAYOUTS: [Layout; 4] = [
@@ -256,6 +305,8 @@ impl Shader {
             Shader::BaselineVert,
             Shader::ShadeFrag,
             Shader::MeshletIdFrag,
+            Shader::DepthIdFrag,
+            Shader::PyramidComp,
         ]);
         v
     }
@@ -280,6 +331,8 @@ impl Shader {
             Shader::BaselineVert => "baseline.vert",
             Shader::ShadeFrag => "shade.frag",
             Shader::MeshletIdFrag => "meshlet_id.frag",
+            Shader::DepthIdFrag => "depth_id.frag",
+            Shader::PyramidComp => "pyramid.comp",
         }
     }
 
@@ -317,7 +370,11 @@ impl Shader {
                 d
             }
             Shader::CompactVert(c) => vec![format!("-DKIND={}", c as u32)],
-            Shader::BaselineVert | Shader::ShadeFrag | Shader::MeshletIdFrag => vec![],
+            Shader::BaselineVert
+            | Shader::ShadeFrag
+            | Shader::MeshletIdFrag
+            | Shader::DepthIdFrag
+            | Shader::PyramidComp => vec![],
         }
     }
 
@@ -340,9 +397,11 @@ impl Shader {
             ),
             Shader::CompactMesh(c, s) => format!("compact.mesh ({}, {})", c.name(), size(s)),
             Shader::CompactVert(c) => format!("compact.vert ({})", c.name()),
-            Shader::BaselineVert | Shader::ShadeFrag | Shader::MeshletIdFrag => {
-                self.source().into()
-            }
+            Shader::BaselineVert
+            | Shader::ShadeFrag
+            | Shader::MeshletIdFrag
+            | Shader::DepthIdFrag
+            | Shader::PyramidComp => self.source().into(),
         }
     }
 

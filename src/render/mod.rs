@@ -53,6 +53,9 @@ pub enum RenderError {
         /// The device's `maxStorageBufferRange`.
         limit: u64,
     },
+    /// The occlusion check needs 64-bit buffer atomics in fragment shaders.
+    #[error("this device has no 64-bit buffer atomics in fragment shaders (shaderBufferInt64Atomics, fragmentStoresAndAtomics): the occlusion exactness check cannot run on it")]
+    NoIdCheck,
     /// A Vulkan call failed.
     #[error("Vulkan call failed: {0}: {1}")]
     Vulkan(&'static str, ash::vk::Result),

@@ -4,25 +4,19 @@
 
 use super::*;
 
+/// One draw: its push constants, index range (vertex pipeline) and whether it is mirrored.
+pub(super) type DrawCmd = (Push, u32, u32, bool);
+
 impl Pass<'_> {
-    pub(super) fn frame(
+    /// The push constants of a frame from `camera` (for one draw of everything).
+    pub(super) fn push(
         &self,
         camera: &Camera,
-        pipeline: vk::Pipeline,
         flags: u32,
         shading: Shading,
         meshlet_count: u32,
-        mesh: bool,
-    ) -> Result<Frame, RenderError> {
-        let ctx = self.ctx;
-        let d = &ctx.device;
-        // The drawn-id bitmap only when this frame records it (render_lod_ids reads it back).
-        let clear = match flags & FLAG_RECORD_IDS {
-            0 => COUNTER_BYTES,
-            _ => self.bindings.counters.size,
-        };
-        self.bindings.counters.write(&vec![0u8; clear as usize]);
-        let push = Push {
+    ) -> Push {
+        Push {
             view_proj: camera
                 .view_proj(WIDTH as f32 / HEIGHT as f32)
                 .to_cols_array(),
@@ -48,16 +42,20 @@ impl Pass<'_> {
                 },
             instance: 0,
             meshlet_first: 0,
-        };
-        // One draw per instance the frustum meets (instanced passes), else one of everything.
+        }
+    }
+
+    /// The draws of a frame: one per instance the frustum meets (instanced passes, with the
+    /// instances dropped), else `push` alone.
+    pub(super) fn draw_list(&self, camera: &Camera, push: Push) -> (Vec<DrawCmd>, u32) {
         let view_proj = camera.view_proj(WIDTH as f32 / HEIGHT as f32);
         let mut culled_instances = 0;
-        let draws: Vec<(Push, u32, u32, bool)> = match &self.draws {
+        let draws = match &self.draws {
             None => vec![(push, 0, self.index_count, false)],
             Some(draws) => draws
                 .iter()
                 .filter(|d| {
-                    let out = flags & FLAG_FRUSTUM != 0
+                    let out = push.flags & FLAG_FRUSTUM != 0
                         && instances::outside_frustum(view_proj, d.sphere);
                     culled_instances += u32::from(out);
                     !out
@@ -74,6 +72,83 @@ impl Pass<'_> {
                 })
                 .collect(),
         };
+        (draws, culled_instances)
+    }
+
+    /// Records `draws` inside a rendering, pipeline and descriptor set bound (`mesh`: through the
+    /// task and mesh shaders).
+    ///
+    /// # Safety
+    /// `cmd` is recording inside a rendering of this pass with its pipeline layout bound.
+    pub(super) unsafe fn record_draws(
+        &self,
+        cmd: vk::CommandBuffer,
+        draws: &[DrawCmd],
+        mesh: bool,
+    ) {
+        let d = &self.ctx.device;
+        // SAFETY: the caller's contract; every handle is this pass's.
+        unsafe {
+            if !mesh && !matches!(self.drawn, Drawn::Compressed(..)) {
+                d.cmd_bind_vertex_buffers(cmd, 0, &[self.bindings.positions.buf], &[0]);
+                d.cmd_bind_index_buffer(cmd, self.index.buf, 0, vk::IndexType::UINT32);
+            }
+            for &(push, index_first, index_count, mirrored) in draws {
+                d.cmd_set_front_face(
+                    cmd,
+                    if mirrored {
+                        vk::FrontFace::CLOCKWISE
+                    } else {
+                        vk::FrontFace::COUNTER_CLOCKWISE
+                    },
+                );
+                d.cmd_push_constants(
+                    cmd,
+                    self.layout.get(),
+                    vk::ShaderStageFlags::TASK_EXT
+                        | vk::ShaderStageFlags::MESH_EXT
+                        | vk::ShaderStageFlags::VERTEX
+                        | vk::ShaderStageFlags::FRAGMENT,
+                    0,
+                    bytemuck::bytes_of(&push),
+                );
+                if mesh {
+                    if push.meshlet_count > 0 {
+                        self.ctx.mesh.cmd_draw_mesh_tasks(
+                            cmd,
+                            push.meshlet_count.div_ceil(TASK_GROUP),
+                            1,
+                            1,
+                        );
+                    }
+                } else if matches!(self.drawn, Drawn::Compressed(..)) {
+                    d.cmd_draw(cmd, self.index_count, 1, 0, 0);
+                } else {
+                    d.cmd_draw_indexed(cmd, index_count, 1, index_first, 0, 0);
+                }
+            }
+        }
+    }
+
+    pub(super) fn frame(
+        &self,
+        camera: &Camera,
+        pipeline: vk::Pipeline,
+        flags: u32,
+        shading: Shading,
+        meshlet_count: u32,
+        mesh: bool,
+    ) -> Result<Frame, RenderError> {
+        let ctx = self.ctx;
+        let d = &ctx.device;
+        // The drawn-id bitmap only when this frame records it (render_lod_ids reads it back).
+        let clear = match flags & FLAG_RECORD_IDS {
+            0 => COUNTER_BYTES,
+            _ => self.bindings.counters.size,
+        };
+        self.bindings.counters.write(&vec![0u8; clear as usize]);
+        let push = self.push(camera, flags, shading, meshlet_count);
+        let (draws, culled_instances) = self.draw_list(camera, push);
         let [msaa, resolve, depth] = &self.targets;
         let (msaa, resolve, depth) = (
             (msaa.image.get(), msaa.view.get()),
@@ -208,44 +283,7 @@ impl Pass<'_> {
                 &[self.set],
                 &[],
             );
-            if !mesh && !matches!(self.drawn, Drawn::Compressed(..)) {
-                d.cmd_bind_vertex_buffers(cmd, 0, &[self.bindings.positions.buf], &[0]);
-                d.cmd_bind_index_buffer(cmd, self.index.buf, 0, vk::IndexType::UINT32);
-            }
-            for &(push, index_first, index_count, mirrored) in &draws {
-                d.cmd_set_front_face(
-                    cmd,
-                    if mirrored {
-                        vk::FrontFace::CLOCKWISE
-                    } else {
-                        vk::FrontFace::COUNTER_CLOCKWISE
-                    },
-                );
-                d.cmd_push_constants(
-                    cmd,
-                    self.layout.get(),
-                    vk::ShaderStageFlags::TASK_EXT
-                        | vk::ShaderStageFlags::MESH_EXT
-                        | vk::ShaderStageFlags::VERTEX
-                        | vk::ShaderStageFlags::FRAGMENT,
-                    0,
-                    bytemuck::bytes_of(&push),
-                );
-                if mesh {
-                    if push.meshlet_count > 0 {
-                        ctx.mesh.cmd_draw_mesh_tasks(
-                            cmd,
-                            push.meshlet_count.div_ceil(TASK_GROUP),
-                            1,
-                            1,
-                        );
-                    }
-                } else if matches!(self.drawn, Drawn::Compressed(..)) {
-                    d.cmd_draw(cmd, self.index_count, 1, 0, 0);
-                } else {
-                    d.cmd_draw_indexed(cmd, index_count, 1, index_first, 0, 0);
-                }
-            }
+            self.record_draws(cmd, &draws, mesh);
             d.cmd_end_rendering(cmd);
             if let Some((stats, prims)) = mesh_queries {
                 d.cmd_end_query(cmd, prims, 0);

@@ -19,13 +19,17 @@ pub struct InstanceRecord {
     pub to_world: [[f32; 4]; 3],
     /// World-to-object rows (the inverse, computed in f64).
     pub to_object: [[f32; 4]; 3],
-    /// (largest stretch, 0, 0, 0): the factor a bounding radius grows by.
-    pub extra: [f32; 4],
+    /// The factor a bounding radius grows by (the largest stretch).
+    pub scale: f32,
+    /// The instance's first (instance, meshlet) slot: its meshlets' visibility words and ids.
+    pub slot_base: u32,
+    /// Padding to 16 bytes.
+    pub pad: [u32; 2],
 }
 
 impl InstanceRecord {
-    /// The record of `inst`.
-    pub fn new(inst: &Instance) -> Self {
+    /// The record of `inst`, whose meshlets' slots start at `slot_base`.
+    pub fn new(inst: &Instance, slot_base: u32) -> Self {
         let m = inst.transform.as_dmat4();
         let inv = m.inverse();
         let rows = |m: DMat4| {
@@ -35,7 +39,9 @@ impl InstanceRecord {
         Self {
             to_world: rows(m),
             to_object: rows(inv),
-            extra: [inst.max_scale(), 0.0, 0.0, 0.0],
+            scale: inst.max_scale(),
+            slot_base,
+            pad: [0; 2],
         }
     }
 }
@@ -142,8 +148,17 @@ impl<'a> Pass<'a> {
             "one meshlet set per mesh"
         );
         let (mesh, ml, draws) = concatenate(scene, meshlets);
-        let records: Vec<InstanceRecord> =
-            scene.instances.iter().map(InstanceRecord::new).collect();
+        let mut slots = 0u32;
+        let records: Vec<InstanceRecord> = scene
+            .instances
+            .iter()
+            .zip(&draws)
+            .map(|(inst, d)| {
+                let r = InstanceRecord::new(inst, slots);
+                slots += d.meshlet_count;
+                r
+            })
+            .collect();
         let mut pass = Self::build(
             ctx,
             Source::Descriptors {
@@ -152,6 +167,7 @@ impl<'a> Pass<'a> {
                 format: Format::Split,
                 lod: None,
                 instances: &records,
+                slots,
             },
         )?;
         pass.draws = Some(draws);
@@ -179,7 +195,7 @@ mod tests {
                 Vec3::new(3.0, 1.0, -2.0),
             ),
         };
-        let r = InstanceRecord::new(&inst);
+        let r = InstanceRecord::new(&inst, 0);
         let p = glam::Vec4::new(0.3, -1.2, 2.0, 1.0);
         let row = |m: &[[f32; 4]; 3], q: glam::Vec4| {
             Vec3::new(
@@ -192,7 +208,7 @@ mod tests {
         assert!((w - inst.transform.transform_point3(p.truncate())).length() < 1e-5);
         let back = row(&r.to_object, w.extend(1.0));
         assert!((back - p.truncate()).length() < 1e-5);
-        assert!(r.extra[0] >= 2.0 && r.extra[0] < 2.001);
+        assert!(r.scale >= 2.0 && r.scale < 2.001);
     }
 
     #[test]

@@ -15,9 +15,11 @@ use ash::vk;
 mod frame;
 mod instances;
 mod objects;
+mod occlusion;
 mod setup;
 
 pub use instances::InstanceRecord;
+pub use occlusion::{Checked, OcclusionFrame};
 
 use objects::{pipeline, target};
 
@@ -147,6 +149,8 @@ struct Modules {
 struct Fields {
     index_count: u32,
     meshlet_count: u32,
+    /// Visibility words occlusion culling keeps: one per (instance, meshlet) slot.
+    slots: u32,
     drawn: Drawn,
     object: descriptor::ObjectBox,
     device_bytes: usize,
@@ -171,12 +175,15 @@ struct Bindings {
     lod_records: Buffer,
     lod_view: Buffer,
     instances: Buffer,
+    visibility: Buffer,
+    pyramid: Buffer,
+    ids: Buffer,
 }
 
 impl Bindings {
     /// The field names, in declaration order.
     #[cfg(test)]
-    const NAMES: [&'static str; 9] = [
+    const NAMES: [&'static str; 12] = [
         "positions",
         "descriptors",
         "data",
@@ -186,10 +193,13 @@ impl Bindings {
         "lod_records",
         "lod_view",
         "instances",
+        "visibility",
+        "pyramid",
+        "ids",
     ];
 
     /// The buffers in binding order.
-    fn in_order(&self) -> [&Buffer; 9] {
+    fn in_order(&self) -> [&Buffer; 12] {
         [
             &self.positions,
             &self.descriptors,
@@ -200,6 +210,9 @@ impl Bindings {
             &self.lod_records,
             &self.lod_view,
             &self.instances,
+            &self.visibility,
+            &self.pyramid,
+            &self.ids,
         ]
     }
 }
@@ -236,6 +249,8 @@ enum Source<'s> {
         lod: Option<&'s Flat>,
         /// Instanced passes: one record per instance (empty otherwise).
         instances: &'s [InstanceRecord],
+        /// Instanced passes: (instance, meshlet) slots over all instances (0: one per meshlet).
+        slots: u32,
     },
     /// The upload, and whether laced wires' scans use subgroup operations.
     Compressed(&'s Upload, bool),
@@ -274,6 +289,8 @@ pub struct Pass<'a> {
     /// Task + mesh pipelines, shaded and coloured by meshlet id (none for GI and TS compact).
     mesh_shade: Option<Owned<vk::Pipeline>>,
     mesh_ids: Option<Owned<vk::Pipeline>>,
+    /// Task + mesh pipeline through the occlusion check's id shader (where the device can).
+    mesh_check: Option<Owned<vk::Pipeline>>,
     /// The vertex pipeline (none for the mesh-shader-only compressed formats).
     vertex: Option<Owned<vk::Pipeline>>,
     /// For a LOD pass: the DAG's level layout and the (shaded, meshlet-id) LOD pipelines.
@@ -288,6 +305,10 @@ pub struct Pass<'a> {
     readback: Buffer,
     /// Instanced passes: one draw per instance ([`Pass::instanced`]).
     draws: Option<Vec<instances::Draw>>,
+    /// Visibility words (one per (instance, meshlet) slot).
+    slots: u32,
+    /// Occlusion culling's compute pipeline and check buffers, made at first use.
+    occlusion: std::cell::OnceCell<occlusion::Objects>,
 }
 
 /// Vulkan has no empty buffers: an unused binding gets one zero vec4.
@@ -343,6 +364,7 @@ impl<'a> Pass<'a> {
                 format,
                 lod: None,
                 instances: &[],
+                slots: 0,
             },
         )
     }
@@ -379,6 +401,7 @@ impl<'a> Pass<'a> {
                 format: Format::Split,
                 lod: Some(flat),
                 instances: &[],
+                slots: 0,
             },
         )
     }
@@ -389,14 +412,15 @@ impl<'a> Pass<'a> {
             v.0 <= Limits::DEFAULT.max_vertices as usize
                 && v.1 <= Limits::DEFAULT.max_triangles as usize
         };
-        let (mesh, ml, format, lod, instances) = match source {
+        let (mesh, ml, format, lod, instances, slots) = match source {
             Source::Descriptors {
                 mesh,
                 ml,
                 format,
                 lod,
                 instances,
-            } => (mesh, ml, format, lod, instances),
+                slots,
+            } => (mesh, ml, format, lod, instances, slots),
             Source::Compressed(up, subgroups) => {
                 return Self::build_compressed(ctx, up, small(up.max_counts), subgroups)
             }
@@ -458,6 +482,7 @@ impl<'a> Pass<'a> {
             Fields {
                 index_count: mesh.indices.len() as u32,
                 meshlet_count: ml.len() as u32,
+                slots: if slots > 0 { slots } else { ml.len() as u32 },
                 drawn: Drawn::Descriptors(format),
                 object: packed.object,
                 device_bytes: packed.device_bytes(mesh.positions.len()),
@@ -523,6 +548,7 @@ impl<'a> Pass<'a> {
             Fields {
                 index_count: 3 * up.triangles as u32,
                 meshlet_count: up.meshlets() as u32,
+                slots: up.meshlets() as u32,
                 drawn: Drawn::Compressed(up.format, how),
                 object: descriptor::ObjectBox {
                     min: up.origin,
@@ -712,6 +738,10 @@ mod tests {
         }
         assert!(h.contains(&format!("const uint FLAG_RECORD_IDS = {FLAG_RECORD_IDS}u;")));
         assert!(h.contains(&format!("#define TASK_GROUP {TASK_GROUP}\n")));
-        assert_eq!(COUNTER_BYTES, 32);
+        assert_eq!(COUNTER_BYTES, 64);
+        assert_eq!(
+            (interface::IMAGE_WIDTH, interface::IMAGE_HEIGHT),
+            (WIDTH, HEIGHT)
+        );
     }
 }

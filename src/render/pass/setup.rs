@@ -54,6 +54,12 @@ impl<'a> Pass<'a> {
             lod_records,
             lod_view,
             instances,
+            visibility: ctx.buffer(4 * fields.slots as u64, storage)?,
+            pyramid: ctx.buffer(4 * occlusion::pyramid_texels() as u64, storage)?,
+            ids: ctx.buffer(
+                8 * WIDTH as u64 * HEIGHT as u64,
+                storage | vk::BufferUsageFlags::TRANSFER_DST,
+            )?,
         };
         let readback = ctx.buffer(
             WIDTH as u64 * HEIGHT as u64 * 4,
@@ -195,10 +201,25 @@ impl<'a> Pass<'a> {
             Ok::<_, RenderError>((pair(&shade)?, pair(&ids)?))
         };
         let (mut mesh_shade, mut mesh_ids, mut lod_pipelines) = (None, None, None);
+        let mut mesh_check = None;
         if let (Some(task), Some(mesh)) = (modules.task, modules.mesh) {
             let meshm = module(mesh)?;
             let (s, i) = mesh_pair(task, meshm.get())?;
             (mesh_shade, mesh_ids) = (Some(s), Some(i));
+            // The occlusion check's id shader (64-bit atomics), for the meshlet layouts.
+            if ctx.id_check && matches!(fields.drawn, Drawn::Descriptors(_)) {
+                let (t, f) = (module(task)?, module(shader(Shader::DepthIdFrag))?);
+                mesh_check = Some(pipeline(
+                    d,
+                    layout.get(),
+                    &[
+                        (vk::ShaderStageFlags::TASK_EXT, t.get()),
+                        (vk::ShaderStageFlags::MESH_EXT, meshm.get()),
+                        (vk::ShaderStageFlags::FRAGMENT, f.get()),
+                    ],
+                    Input::Mesh,
+                )?);
+            }
             if let Some(lod_task) = modules.lod_task {
                 lod_pipelines = Some(mesh_pair(lod_task, meshm.get())?);
             }
@@ -211,11 +232,12 @@ impl<'a> Pass<'a> {
                 vk::SampleCountFlags::TYPE_1,
                 vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
             )?,
+            // Sampled: the occlusion pyramid and the exactness check read it in a compute shader.
             target(
                 ctx,
                 DEPTH,
                 SAMPLES,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
             )?,
         ];
         let query_pool = |info: &vk::QueryPoolCreateInfo, what| {
@@ -264,6 +286,7 @@ impl<'a> Pass<'a> {
             targets,
             mesh_shade,
             mesh_ids,
+            mesh_check,
             vertex,
             lod: lod_layout.zip(lod_pipelines),
             layout,
@@ -274,6 +297,8 @@ impl<'a> Pass<'a> {
             index,
             readback,
             draws: None,
+            slots: fields.slots,
+            occlusion: Default::default(),
         })
     }
 }

@@ -1,0 +1,716 @@
+//! Two-phase occlusion culling (as in Nanite and niagara) and the check that it hides nothing.
+//!
+//! A frame with occlusion culling, in one submission:
+//! 1. **early phase**: the task shader draws the meshlets that were visible in the previous frame
+//!    (one visibility word per (instance, meshlet) slot), after the frustum and cone tests;
+//! 2. **pyramid** (`glsl/pyramid.comp`): the early depth, each pixel's largest depth over its
+//!    samples, then level by level the largest of 2 x 2 texels (odd edges covered), down to 1 x 1;
+//! 3. **late phase**: every meshlet is tested (frustum, cone, then its bounding sphere's screen
+//!    rectangle and nearest depth against the pyramid, `glsl/occlusion.glsl`); what passes and was
+//!    not drawn early is drawn now, and every slot's visibility is kept for the next frame.
+//!
+//! The early depth is never nearer than the final one (it has fewer occluders), so a meshlet
+//! behind the pyramid is behind the final image too. The check ([`Checked`]) renders with a
+//! fragment shader that keeps, per pixel, the least (depth, slot) of every fragment drawn; run
+//! with and without occlusion culling, the two id images and every depth sample must be equal.
+
+use super::*;
+use interface::{
+    COUNTER_CULLED_CONE, COUNTER_CULLED_FRUSTUM, COUNTER_DRAWN, COUNTER_DRAWN_LATE,
+    COUNTER_OCCLUDED, COUNTER_TRIANGLES_CONE, COUNTER_TRIANGLES_DRAWN,
+    COUNTER_TRIANGLES_DRAWN_LATE, COUNTER_TRIANGLES_FRUSTUM, COUNTER_TRIANGLES_OCCLUDED,
+    FLAG_EARLY, FLAG_LATE, FLAG_PYRAMID_ONE_TEXEL, PYRAMID_LEVELS,
+};
+
+/// Texels of every pyramid level together.
+pub(super) fn pyramid_texels() -> u32 {
+    let (mut w, mut h, mut total) = (WIDTH, HEIGHT, 0);
+    for _ in 0..PYRAMID_LEVELS {
+        total += w * h;
+        (w, h) = (w.div_ceil(2), h.div_ceil(2));
+    }
+    total
+}
+
+/// The compute side of occlusion culling, made at the first occlusion frame.
+pub(super) struct Objects {
+    pipeline: Owned<vk::Pipeline>,
+    layout: Owned<vk::PipelineLayout>,
+    set: vk::DescriptorSet,
+    _pool: Owned<vk::DescriptorPool>,
+    _set_layout: Owned<vk::DescriptorSetLayout>,
+    _sampler: Owned<vk::Sampler>,
+    /// Every depth sample of the last checked frame.
+    samples: Buffer,
+    /// Timestamps: start, after the early phase, after the pyramid, after the late phase.
+    queries: Owned<vk::QueryPool>,
+}
+
+/// The pyramid shader's push constants.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ComputePush {
+    mode: u32,
+    level: u32,
+    sample_count: u32,
+}
+
+/// The exactness check's images of one frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Checked {
+    /// Every depth sample (4 per pixel, row-major).
+    pub depth: Vec<f32>,
+    /// Per pixel, the least (depth bits << 32 | slot) drawn there (`u64::MAX`: nothing).
+    pub ids: Vec<u64>,
+}
+
+impl Checked {
+    /// The (instance, meshlet) slots that own at least one pixel, ascending: the oracle's set.
+    pub fn owners(&self) -> Vec<u32> {
+        let mut v: Vec<u32> = self
+            .ids
+            .iter()
+            .filter(|&&x| x != u64::MAX)
+            .map(|&x| x as u32)
+            .collect();
+        v.sort_unstable();
+        v.dedup();
+        v
+    }
+
+    /// (depth samples, id pixels) that differ from `other`, bit for bit.
+    pub fn differences(&self, other: &Checked) -> (usize, usize) {
+        let depth = self
+            .depth
+            .iter()
+            .zip(&other.depth)
+            .filter(|(a, b)| a.to_bits() != b.to_bits())
+            .count();
+        let ids = self
+            .ids
+            .iter()
+            .zip(&other.ids)
+            .filter(|(a, b)| a != b)
+            .count();
+        (depth, ids)
+    }
+}
+
+/// How an occlusion-culled frame went (or a reference frame: frustum and cone only, one phase,
+/// everything counted as drawn early).
+#[derive(Clone, Debug)]
+pub struct OcclusionFrame {
+    /// RGBA8 pixels.
+    pub pixels: Vec<u8>,
+    /// GPU time of the early phase, the pyramid and the late phase, nanoseconds.
+    pub early_ns: f64,
+    /// See `early_ns`.
+    pub pyramid_ns: f64,
+    /// See `early_ns`.
+    pub late_ns: f64,
+    /// Meshlets and triangles drawn by the early phase.
+    pub drawn_early: u32,
+    /// See `drawn_early`.
+    pub triangles_early: u32,
+    /// Meshlets and triangles drawn by the late phase.
+    pub drawn_late: u32,
+    /// See `drawn_late`.
+    pub triangles_late: u32,
+    /// Meshlets culled by the frustum, the cone and the pyramid (the late phase's classification).
+    pub culled_frustum: u32,
+    /// See `culled_frustum`.
+    pub culled_cone: u32,
+    /// See `culled_frustum`.
+    pub occluded: u32,
+    /// Triangles in the meshlets culled by the frustum, the cone and the pyramid.
+    pub culled_triangles: [u32; 3],
+    /// Instances wholly outside the frustum (not drawn; their meshlets are in no other count).
+    pub culled_instances: u32,
+    /// The check's images, when asked for.
+    pub checked: Option<Checked>,
+}
+
+impl OcclusionFrame {
+    /// GPU time of the whole frame, nanoseconds.
+    pub fn gpu_ns(&self) -> f64 {
+        self.early_ns + self.pyramid_ns + self.late_ns
+    }
+
+    /// Triangles drawn by both phases.
+    pub fn triangles(&self) -> u32 {
+        self.triangles_early + self.triangles_late
+    }
+
+    /// Meshlets drawn by both phases.
+    pub fn drawn(&self) -> u32 {
+        self.drawn_early + self.drawn_late
+    }
+}
+
+/// What a frame draws.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Phases {
+    /// Frustum and cone culling, one phase (what occlusion culling is checked against).
+    Reference,
+    /// Early phase, pyramid, late phase; `one_texel` breaks the pyramid test on purpose.
+    Occlusion { one_texel: bool },
+}
+
+impl Pass<'_> {
+    /// Forgets what was visible: the next occlusion frame's early phase draws nothing and its
+    /// late phase draws everything the frustum, cone and (empty) pyramid let through.
+    pub fn reset_visibility(&self) {
+        self.bindings
+            .visibility
+            .write(&vec![0u8; 4 * self.slots as usize]);
+    }
+
+    /// One frame from `camera` with two-phase occlusion culling on top of frustum and cone
+    /// culling, using and updating the visibility of the previous frame; with `check`, drawn
+    /// through the id shader and returned with its [`Checked`] images (for exactness, not speed).
+    pub fn render_occlusion(
+        &self,
+        camera: &Camera,
+        shading: Shading,
+        check: bool,
+    ) -> Result<OcclusionFrame, RenderError> {
+        self.occlusion_frame(
+            camera,
+            shading,
+            check,
+            Phases::Occlusion { one_texel: false },
+        )
+    }
+
+    /// [`Pass::render_occlusion`] with a pyramid test made non-conservative on purpose (one level
+    /// finer than a footprint needs): for showing that the check catches a wrong pyramid.
+    pub fn render_occlusion_one_texel(
+        &self,
+        camera: &Camera,
+        check: bool,
+    ) -> Result<OcclusionFrame, RenderError> {
+        self.occlusion_frame(
+            camera,
+            Shading::Unlit,
+            check,
+            Phases::Occlusion { one_texel: true },
+        )
+    }
+
+    /// The frame occlusion culling is compared with: frustum and cone culling alone, in one
+    /// phase, through the same recording (with `check`, the id shader and the [`Checked`] images).
+    pub fn render_reference(
+        &self,
+        camera: &Camera,
+        shading: Shading,
+        check: bool,
+    ) -> Result<OcclusionFrame, RenderError> {
+        self.occlusion_frame(camera, shading, check, Phases::Reference)
+    }
+
+    fn objects(&self) -> Result<&Objects, RenderError> {
+        if let Some(o) = self.occlusion.get() {
+            return Ok(o);
+        }
+        let o = self.make_objects()?;
+        Ok(self.occlusion.get_or_init(|| o))
+    }
+
+    fn make_objects(&self) -> Result<Objects, RenderError> {
+        let ctx = self.ctx;
+        let d = &ctx.device;
+        let code = spirv(shader(Shader::PyramidComp))?;
+        // SAFETY (this function's calls): valid create infos on the context's live device; every
+        // handle is owned by an `Owned` right away, so an error frees what was made.
+        let module = Owned::new(
+            d,
+            unsafe {
+                d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None)
+            }
+            .map_err(vk_err("shader module"))?,
+            vkc::destroy_shader_module,
+        );
+        let sampler = Owned::new(
+            d,
+            unsafe { d.create_sampler(&vk::SamplerCreateInfo::default(), None) }
+                .map_err(vk_err("sampler"))?,
+            vkc::destroy_sampler,
+        );
+        let bindings = [
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(0)
+                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::COMPUTE),
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(1)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::COMPUTE),
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(2)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(1)
+                .stage_flags(vk::ShaderStageFlags::COMPUTE),
+        ];
+        let set_layout = Owned::new(
+            d,
+            unsafe {
+                d.create_descriptor_set_layout(
+                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
+                    None,
+                )
+            }
+            .map_err(vk_err("descriptor set layout"))?,
+            vkc::destroy_descriptor_set_layout,
+        );
+        let sizes = [
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                .descriptor_count(1),
+            vk::DescriptorPoolSize::default()
+                .ty(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(2),
+        ];
+        let pool = Owned::new(
+            d,
+            unsafe {
+                d.create_descriptor_pool(
+                    &vk::DescriptorPoolCreateInfo::default()
+                        .max_sets(1)
+                        .pool_sizes(&sizes),
+                    None,
+                )
+            }
+            .map_err(vk_err("descriptor pool"))?,
+            vkc::destroy_descriptor_pool,
+        );
+        let layouts = [set_layout.get()];
+        let set = unsafe {
+            d.allocate_descriptor_sets(
+                &vk::DescriptorSetAllocateInfo::default()
+                    .descriptor_pool(pool.get())
+                    .set_layouts(&layouts),
+            )
+        }
+        .map_err(vk_err("descriptor set"))?[0];
+        let samples = ctx.buffer(
+            4 * SAMPLES.as_raw() as u64 * WIDTH as u64 * HEIGHT as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let image = [vk::DescriptorImageInfo::default()
+            .sampler(sampler.get())
+            .image_view(self.targets[2].view.get())
+            .image_layout(vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL)];
+        let pyramid = [vk::DescriptorBufferInfo::default()
+            .buffer(self.bindings.pyramid.buf)
+            .range(vk::WHOLE_SIZE)];
+        let sample_info = [vk::DescriptorBufferInfo::default()
+            .buffer(samples.buf)
+            .range(vk::WHOLE_SIZE)];
+        let writes = [
+            vk::WriteDescriptorSet::default()
+                .dst_set(set)
+                .dst_binding(0)
+                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                .image_info(&image),
+            vk::WriteDescriptorSet::default()
+                .dst_set(set)
+                .dst_binding(1)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .buffer_info(&pyramid),
+            vk::WriteDescriptorSet::default()
+                .dst_set(set)
+                .dst_binding(2)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .buffer_info(&sample_info),
+        ];
+        unsafe { d.update_descriptor_sets(&writes, &[]) };
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            .size(std::mem::size_of::<ComputePush>() as u32)];
+        let layout = Owned::new(
+            d,
+            unsafe {
+                d.create_pipeline_layout(
+                    &vk::PipelineLayoutCreateInfo::default()
+                        .set_layouts(&layouts)
+                        .push_constant_ranges(&ranges),
+                    None,
+                )
+            }
+            .map_err(vk_err("pipeline layout"))?,
+            vkc::destroy_pipeline_layout,
+        );
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module.get())
+            .name(c"main");
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(layout.get());
+        let pipeline = Owned::new(
+            d,
+            unsafe { d.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) }
+                .map_err(|(_, e)| RenderError::Vulkan("create compute pipeline", e))?[0],
+            vkc::destroy_pipeline,
+        );
+        let queries = Owned::new(
+            d,
+            unsafe {
+                d.create_query_pool(
+                    &vk::QueryPoolCreateInfo::default()
+                        .query_type(vk::QueryType::TIMESTAMP)
+                        .query_count(4),
+                    None,
+                )
+            }
+            .map_err(vk_err("query pool"))?,
+            vkc::destroy_query_pool,
+        );
+        Ok(Objects {
+            pipeline,
+            layout,
+            set,
+            _pool: pool,
+            _set_layout: set_layout,
+            _sampler: sampler,
+            samples,
+            queries,
+        })
+    }
+
+    fn occlusion_frame(
+        &self,
+        camera: &Camera,
+        shading: Shading,
+        check: bool,
+        phases: Phases,
+    ) -> Result<OcclusionFrame, RenderError> {
+        let ctx = self.ctx;
+        let d = &ctx.device;
+        if !matches!(self.drawn, Drawn::Descriptors(_)) || self.lod.is_some() {
+            return Err(RenderError::NoShaderDecoder(
+                "occlusion culling of a compressed or LOD pass".into(),
+            ));
+        }
+        let pipeline = if check {
+            self.mesh_check
+                .as_ref()
+                .ok_or(RenderError::NoIdCheck)?
+                .get()
+        } else {
+            self.mesh_shade
+                .as_ref()
+                .expect("a descriptor pass has one")
+                .get()
+        };
+        let objects = self.objects()?;
+        self.bindings.counters.write(&[0u8; COUNTER_BYTES as usize]);
+        if check {
+            self.bindings
+                .ids
+                .write(&vec![0xffu8; self.bindings.ids.size as usize]);
+        }
+        let base = FLAG_FRUSTUM | FLAG_CONE;
+        let push = self.push(camera, base, shading, self.meshlet_count);
+        let (draws, culled_instances) = self.draw_list(camera, push);
+        let with = |flags: u32| -> Vec<frame::DrawCmd> {
+            draws
+                .iter()
+                .map(|&(p, a, b, m)| {
+                    (
+                        Push {
+                            flags: p.flags | flags,
+                            ..p
+                        },
+                        a,
+                        b,
+                        m,
+                    )
+                })
+                .collect()
+        };
+        let (first, second) = match phases {
+            Phases::Reference => (with(0), Vec::new()),
+            Phases::Occlusion { one_texel } => (
+                with(FLAG_EARLY),
+                with(FLAG_LATE | if one_texel { FLAG_PYRAMID_ONE_TEXEL } else { 0 }),
+            ),
+        };
+        let two = phases != Phases::Reference;
+        let [msaa, resolve, depth] = &self.targets;
+        let (msaa, resolve, depth) = (
+            (msaa.image.get(), msaa.view.get()),
+            (resolve.image.get(), resolve.view.get()),
+            (depth.image.get(), depth.view.get()),
+        );
+        let ts = objects.queries.get();
+        let area = vk::Rect2D::default().extent(vk::Extent2D {
+            width: WIDTH,
+            height: HEIGHT,
+        });
+        let (cw, ch) = (WIDTH.div_ceil(8), HEIGHT.div_ceil(8));
+        // SAFETY: `submit` hands a recording command buffer and waits for it; every handle
+        // recorded is owned by this pass and lives past the wait.
+        ctx.submit(|cmd| unsafe {
+            d.cmd_reset_query_pool(cmd, ts, 0, 4);
+            let image_barrier = |image, old, new, aspect| {
+                vk::ImageMemoryBarrier2::default()
+                    .image(image)
+                    .old_layout(old)
+                    .new_layout(new)
+                    .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                    .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+                    .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                    .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
+                    .subresource_range(
+                        vk::ImageSubresourceRange::default()
+                            .aspect_mask(aspect)
+                            .level_count(1)
+                            .layer_count(1),
+                    )
+            };
+            // Every buffer write before is visible to every read and write after.
+            let full = || {
+                let m = [vk::MemoryBarrier2::default()
+                    .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                    .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+                    .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                    .dst_access_mask(
+                        vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE,
+                    )];
+                d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&m));
+            };
+            let attachment = vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL;
+            let read_only = vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL;
+            let start = [
+                image_barrier(
+                    msaa.0,
+                    vk::ImageLayout::UNDEFINED,
+                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                    vk::ImageAspectFlags::COLOR,
+                ),
+                image_barrier(
+                    resolve.0,
+                    vk::ImageLayout::UNDEFINED,
+                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                    vk::ImageAspectFlags::COLOR,
+                ),
+                image_barrier(
+                    depth.0,
+                    vk::ImageLayout::UNDEFINED,
+                    attachment,
+                    vk::ImageAspectFlags::DEPTH,
+                ),
+            ];
+            d.cmd_pipeline_barrier2(
+                cmd,
+                &vk::DependencyInfo::default().image_memory_barriers(&start),
+            );
+            let rendering = |clear: bool, last: bool, draws: &[frame::DrawCmd]| {
+                let load = if clear {
+                    vk::AttachmentLoadOp::CLEAR
+                } else {
+                    vk::AttachmentLoadOp::LOAD
+                };
+                let mut colour = vk::RenderingAttachmentInfo::default()
+                    .image_view(msaa.1)
+                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .load_op(load)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .clear_value(vk::ClearValue {
+                        color: vk::ClearColorValue {
+                            float32: [0.08, 0.09, 0.12, 1.0],
+                        },
+                    });
+                if last {
+                    colour = colour
+                        .resolve_mode(vk::ResolveModeFlags::AVERAGE)
+                        .resolve_image_view(resolve.1)
+                        .resolve_image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+                }
+                let colour = [colour];
+                let depth_att = vk::RenderingAttachmentInfo::default()
+                    .image_view(depth.1)
+                    .image_layout(attachment)
+                    .load_op(load)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .clear_value(vk::ClearValue {
+                        depth_stencil: vk::ClearDepthStencilValue {
+                            depth: 1.0,
+                            stencil: 0,
+                        },
+                    });
+                d.cmd_begin_rendering(
+                    cmd,
+                    &vk::RenderingInfo::default()
+                        .render_area(area)
+                        .layer_count(1)
+                        .color_attachments(&colour)
+                        .depth_attachment(&depth_att),
+                );
+                d.cmd_set_viewport(
+                    cmd,
+                    0,
+                    &[vk::Viewport::default()
+                        .width(WIDTH as f32)
+                        .height(HEIGHT as f32)
+                        .max_depth(1.0)],
+                );
+                d.cmd_set_scissor(cmd, 0, &[area]);
+                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+                d.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::GRAPHICS,
+                    self.layout.get(),
+                    0,
+                    &[self.set],
+                    &[],
+                );
+                self.record_draws(cmd, draws, true);
+                d.cmd_end_rendering(cmd);
+            };
+            let compute = |mode: u32, level: u32, groups: (u32, u32)| {
+                let p = ComputePush {
+                    mode,
+                    level,
+                    sample_count: SAMPLES.as_raw(),
+                };
+                d.cmd_push_constants(
+                    cmd,
+                    objects.layout.get(),
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    bytemuck::bytes_of(&p),
+                );
+                d.cmd_dispatch(cmd, groups.0, groups.1, 1);
+            };
+            let bind_compute = || {
+                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, objects.pipeline.get());
+                d.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::COMPUTE,
+                    objects.layout.get(),
+                    0,
+                    &[objects.set],
+                    &[],
+                );
+            };
+            let depth_to = |old, new| {
+                let b = [image_barrier(
+                    depth.0,
+                    old,
+                    new,
+                    vk::ImageAspectFlags::DEPTH,
+                )];
+                d.cmd_pipeline_barrier2(
+                    cmd,
+                    &vk::DependencyInfo::default().image_memory_barriers(&b),
+                );
+            };
+            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, ts, 0);
+            rendering(true, !two, &first);
+            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts, 1);
+            if two {
+                depth_to(attachment, read_only);
+                bind_compute();
+                compute(0, 0, (cw, ch));
+                let (mut w, mut h) = (WIDTH, HEIGHT);
+                for level in 1..PYRAMID_LEVELS {
+                    (w, h) = (w.div_ceil(2), h.div_ceil(2));
+                    full();
+                    compute(1, level, (w.div_ceil(8), h.div_ceil(8)));
+                }
+                full();
+                depth_to(read_only, attachment);
+            }
+            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts, 2);
+            if two {
+                rendering(false, true, &second);
+            }
+            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts, 3);
+            if check {
+                depth_to(attachment, read_only);
+                bind_compute();
+                compute(2, 0, (cw, ch));
+            }
+            let to_copy = [image_barrier(
+                resolve.0,
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                vk::ImageAspectFlags::COLOR,
+            )];
+            d.cmd_pipeline_barrier2(
+                cmd,
+                &vk::DependencyInfo::default().image_memory_barriers(&to_copy),
+            );
+            d.cmd_copy_image_to_buffer(
+                cmd,
+                resolve.0,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                self.readback.buf,
+                &[vk::BufferImageCopy::default()
+                    .image_subresource(
+                        vk::ImageSubresourceLayers::default()
+                            .aspect_mask(vk::ImageAspectFlags::COLOR)
+                            .layer_count(1),
+                    )
+                    .image_extent(vk::Extent3D {
+                        width: WIDTH,
+                        height: HEIGHT,
+                        depth: 1,
+                    })],
+            );
+            let host = [vk::MemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+                .dst_access_mask(vk::AccessFlags2::HOST_READ)];
+            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&host));
+        })?;
+        let mut t = [0u64; 4];
+        // SAFETY: the submission that wrote the timestamps has completed (`submit` waits).
+        unsafe {
+            d.get_query_pool_results(
+                ts,
+                0,
+                &mut t,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .map_err(vk_err("timestamps"))?;
+        let ns =
+            |a: usize, b: usize| t[b].saturating_sub(t[a]) as f64 * ctx.timestamp_period as f64;
+        let c: Vec<u32> =
+            bytemuck::cast_slice(&self.bindings.counters.read(COUNTER_BYTES as usize)).to_vec();
+        let checked = check.then(|| Checked {
+            depth: bytemuck::cast_slice(&objects.samples.read(objects.samples.size as usize))
+                .to_vec(),
+            ids: bytemuck::cast_slice(&self.bindings.ids.read(self.bindings.ids.size as usize))
+                .to_vec(),
+        });
+        let (drawn, triangles) = (c[COUNTER_DRAWN], c[COUNTER_TRIANGLES_DRAWN]);
+        let (drawn_late, triangles_late) = (c[COUNTER_DRAWN_LATE], c[COUNTER_TRIANGLES_DRAWN_LATE]);
+        Ok(OcclusionFrame {
+            pixels: self.readback.read((WIDTH * HEIGHT * 4) as usize),
+            early_ns: ns(0, 1),
+            pyramid_ns: ns(1, 2),
+            late_ns: ns(2, 3),
+            drawn_early: drawn - drawn_late,
+            triangles_early: triangles - triangles_late,
+            drawn_late,
+            triangles_late,
+            culled_frustum: c[COUNTER_CULLED_FRUSTUM],
+            culled_cone: c[COUNTER_CULLED_CONE],
+            occluded: c[COUNTER_OCCLUDED],
+            culled_triangles: [
+                c[COUNTER_TRIANGLES_FRUSTUM],
+                c[COUNTER_TRIANGLES_CONE],
+                c[COUNTER_TRIANGLES_OCCLUDED],
+            ],
+            culled_instances,
+            checked,
+        })
+    }
+}
