@@ -18,25 +18,33 @@ uint pyramid_offset(uint k) {
 }
 
 // Whether bounding sphere s (the meshlet's, in the space of its positions) is wholly behind the
-// early phase's depth. The sphere's world box is projected corner by corner: its screen rectangle
-// holds the sphere's, and its nearest corner is at most as deep as the sphere's nearest point.
-// The pyramid level is the finest at which the rectangle spans at most 2 x 2 texels, which then
-// cover it whole. Divisions and rounding are paid for with a pixel of margin on each side and a
-// relative 1e-5 of depth, always towards keeping the meshlet.
+// early phase's depth. The sphere is projected exactly (Mara and McGuire, JCGT 2(2), 2013, per
+// axis as niagara does): the rows of view_proj are the view's rows scaled by the projection
+// (x, y) or negated (w, the distance along the view axis), so the sphere's view-space centre and
+// its tangent lines give the screen rectangle, and its nearest depth is at w = w_c - r. The
+// pyramid level is the finest at which the rectangle spans at most 2 x 2 texels, which then cover
+// it whole. Square roots, divisions and rounding are paid for with a pixel of margin on each side
+// and a relative 1e-5 of depth, always towards keeping the meshlet.
 bool occluded(vec4 s) {
     if (instanced()) { s = vec4(to_world(s.xyz), s.w * instances[pc.instance].extra.x * 1.00001); }
-    vec2 lo = vec2(1e30), hi = vec2(-1e30);
-    float nearest = 1.0;
-    for (int k = 0; k < 8; k++) {
-        vec3 corner = s.xyz + s.w * vec3((k & 1) != 0 ? 1.0 : -1.0, (k & 2) != 0 ? 1.0 : -1.0, (k & 4) != 0 ? 1.0 : -1.0);
-        vec4 c = pc.view_proj * vec4(corner, 1.0);
-        // A corner at or behind the camera plane: the rectangle is unbounded, keep the meshlet.
-        if (c.w <= 1e-6) { return false; }
-        vec3 n = c.xyz / c.w;
-        lo = min(lo, n.xy);
-        hi = max(hi, n.xy);
-        nearest = min(nearest, n.z);
-    }
+    mat4 m = transpose(pc.view_proj);
+    vec4 c = vec4(s.xyz, 1.0);
+    float p00 = length(m[0].xyz), p11 = length(m[1].xyz), pw = length(m[3].xyz);
+    float cx = dot(m[0], c) / p00, cy = dot(m[1], c) / p11, cz = dot(m[3], c) / pw;
+    float r = s.w;
+    // Not wholly in front of the camera plane (with room for rounding): keep it.
+    if (cz - r <= 1e-4 * cz + 1e-6) { return false; }
+    float czr2 = cz * cz - r * r;
+    float vx = sqrt(cx * cx + czr2), vy = sqrt(cy * cy + czr2);
+    vec2 lo = vec2((vx * cx - r * cz) / (vx * cz + r * cx), (vy * cy - r * cz) / (vy * cz + r * cy));
+    vec2 hi = vec2((vx * cx + r * cz) / (vx * cz - r * cx), (vy * cy + r * cz) / (vy * cz - r * cy));
+    // The projection's scales are positive (x) and may flip y: order each axis again.
+    vec2 scale = vec2(p00, p11) / pw;
+    vec2 a0 = lo * scale, a1 = hi * scale;
+    lo = min(a0, a1);
+    hi = max(a0, a1);
+    float w = dot(m[3], c) - r * pw;
+    float nearest = (dot(m[2], c) - r * dot(m[2].xyz, m[3].xyz) / pw) / w;
     vec2 image = vec2(IMAGE_WIDTH, IMAGE_HEIGHT);
     vec2 plo = (lo * 0.5 + 0.5) * image - 1.0;
     vec2 phi = (hi * 0.5 + 0.5) * image + 1.0;

@@ -67,6 +67,17 @@ pub struct RenderArgs {
     /// With --format: largest position error as a fraction of the bounding-box diagonal.
     #[arg(long, requires = "format")]
     relative_tolerance: Option<f64>,
+    /// Two-phase occlusion culling: each view becomes a path of `--frames` frames closing in on
+    /// it; the early phase draws what the last frame saw, a depth pyramid is built from it, the
+    /// late phase tests the rest against the pyramid. Every frame is also drawn with frustum and
+    /// cone culling alone, and the two are checked pixel for pixel through an id image (exit 1 on
+    /// any difference); the meshlets that own a pixel are the oracle the result is reported
+    /// against. Draws the split layout, for meshes and instanced scenes.
+    #[arg(long, conflicts_with_all = ["lod", "format", "compressed"])]
+    occlusion: bool,
+    /// Frames per view with `--occlusion` (the first warms the visibility and is reported apart).
+    #[arg(long, default_value_t = 8, requires = "occlusion", value_parser = clap::value_parser!(u32).range(2..=64))]
+    frames: u32,
     /// Enable the Khronos validation layer and fail on any error it reports.
     #[arg(long)]
     validate: bool,
@@ -100,6 +111,9 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
     let name = &a.strategy;
     crate::strategy::by_name(name, &a.args.options())?;
     let scene = load_scene(&a.mesh, quiet)?;
+    if a.occlusion {
+        return run_occlusion(a, scene, quiet);
+    }
     if scene.is_instanced() {
         return run_scene(a, scene, quiet);
     }
@@ -291,6 +305,116 @@ fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
     }
     if let (Some(p), false) = (&a.output, a.json) {
         println!("wrote {}", p.display());
+    }
+    report_validation(validation_errors, a.json)
+}
+
+/// `render --occlusion`: camera paths with two-phase occlusion culling, checked against the
+/// frustum-and-cone render frame by frame.
+fn run_occlusion(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
+    use crate::render::occlusion::{measure_path, slot_triangles, Totals};
+    if a.descriptor != Format::Split {
+        bail!("--occlusion draws the split descriptor layout only");
+    }
+    if a.no_cull {
+        bail!("--occlusion culls on top of the frustum and cone tests: drop --no-cull");
+    }
+    let name = &a.strategy;
+    let pb = super::spinner(
+        quiet || a.json,
+        format!("building {name} meshlets per mesh"),
+    );
+    let meshlets = scene
+        .meshes
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            build_validated(m, &a.mesh, name, &a.args).with_context(|| format!("mesh {i}"))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    pb.finish_and_clear();
+    let built: usize = meshlets.iter().map(|m| m.len()).sum();
+    let ctx = Context::new(a.validate)?;
+    if !ctx.id_check {
+        bail!(crate::render::RenderError::NoIdCheck);
+    }
+    let pass = Pass::instanced(&ctx, &scene, &meshlets)
+        .with_context(|| format!("{}: {name}", a.mesh.display()))?;
+    let slots = slot_triangles(&scene, &meshlets);
+    let (views, _) = cameras(&a, &scene.box_corners());
+    let bar = super::bar(quiet || a.json, views.len() as u64);
+    bar.set_message("camera paths");
+    let mut paths = Vec::new();
+    for (i, cam) in views.iter().enumerate() {
+        paths.push(measure_path(&pass, cam, i, a.frames as usize, &slots)?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let mut total = Totals {
+        images_identical: true,
+        ..Default::default()
+    };
+    for p in &paths {
+        total.add(&p.frames);
+    }
+    let validation_errors = ctx.validation.as_ref().map(|v| v.errors());
+    if a.json {
+        let mut out = serde_json::to_value(&total)?;
+        let o = out.as_object_mut().expect("an object");
+        for (k, v) in [
+            ("mesh", serde_json::json!(a.mesh.display().to_string())),
+            ("meshes", scene.meshes.len().into()),
+            ("instances", scene.instances.len().into()),
+            ("triangles_built", scene.triangles_built().into()),
+            ("strategy", name.as_str().into()),
+            ("limits", a.args.limits.to_string().into()),
+            ("meshlets_built", built.into()),
+            ("frames_per_view", a.frames.into()),
+            ("device_bytes_scene", pass.scene_bytes().into()),
+            ("triangle_ratio", total.triangle_ratio().into()),
+            ("oracle_ratio", total.oracle_ratio().into()),
+            ("time_ratio", total.time_ratio().into()),
+        ] {
+            o.insert(k.into(), v);
+        }
+        print_json(out, &ctx, true, &a, &validation_errors, &paths)?;
+    } else {
+        println!(
+            "{}: {} meshes, {} instances, {} triangles built; {name}: {built} meshlets built; {} frames per view, the first apart; device: {}",
+            a.mesh.display(),
+            scene.meshes.len(),
+            scene.instances.len(),
+            scene.triangles_built(),
+            a.frames,
+            ctx.name
+        );
+        for p in &paths {
+            let t = &p.frames;
+            println!(
+                "view {}: triangles {} with occlusion, {} frustum+cone ({:.2}x), oracle {}; meshlets {:.2}x the oracle's; time {:.2}x (pyramid {:.2} ms); images {}",
+                p.view,
+                t.triangles_occlusion,
+                t.triangles_frustum_cone,
+                t.triangle_ratio(),
+                t.triangles_oracle,
+                t.oracle_ratio(),
+                t.time_ratio(),
+                t.pyramid_ms / t.frames.max(1) as f64,
+                if t.images_identical && p.warm_up.images_identical { "identical" } else { "DIFFER" }
+            );
+        }
+        println!(
+            "all views: triangles {:.3}x frustum+cone, meshlets {:.3}x the oracle's, frame time {:.3}x",
+            total.triangle_ratio(),
+            total.oracle_ratio(),
+            total.time_ratio()
+        );
+    }
+    let exact = paths
+        .iter()
+        .all(|p| p.frames.images_identical && p.warm_up.images_identical);
+    if !exact {
+        bail!("occlusion culling changed the image: a visible meshlet was culled");
     }
     report_validation(validation_errors, a.json)
 }

@@ -35,8 +35,8 @@ pub struct Context {
     pub mesh_subgroups: bool,
     /// Device name and driver.
     pub name: String,
-    /// Whether fragment shaders have 64-bit buffer atomics: what the occlusion exactness check's
-    /// id image needs (lavapipe has them).
+    /// Whether fragment shaders have 64-bit buffer atomics and per-sample shading: what the
+    /// occlusion exactness check's id image needs (lavapipe has both).
     pub id_check: bool,
     /// Errors reported by the validation layer (when enabled).
     pub validation: Option<super::validation::Messenger>,
@@ -178,6 +178,7 @@ impl Context {
         // SAFETY: `physical` comes from this instance; `f2` chains only live structs.
         unsafe { instance.get_physical_device_features2(physical, &mut f2) };
         let id_check = f2.features.fragment_stores_and_atomics == vk::TRUE
+            && f2.features.sample_rate_shading == vk::TRUE
             && f2.features.shader_int64 == vk::TRUE
             && have12.shader_buffer_int64_atomics == vk::TRUE;
         let mut v12 =
@@ -185,6 +186,7 @@ impl Context {
         let core = vk::PhysicalDeviceFeatures::default()
             .pipeline_statistics_query(true)
             .fragment_stores_and_atomics(id_check)
+            .sample_rate_shading(id_check)
             .shader_int64(id_check);
         let dev_exts = [MESH_EXT.as_ptr()];
         let info = vk::DeviceCreateInfo::default()

@@ -89,6 +89,8 @@ pub const FLAG_PYRAMID_ONE_TEXEL: u32 = 1 << 7;
 pub const IMAGE_WIDTH: u32 = 1280;
 /// See [`IMAGE_WIDTH`].
 pub const IMAGE_HEIGHT: u32 = 720;
+/// Samples per pixel (4x MSAA).
+pub const IMAGE_SAMPLES: u32 = 4;
 /// Levels of the depth pyramid: level 0 is the image, each next one half as wide and high
 /// (rounded up), down to 1 x 1.
 pub const PYRAMID_LEVELS: u32 = 12;
@@ -141,6 +143,7 @@ pub fn glsl_header() -> String {
         ("FLAG_PYRAMID_ONE_TEXEL", FLAG_PYRAMID_ONE_TEXEL),
         ("IMAGE_WIDTH", IMAGE_WIDTH),
         ("IMAGE_HEIGHT", IMAGE_HEIGHT),
+        ("IMAGE_SAMPLES", IMAGE_SAMPLES),
         ("PYRAMID_LEVELS", PYRAMID_LEVELS),
     ];
     for (name, v) in flags {

@@ -6,13 +6,14 @@
 pub mod compressed;
 pub mod context;
 pub mod interface;
+pub mod occlusion;
 pub mod pass;
 pub mod validation;
 
 pub use crate::lod::camera::{Camera, FOV_Y, FRAME_FILL, HEIGHT, WIDTH};
 pub use crate::mesh::generate::random_directions;
 pub use context::Context;
-pub use pass::{Drawn, Frame, MeshQueries, Pass, Pipeline, Shading};
+pub use pass::{Checked, Drawn, Frame, MeshQueries, OcclusionFrame, Pass, Pipeline, Shading};
 
 use thiserror::Error;
 

@@ -589,6 +589,26 @@ impl<'a> Pass<'a> {
         self.largest_binding
     }
 
+    /// Device bytes the scene holds: positions, meshlet descriptors and data, culling data,
+    /// index buffer, instance records and visibility words (not the render targets, the pyramid
+    /// or the check's buffers, which depend on the image alone).
+    pub fn scene_bytes(&self) -> u64 {
+        let b = &self.bindings;
+        [
+            &b.positions,
+            &b.descriptors,
+            &b.data,
+            &b.triangles,
+            &b.task,
+            &self.index,
+            &b.instances,
+            &b.visibility,
+        ]
+        .iter()
+        .map(|x| x.size)
+        .sum()
+    }
+
     /// Device bytes of the meshlet data in this layout (see `Packed::device_bytes`).
     pub fn device_bytes(&self) -> usize {
         self.device_bytes
@@ -743,5 +763,6 @@ mod tests {
             (interface::IMAGE_WIDTH, interface::IMAGE_HEIGHT),
             (WIDTH, HEIGHT)
         );
+        assert_eq!(interface::IMAGE_SAMPLES, SAMPLES.as_raw());
     }
 }

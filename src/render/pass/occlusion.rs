@@ -11,8 +11,9 @@
 //!
 //! The early depth is never nearer than the final one (it has fewer occluders), so a meshlet
 //! behind the pyramid is behind the final image too. The check ([`Checked`]) renders with a
-//! fragment shader that keeps, per pixel, the least (depth, slot) of every fragment drawn; run
+//! fragment shader that keeps, per sample, the least (depth, slot) of every fragment drawn; run
 //! with and without occlusion culling, the two id images and every depth sample must be equal.
+//! Both are per sample (4x MSAA).
 
 use super::*;
 use interface::{
@@ -60,12 +61,13 @@ struct ComputePush {
 pub struct Checked {
     /// Every depth sample (4 per pixel, row-major).
     pub depth: Vec<f32>,
-    /// Per pixel, the least (depth bits << 32 | slot) drawn there (`u64::MAX`: nothing).
+    /// Per sample (4 per pixel, row-major), the least (depth bits << 32 | slot) drawn there
+    /// (`u64::MAX`: nothing).
     pub ids: Vec<u64>,
 }
 
 impl Checked {
-    /// The (instance, meshlet) slots that own at least one pixel, ascending: the oracle's set.
+    /// The (instance, meshlet) slots that own at least one sample, ascending: the oracle's set.
     pub fn owners(&self) -> Vec<u32> {
         let mut v: Vec<u32> = self
             .ids
@@ -78,7 +80,7 @@ impl Checked {
         v
     }
 
-    /// (depth samples, id pixels) that differ from `other`, bit for bit.
+    /// (depth samples, id samples) that differ from `other`, bit for bit.
     pub fn differences(&self, other: &Checked) -> (usize, usize) {
         let depth = self
             .depth
@@ -450,7 +452,7 @@ impl Pass<'_> {
             width: WIDTH,
             height: HEIGHT,
         });
-        let (cw, ch) = (WIDTH.div_ceil(8), HEIGHT.div_ceil(8));
+        let (cw, ch) = (WIDTH.div_ceil(16), HEIGHT.div_ceil(16));
         // SAFETY: `submit` hands a recording command buffer and waits for it; every handle
         // recorded is owned by this pass and lives past the wait.
         ctx.submit(|cmd| unsafe {
@@ -615,13 +617,11 @@ impl Pass<'_> {
             if two {
                 depth_to(attachment, read_only);
                 bind_compute();
-                compute(0, 0, (cw, ch));
-                let (mut w, mut h) = (WIDTH, HEIGHT);
-                for level in 1..PYRAMID_LEVELS {
-                    (w, h) = (w.div_ceil(2), h.div_ceil(2));
-                    full();
-                    compute(1, level, (w.div_ceil(8), h.div_ceil(8)));
-                }
+                // Levels 0-3 per 8 x 8 block (16 x 16 blocks a workgroup), then the rest in one
+                // workgroup.
+                compute(0, 0, (WIDTH.div_ceil(128), HEIGHT.div_ceil(128)));
+                full();
+                compute(1, 0, (1, 1));
                 full();
                 depth_to(read_only, attachment);
             }

@@ -57,7 +57,7 @@ impl<'a> Pass<'a> {
             visibility: ctx.buffer(4 * fields.slots as u64, storage)?,
             pyramid: ctx.buffer(4 * occlusion::pyramid_texels() as u64, storage)?,
             ids: ctx.buffer(
-                8 * WIDTH as u64 * HEIGHT as u64,
+                8 * SAMPLES.as_raw() as u64 * WIDTH as u64 * HEIGHT as u64,
                 storage | vk::BufferUsageFlags::TRANSFER_DST,
             )?,
         };

@@ -1,0 +1,215 @@
+//! Occlusion culling measured along camera paths: what `render --occlusion` and `bench render`
+//! report.
+//!
+//! Each view becomes a short path closing in on it ([`Camera::approach`]); the first frame starts
+//! from nothing visible and warms the visibility up, so it is reported apart. The path is run
+//! twice: once timed (shaded, with occlusion culling and, frame by frame, the frustum-and-cone
+//! render it is compared with), and once through the exactness check (id shader): every frame's
+//! depth samples and (depth, slot) id image with occlusion culling must equal those without. The
+//! oracle is the set of (instance, meshlet) slots that own at least one sample of the id image:
+//! what a perfect culler would draw.
+
+use super::{Camera, Pass, RenderError, Shading};
+use serde::Serialize;
+
+/// Sums over frames of one path (or several).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Totals {
+    /// Frames summed.
+    pub frames: u32,
+    /// Triangles drawn with occlusion culling (both phases).
+    pub triangles_occlusion: u64,
+    /// Triangles drawn with frustum and cone culling alone.
+    pub triangles_frustum_cone: u64,
+    /// Triangles of the meshlets that own a sample.
+    pub triangles_oracle: u64,
+    /// Meshlets drawn with occlusion culling.
+    pub meshlets_occlusion: u64,
+    /// Meshlets drawn with frustum and cone culling alone.
+    pub meshlets_frustum_cone: u64,
+    /// Meshlets that own a sample.
+    pub meshlets_oracle: u64,
+    /// Meshlets and triangles drawn by the early phase (visible in the previous frame).
+    pub meshlets_early: u64,
+    /// See `meshlets_early`.
+    pub triangles_early: u64,
+    /// Meshlets and triangles drawn by the late phase (newly visible).
+    pub meshlets_late: u64,
+    /// See `meshlets_late`.
+    pub triangles_late: u64,
+    /// Instances skipped whole by the frustum (host).
+    pub instances_culled_frustum: u64,
+    /// Meshlets skipped by the frustum, the normal cone and the pyramid (late phase).
+    pub meshlets_culled_frustum: u64,
+    /// See `meshlets_culled_frustum`.
+    pub meshlets_culled_cone: u64,
+    /// See `meshlets_culled_frustum`.
+    pub meshlets_occluded: u64,
+    /// GPU milliseconds of the early phase, the pyramid and the late phase.
+    pub early_ms: f64,
+    /// See `early_ms`.
+    pub pyramid_ms: f64,
+    /// See `early_ms`.
+    pub late_ms: f64,
+    /// GPU milliseconds of the frames with occlusion culling (the three above).
+    pub frame_ms_occlusion: f64,
+    /// GPU milliseconds of the frames with frustum and cone culling alone.
+    pub frame_ms_frustum_cone: f64,
+    /// Depth samples and id samples that differ between the two renders (0 when exact).
+    pub depth_samples_differing: u64,
+    /// See `depth_samples_differing`.
+    pub id_samples_differing: u64,
+    /// Whether every frame's depth samples and id image were identical.
+    pub images_identical: bool,
+}
+
+impl Totals {
+    fn new() -> Self {
+        Self {
+            images_identical: true,
+            ..Default::default()
+        }
+    }
+
+    /// Adds `o`.
+    pub fn add(&mut self, o: &Totals) {
+        self.frames += o.frames;
+        self.triangles_occlusion += o.triangles_occlusion;
+        self.triangles_frustum_cone += o.triangles_frustum_cone;
+        self.triangles_oracle += o.triangles_oracle;
+        self.meshlets_occlusion += o.meshlets_occlusion;
+        self.meshlets_frustum_cone += o.meshlets_frustum_cone;
+        self.meshlets_oracle += o.meshlets_oracle;
+        self.meshlets_early += o.meshlets_early;
+        self.triangles_early += o.triangles_early;
+        self.meshlets_late += o.meshlets_late;
+        self.triangles_late += o.triangles_late;
+        self.instances_culled_frustum += o.instances_culled_frustum;
+        self.meshlets_culled_frustum += o.meshlets_culled_frustum;
+        self.meshlets_culled_cone += o.meshlets_culled_cone;
+        self.meshlets_occluded += o.meshlets_occluded;
+        self.early_ms += o.early_ms;
+        self.pyramid_ms += o.pyramid_ms;
+        self.late_ms += o.late_ms;
+        self.frame_ms_occlusion += o.frame_ms_occlusion;
+        self.frame_ms_frustum_cone += o.frame_ms_frustum_cone;
+        self.depth_samples_differing += o.depth_samples_differing;
+        self.id_samples_differing += o.id_samples_differing;
+        self.images_identical &= o.images_identical;
+    }
+
+    /// Triangles drawn with occlusion culling over those with frustum and cone culling alone.
+    pub fn triangle_ratio(&self) -> f64 {
+        self.triangles_occlusion as f64 / self.triangles_frustum_cone.max(1) as f64
+    }
+
+    /// Meshlets drawn with occlusion culling over the oracle's.
+    pub fn oracle_ratio(&self) -> f64 {
+        self.meshlets_occlusion as f64 / self.meshlets_oracle.max(1) as f64
+    }
+
+    /// Frame time with occlusion culling over frame time without.
+    pub fn time_ratio(&self) -> f64 {
+        self.frame_ms_occlusion / self.frame_ms_frustum_cone.max(1e-9)
+    }
+}
+
+/// One view's path: the warm-up frame and the frames after it.
+#[derive(Clone, Debug, Serialize)]
+pub struct ViewPath {
+    /// The view's index.
+    pub view: usize,
+    /// The first frame (nothing visible before it).
+    pub warm_up: Totals,
+    /// Every later frame, summed.
+    pub frames: Totals,
+}
+
+/// The triangle count of every (instance, meshlet) slot of `scene` drawn with `meshlets` (one set
+/// per mesh), in slot order: instances in order, each its mesh's meshlets.
+pub fn slot_triangles(
+    scene: &crate::mesh::Scene,
+    meshlets: &[crate::meshlet::Meshlets],
+) -> Vec<u32> {
+    scene
+        .instances
+        .iter()
+        .flat_map(|i| {
+            meshlets[i.mesh as usize]
+                .meshlets
+                .iter()
+                .map(|m| m.triangle_count)
+        })
+        .collect()
+}
+
+/// Runs `view`'s path of `frames` frames on `pass` (timed, then checked); `slot_triangles[s]` is
+/// the triangle count of (instance, meshlet) slot `s` (for the oracle's triangles).
+pub fn measure_path(
+    pass: &Pass,
+    view: &Camera,
+    index: usize,
+    frames: usize,
+    slot_triangles: &[u32],
+) -> Result<ViewPath, RenderError> {
+    let path = view.approach(frames.max(1));
+    let mut totals = [Totals::new(), Totals::new()];
+    let mut drawn = Vec::with_capacity(path.len());
+    pass.reset_visibility();
+    for (f, cam) in path.iter().enumerate() {
+        let occ = pass.render_occlusion(cam, Shading::Lit, false)?;
+        let full = pass.render_reference(cam, Shading::Lit, false)?;
+        drawn.push((occ.drawn_early, occ.drawn_late, occ.occluded));
+        let t = &mut totals[usize::from(f > 0)];
+        t.frames += 1;
+        t.triangles_occlusion += occ.triangles() as u64;
+        t.triangles_frustum_cone += full.triangles() as u64;
+        t.meshlets_occlusion += occ.drawn() as u64;
+        t.meshlets_frustum_cone += full.drawn() as u64;
+        t.meshlets_early += occ.drawn_early as u64;
+        t.triangles_early += occ.triangles_early as u64;
+        t.meshlets_late += occ.drawn_late as u64;
+        t.triangles_late += occ.triangles_late as u64;
+        t.instances_culled_frustum += occ.culled_instances as u64;
+        t.meshlets_culled_frustum += occ.culled_frustum as u64;
+        t.meshlets_culled_cone += occ.culled_cone as u64;
+        t.meshlets_occluded += occ.occluded as u64;
+        t.early_ms += occ.early_ns * 1e-6;
+        t.pyramid_ms += occ.pyramid_ns * 1e-6;
+        t.late_ms += occ.late_ns * 1e-6;
+        t.frame_ms_occlusion += occ.gpu_ns() * 1e-6;
+        t.frame_ms_frustum_cone += full.gpu_ns() * 1e-6;
+    }
+    // The same path through the check: the same visibility, so the same draws, which is checked.
+    pass.reset_visibility();
+    for (f, cam) in path.iter().enumerate() {
+        let occ = pass.render_occlusion(cam, Shading::Unlit, true)?;
+        let full = pass.render_reference(cam, Shading::Unlit, true)?;
+        assert_eq!(
+            (occ.drawn_early, occ.drawn_late, occ.occluded),
+            drawn[f],
+            "the checked run of a path drew what the timed run did"
+        );
+        let (a, b) = (
+            occ.checked.expect("checked"),
+            full.checked.expect("checked"),
+        );
+        let (depth, ids) = a.differences(&b);
+        let owners = b.owners();
+        let t = &mut totals[usize::from(f > 0)];
+        t.depth_samples_differing += depth as u64;
+        t.id_samples_differing += ids as u64;
+        t.images_identical &= depth == 0 && ids == 0;
+        t.meshlets_oracle += owners.len() as u64;
+        t.triangles_oracle += owners
+            .iter()
+            .map(|&s| slot_triangles.get(s as usize).copied().unwrap_or(0) as u64)
+            .sum::<u64>();
+    }
+    let [warm_up, frames] = totals;
+    Ok(ViewPath {
+        view: index,
+        warm_up,
+        frames,
+    })
+}
