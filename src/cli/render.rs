@@ -75,6 +75,14 @@ pub struct RenderArgs {
     /// against. Draws the split layout, for meshes and instanced scenes.
     #[arg(long, conflicts_with_all = ["lod", "format", "compressed"])]
     occlusion: bool,
+    /// Draw N x N x N copies of the mesh, spaced at `--spacing` of its largest extent, as an
+    /// instanced scene (the mesh's meshlets built once).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16), conflicts_with_all = ["lod", "format", "compressed"])]
+    grid: Option<u32>,
+    /// With `--grid`: spacing as a fraction of the mesh's largest extent (below 1 the copies
+    /// interpenetrate).
+    #[arg(long, default_value_t = 0.7, requires = "grid")]
+    spacing: f32,
     /// Frames per view with `--occlusion` (the first warms the visibility and is reported apart).
     #[arg(long, default_value_t = 8, requires = "occlusion", value_parser = clap::value_parser!(u32).range(2..=64))]
     frames: u32,
@@ -110,7 +118,17 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
     }
     let name = &a.strategy;
     crate::strategy::by_name(name, &a.args.options())?;
-    let scene = load_scene(&a.mesh, quiet)?;
+    let mut scene = load_scene(&a.mesh, quiet)?;
+    if let Some(n) = a.grid {
+        if scene.is_instanced() {
+            bail!("--grid copies one mesh; {} is already a scene", a.mesh.display());
+        }
+        if !(a.spacing > 0.0 && a.spacing.is_finite()) {
+            bail!("--spacing must be a positive fraction of the mesh's extent");
+        }
+        let m = scene.meshes.pop().expect("one mesh");
+        scene = Scene::grid(m, n as usize, a.spacing);
+    }
     if a.occlusion {
         return run_occlusion(a, scene, quiet);
     }

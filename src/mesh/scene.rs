@@ -75,6 +75,26 @@ impl Scene {
         }
     }
 
+    /// `n` x `n` x `n` copies of `mesh` on a grid whose spacing is `spacing` times the mesh's
+    /// largest extent (below 1 the copies interpenetrate, so most of them hide the others).
+    pub fn grid(mesh: Mesh, n: usize, spacing: f32) -> Self {
+        let (lo, hi) = mesh.bounding_box();
+        let step = (hi - lo).max_element() * spacing;
+        let mut instances = Vec::with_capacity(n * n * n);
+        for k in 0..n * n * n {
+            let (x, y, z) = (k % n, (k / n) % n, k / (n * n));
+            let offset = (Vec3::new(x as f32, y as f32, z as f32) - (n as f32 - 1.0) / 2.0) * step;
+            instances.push(Instance {
+                mesh: 0,
+                transform: Mat4::from_translation(offset),
+            });
+        }
+        Self {
+            meshes: vec![mesh],
+            instances,
+        }
+    }
+
     /// Whether drawing it needs instancing: more than one placement, or a transformed one.
     pub fn is_instanced(&self) -> bool {
         self.instances.len() != 1 || self.instances[0].transform != Mat4::IDENTITY
