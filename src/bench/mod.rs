@@ -16,6 +16,7 @@ pub mod lod;
 pub mod paper;
 pub mod plot;
 pub mod render;
+pub mod render_occlusion;
 pub mod robustness;
 pub mod smoke;
 pub mod stability;

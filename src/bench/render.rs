@@ -61,6 +61,9 @@ pub struct Config {
     /// frustum culls).
     #[arg(long, default_value_t = 0.9)]
     pub near_distance: f32,
+    /// The occlusion-culling scenes.
+    #[command(flatten)]
+    pub occlusion: super::render_occlusion::OcclusionArgs,
 }
 
 impl Config {
@@ -236,8 +239,15 @@ pub fn run(cfg: &Config) -> Result<()> {
             pb.inc(1);
         }
     }
+    let occlusion = super::render_occlusion::run(
+        &cfg.occlusion,
+        &cfg.common,
+        &ctx,
+        cfg.limits,
+        |msg| pb.set_message(msg.to_string()),
+    )?;
     pb.finish_and_clear();
-    write(cfg, &ctx, &rows, &variants)
+    write(cfg, &ctx, &rows, &variants, &occlusion)
 }
 
 /// The main table's row: culling on and off, the vertex pipeline, close-view culling, and the
@@ -417,7 +427,13 @@ fn geomean(xs: &[f64]) -> f64 {
     (xs.iter().map(|x| x.ln()).sum::<f64>() / xs.len() as f64).exp()
 }
 
-fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Result<()> {
+fn write(
+    cfg: &Config,
+    ctx: &Context,
+    rows: &[Row],
+    variants: &[Variant],
+    occlusion: &[super::render_occlusion::SceneRow],
+) -> Result<()> {
     let mut md = String::new();
     writeln!(md, "# Mesh-shader rendering against the vertex pipeline\n")?;
     writeln!(
@@ -485,6 +501,7 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row], variants: &[Variant]) -> Res
                 .name(&format!("render_bunny_{}.png", s.replace('+', "_")))
         )?;
     }
+    super::render_occlusion::write(&mut md, &cfg.occlusion, occlusion)?;
     write_experiments(cfg, &mut md, variants)?;
     crate::atomic::write(cfg.common.out.join(cfg.tag.name("render.md")), md)?;
     crate::atomic::write(

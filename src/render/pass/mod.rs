@@ -609,6 +609,12 @@ impl<'a> Pass<'a> {
         .sum()
     }
 
+    /// The part of [`Pass::scene_bytes`] that grows with the instances: their records and one
+    /// visibility word per (instance, meshlet).
+    pub fn per_instance_bytes(&self) -> u64 {
+        self.bindings.instances.size + self.bindings.visibility.size
+    }
+
     /// Device bytes of the meshlet data in this layout (see `Packed::device_bytes`).
     pub fn device_bytes(&self) -> usize {
         self.device_bytes
