@@ -715,3 +715,53 @@ fn an_instanced_scene_is_built_once_per_mesh_by_stats_export_and_render() {
         assert!(drawn > 0 && drawn <= over as u64, "{v}");
     }
 }
+
+#[test]
+fn render_occlusion_checks_every_frame_and_reports_json() {
+    let out = ok(&[
+        "render",
+        "-q",
+        "gen:scene-small",
+        "--occlusion",
+        "--views",
+        "1",
+        "--frames",
+        "3",
+        "--json",
+    ]);
+    let r: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(r["images_identical"], true, "{r}");
+    assert_eq!(r["frames"], 2, "frames after the first");
+    let (occ, full, oracle) = (
+        r["triangles_occlusion"].as_u64().unwrap(),
+        r["triangles_frustum_cone"].as_u64().unwrap(),
+        r["triangles_oracle"].as_u64().unwrap(),
+    );
+    assert!(oracle > 0 && oracle <= occ && occ <= full, "{r}");
+    let scene = meshletlab::mesh::load_scene("gen:scene-small".as_ref()).unwrap();
+    let built: usize = scene
+        .meshes
+        .iter()
+        .map(|m| {
+            meshletlab::strategy::by_name("meshopt", &Default::default())
+                .unwrap()
+                .build(m, meshletlab::meshlet::Limits::DEFAULT)
+                .len()
+        })
+        .sum();
+    assert_eq!(r["meshlets_built"], built);
+    assert!(r["device_bytes_scene"].as_u64().unwrap() > 0);
+    let views = r["views"].as_array().unwrap();
+    assert_eq!(views.len(), 1);
+    assert_eq!(views[0]["warm_up"]["meshlets_early"], 0);
+    // Occlusion is drawn in the split layout only, and never without frustum and cone culling.
+    let bad = cli(&[
+        "render",
+        "-q",
+        "gen:scene-small",
+        "--occlusion",
+        "--no-cull",
+    ]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--no-cull"));
+}

@@ -239,13 +239,10 @@ pub fn run(cfg: &Config) -> Result<()> {
             pb.inc(1);
         }
     }
-    let occlusion = super::render_occlusion::run(
-        &cfg.occlusion,
-        &cfg.common,
-        &ctx,
-        cfg.limits,
-        |msg| pb.set_message(msg.to_string()),
-    )?;
+    let occlusion =
+        super::render_occlusion::run(&cfg.occlusion, &cfg.common, &ctx, cfg.limits, |msg| {
+            pb.set_message(msg.to_string())
+        })?;
     pb.finish_and_clear();
     write(cfg, &ctx, &rows, &variants, &occlusion)
 }

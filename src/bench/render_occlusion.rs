@@ -9,7 +9,7 @@
 use super::Common;
 use crate::mesh::{Mesh, Scene};
 use crate::meshlet::{validate, Limits, Meshlets};
-use crate::render::occlusion::{measure_path, slot_triangles, Totals};
+use crate::render::occlusion::{measure_path, slot_triangles, Policy, Totals};
 use crate::render::{Camera, Context, Pass};
 use crate::strategy::{self, Options};
 use anyhow::{Context as _, Result};
@@ -79,14 +79,42 @@ pub fn run(
     let grid = Scene::grid(mesh.clone(), 4, 0.7);
     for s in &strategies {
         tick(&format!("occlusion: {name} 4x4x4, {s}"));
-        rows.push(scene_row(ctx, &format!("{name} 4x4x4"), &grid, s, limits, views, frames)?);
+        rows.push(scene_row(
+            ctx,
+            &format!("{name} 4x4x4"),
+            &grid,
+            s,
+            limits,
+            views,
+            frames,
+        )?);
     }
-    let dense_name = if common.smoke { "scene-small" } else { "scene-grid" };
+    let dense_name = if common.smoke {
+        "scene-small"
+    } else {
+        "scene-grid"
+    };
     let dense = crate::mesh::generate::named_scene(dense_name).expect("a generated scene");
     tick(&format!("occlusion: gen:{dense_name}, {first}"));
-    rows.push(scene_row(ctx, &format!("gen:{dense_name}"), &dense, first, limits, views, frames)?);
+    rows.push(scene_row(
+        ctx,
+        &format!("gen:{dense_name}"),
+        &dense,
+        first,
+        limits,
+        views,
+        frames,
+    )?);
     tick(&format!("occlusion: {name} alone, {first}"));
-    rows.push(scene_row(ctx, &name, &Scene::single(mesh), first, limits, views, frames)?);
+    rows.push(scene_row(
+        ctx,
+        &name,
+        &Scene::single(mesh),
+        first,
+        limits,
+        views,
+        frames,
+    )?);
     Ok(rows)
 }
 
@@ -123,7 +151,7 @@ fn scene_row(
     totals.images_identical = true;
     warm_up.images_identical = true;
     for (i, cam) in cams.iter().enumerate() {
-        let p = measure_path(&pass, cam, i, frames, &slots)?;
+        let p = measure_path(&pass, cam, i, frames, &slots, Policy::default())?;
         totals.add(&p.frames);
         warm_up.add(&p.warm_up);
     }
@@ -153,13 +181,17 @@ pub fn write(md: &mut String, args: &OcclusionArgs, rows: &[SceneRow]) -> Result
     }
     let w0 = &rows[0].warm_up;
     let frames = (rows[0].totals.frames + w0.frames) / w0.frames.max(1);
-    writeln!(md, "\n## Occlusion culling: two phases, checked sample by sample\n")?;
+    writeln!(
+        md,
+        "\n## Occlusion culling: two phases, checked sample by sample\n"
+    )?;
     writeln!(md, "Each view (framed on the scene, seeded directions) becomes a path of {} frames closing in on it, the first from half again as far. The early phase draws what the previous frame found visible; a depth pyramid (each level the largest depth of 2 x 2 texels below it, level 0 the largest of each pixel's 4 samples) is built from its depth; the late phase tests every meshlet's bounding sphere, projected exactly, against the texels covering it and draws what is newly visible. Every frame is drawn again with frustum and cone culling alone, and twice more through an id shader that keeps each sample's least (depth, slot): the depth samples and id images must be identical (`images identical`). The oracle is the set of (instance, meshlet) slots that own a sample. Sums over the frames after the first of every path; the first frames (nothing visible before them) are in the last columns. Triangles and meshlets count what was sent to the mesh shaders.\n", frames)?;
     writeln!(md, "| scene | strategy | instances | meshlets built | triangles: frustum+cone | occlusion | ratio | oracle | meshlets / oracle | early / late triangles % | culled: frustum % | backface % | occluded % | ms: frustum+cone | occlusion | ratio | first frame: ms frustum+cone | occlusion | images identical |")?;
     writeln!(md, "|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")?;
     for r in rows {
         let t = &r.totals;
-        let tests = (t.meshlets_frustum_cone + t.meshlets_culled_frustum + t.meshlets_culled_cone).max(1) as f64;
+        let tests = (t.meshlets_frustum_cone + t.meshlets_culled_frustum + t.meshlets_culled_cone)
+            .max(1) as f64;
         let drawn = t.triangles_occlusion.max(1) as f64;
         let f = t.frames.max(1) as f64;
         let w = &r.warm_up;
@@ -199,19 +231,38 @@ pub fn write(md: &mut String, args: &OcclusionArgs, rows: &[SceneRow]) -> Result
         let t = &r.totals;
         let (tri, orc, time, over, mem) = if r.instances == 1 {
             let over = t.time_ratio() - 1.0;
-            ("-".into(), "-".into(), "-".into(), format!("{:+.1} % {}", 100.0 * over, mark(over <= OVERHEAD)), "-".to_string())
+            (
+                "-".into(),
+                "-".into(),
+                "-".into(),
+                format!("{:+.1} % {}", 100.0 * over, mark(over <= OVERHEAD)),
+                "-".to_string(),
+            )
         } else {
-            let limit = if r.scene.starts_with("gen:") { DENSE_TRIANGLES } else { GRID_TRIANGLES };
+            let limit = if r.scene.starts_with("gen:") {
+                DENSE_TRIANGLES
+            } else {
+                GRID_TRIANGLES
+            };
             let mem = match single {
                 Some(s) if !r.scene.starts_with("gen:") && s.strategy == r.strategy => {
-                    let shared = (r.bytes.0 - r.bytes.1) as f64 / (s.bytes.0 - s.bytes.1).max(1) as f64;
+                    let shared =
+                        (r.bytes.0 - r.bytes.1) as f64 / (s.bytes.0 - s.bytes.1).max(1) as f64;
                     format!("{shared:.3}x {}", mark(shared <= MEMORY))
                 }
                 _ => "-".into(),
             };
             (
-                format!("{:.3} {}", t.triangle_ratio(), mark(t.triangle_ratio() <= limit)),
-                format!("{:.2} {}", t.oracle_ratio(), mark(t.oracle_ratio() <= ORACLE)),
+                format!(
+                    "{:.3} {}",
+                    t.triangle_ratio(),
+                    mark(t.triangle_ratio() <= limit)
+                ),
+                format!(
+                    "{:.2} {}",
+                    t.oracle_ratio(),
+                    mark(t.oracle_ratio() <= ORACLE)
+                ),
                 format!("{:.3} {}", t.time_ratio(), mark(t.time_ratio() <= TIME)),
                 "-".to_string(),
                 mem,

@@ -83,6 +83,10 @@ pub struct RenderArgs {
     /// interpenetrate).
     #[arg(long, default_value_t = 0.7, requires = "grid")]
     spacing: f32,
+    /// With `--occlusion`: build the pyramid in every frame (by default a frame whose pyramid
+    /// hid under a fifth of the triangles makes the next frames skip it, trying again every 4th).
+    #[arg(long, requires = "occlusion")]
+    always_pyramid: bool,
     /// Frames per view with `--occlusion` (the first warms the visibility and is reported apart).
     #[arg(long, default_value_t = 8, requires = "occlusion", value_parser = clap::value_parser!(u32).range(2..=64))]
     frames: u32,
@@ -121,7 +125,10 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
     let mut scene = load_scene(&a.mesh, quiet)?;
     if let Some(n) = a.grid {
         if scene.is_instanced() {
-            bail!("--grid copies one mesh; {} is already a scene", a.mesh.display());
+            bail!(
+                "--grid copies one mesh; {} is already a scene",
+                a.mesh.display()
+            );
         }
         if !(a.spacing > 0.0 && a.spacing.is_finite()) {
             bail!("--spacing must be a positive fraction of the mesh's extent");
@@ -330,7 +337,7 @@ fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
 /// `render --occlusion`: camera paths with two-phase occlusion culling, checked against the
 /// frustum-and-cone render frame by frame.
 fn run_occlusion(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
-    use crate::render::occlusion::{measure_path, slot_triangles, Totals};
+    use crate::render::occlusion::{measure_path, slot_triangles, Policy, Totals};
     if a.descriptor != Format::Split {
         bail!("--occlusion draws the split descriptor layout only");
     }
@@ -364,7 +371,19 @@ fn run_occlusion(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
     bar.set_message("camera paths");
     let mut paths = Vec::new();
     for (i, cam) in views.iter().enumerate() {
-        paths.push(measure_path(&pass, cam, i, a.frames as usize, &slots)?);
+        let policy = if a.always_pyramid {
+            Policy::ALWAYS
+        } else {
+            Policy::default()
+        };
+        paths.push(measure_path(
+            &pass,
+            cam,
+            i,
+            a.frames as usize,
+            &slots,
+            policy,
+        )?);
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -409,7 +428,7 @@ fn run_occlusion(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
         for p in &paths {
             let t = &p.frames;
             println!(
-                "view {}: triangles {} with occlusion, {} frustum+cone ({:.2}x), oracle {}; meshlets {:.2}x the oracle's; time {:.2}x (pyramid {:.2} ms); images {}",
+                "view {}: triangles {} with occlusion, {} frustum+cone ({:.2}x), oracle {}; meshlets {:.2}x the oracle's; time {:.2}x ({} of {} frames without the pyramid); images {}",
                 p.view,
                 t.triangles_occlusion,
                 t.triangles_frustum_cone,
@@ -417,7 +436,8 @@ fn run_occlusion(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
                 t.triangles_oracle,
                 t.oracle_ratio(),
                 t.time_ratio(),
-                t.pyramid_ms / t.frames.max(1) as f64,
+                t.frames_without_pyramid,
+                t.frames,
                 if t.images_identical && p.warm_up.images_identical { "identical" } else { "DIFFER" }
             );
         }

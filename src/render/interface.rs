@@ -85,6 +85,10 @@ pub const FLAG_LATE: u32 = 1 << 6;
 /// footprint's centre) instead of the 2 x 2 that cover it, so the test is no longer conservative.
 pub const FLAG_PYRAMID_ONE_TEXEL: u32 = 1 << 7;
 
+/// Push-constant `flags`: a one-phase frame (frustum and cone only) that still records every
+/// slot's visibility, for the frames where occlusion culling is skipped because it did not pay.
+pub const FLAG_KEEP_VISIBILITY: u32 = 1 << 8;
+
 /// The image the pass renders (`render::WIDTH` x `render::HEIGHT`; a test checks they agree).
 pub const IMAGE_WIDTH: u32 = 1280;
 /// See [`IMAGE_WIDTH`].
@@ -141,6 +145,7 @@ pub fn glsl_header() -> String {
         ("FLAG_EARLY", FLAG_EARLY),
         ("FLAG_LATE", FLAG_LATE),
         ("FLAG_PYRAMID_ONE_TEXEL", FLAG_PYRAMID_ONE_TEXEL),
+        ("FLAG_KEEP_VISIBILITY", FLAG_KEEP_VISIBILITY),
         ("IMAGE_WIDTH", IMAGE_WIDTH),
         ("IMAGE_HEIGHT", IMAGE_HEIGHT),
         ("IMAGE_SAMPLES", IMAGE_SAMPLES),

@@ -12,11 +12,47 @@
 use super::{Camera, Pass, RenderError, Shading};
 use serde::Serialize;
 
+/// When a frame builds the pyramid: occlusion culling is a lazy stage, skipped where it does not
+/// pay. A frame whose pyramid hid less than `min_share` of the triangles it tested (the first
+/// frame, built from an empty early phase, does not count) makes the following frames one-phase
+/// (frustum and cone only, no pyramid, visibility still recorded), until `probe_every` of them
+/// have passed and a frame tries the pyramid again.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Policy {
+    /// Share of the tested triangles the pyramid must hide to be built for the next frame.
+    pub min_share: f64,
+    /// One-phase frames before the pyramid is tried again.
+    pub probe_every: u32,
+}
+
+impl Policy {
+    /// The pyramid in every frame.
+    pub const ALWAYS: Policy = Policy {
+        min_share: 0.0,
+        probe_every: 0,
+    };
+}
+
+impl Default for Policy {
+    /// On lavapipe the pyramid and the second phase cost about a quarter of a 720p frame of a
+    /// mesh drawn whole (results/render.md, the mesh alone), so the pyramid has to hide at least a
+    /// fifth of the triangles to pay; a probe every 4th frame notices a scene that starts hiding
+    /// more. A GPU builds the pyramid in a fraction of that, and could take a lower share.
+    fn default() -> Self {
+        Self {
+            min_share: 0.2,
+            probe_every: 4,
+        }
+    }
+}
+
 /// Sums over frames of one path (or several).
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Totals {
     /// Frames summed.
     pub frames: u32,
+    /// Of those, frames drawn in one phase without a pyramid ([`Policy`]).
+    pub frames_without_pyramid: u32,
     /// Triangles drawn with occlusion culling (both phases).
     pub triangles_occlusion: u64,
     /// Triangles drawn with frustum and cone culling alone.
@@ -74,6 +110,7 @@ impl Totals {
     /// Adds `o`.
     pub fn add(&mut self, o: &Totals) {
         self.frames += o.frames;
+        self.frames_without_pyramid += o.frames_without_pyramid;
         self.triangles_occlusion += o.triangles_occlusion;
         self.triangles_frustum_cone += o.triangles_frustum_cone;
         self.triangles_oracle += o.triangles_oracle;
@@ -143,25 +180,45 @@ pub fn slot_triangles(
         .collect()
 }
 
-/// Runs `view`'s path of `frames` frames on `pass` (timed, then checked); `slot_triangles[s]` is
-/// the triangle count of (instance, meshlet) slot `s` (for the oracle's triangles).
+/// Runs `view`'s path of `frames` frames on `pass` (timed, then checked), building the pyramid
+/// as `policy` says; `slot_triangles[s]` is the triangle count of (instance, meshlet) slot `s`
+/// (for the oracle's triangles).
 pub fn measure_path(
     pass: &Pass,
     view: &Camera,
     index: usize,
     frames: usize,
     slot_triangles: &[u32],
+    policy: Policy,
 ) -> Result<ViewPath, RenderError> {
     let path = view.approach(frames.max(1));
     let mut totals = [Totals::new(), Totals::new()];
     let mut drawn = Vec::with_capacity(path.len());
+    // Per frame: whether it builds the pyramid (the checked run replays the timed run's choices).
+    let mut pyramid = Vec::with_capacity(path.len());
+    let (mut build, mut skipped) = (true, 0);
     pass.reset_visibility();
     for (f, cam) in path.iter().enumerate() {
-        let occ = pass.render_occlusion(cam, Shading::Lit, false)?;
+        pyramid.push(build);
+        let occ = if build {
+            pass.render_occlusion(cam, Shading::Lit, false)?
+        } else {
+            pass.render_without_pyramid(cam, Shading::Lit, false)?
+        };
+        if !build {
+            skipped += 1;
+            build = skipped >= policy.probe_every;
+        } else if occ.drawn_early > 0 {
+            // A pyramid from an empty early phase (the first frame) hides nothing: no evidence.
+            let hidden = occ.culled_triangles[2] as f64;
+            build = hidden / (hidden + occ.triangles() as f64).max(1.0) >= policy.min_share;
+            skipped = 0;
+        }
         let full = pass.render_reference(cam, Shading::Lit, false)?;
         drawn.push((occ.drawn_early, occ.drawn_late, occ.occluded));
         let t = &mut totals[usize::from(f > 0)];
         t.frames += 1;
+        t.frames_without_pyramid += u32::from(!pyramid[f]);
         t.triangles_occlusion += occ.triangles() as u64;
         t.triangles_frustum_cone += full.triangles() as u64;
         t.meshlets_occlusion += occ.drawn() as u64;
@@ -183,7 +240,11 @@ pub fn measure_path(
     // The same path through the check: the same visibility, so the same draws, which is checked.
     pass.reset_visibility();
     for (f, cam) in path.iter().enumerate() {
-        let occ = pass.render_occlusion(cam, Shading::Unlit, true)?;
+        let occ = if pyramid[f] {
+            pass.render_occlusion(cam, Shading::Unlit, true)?
+        } else {
+            pass.render_without_pyramid(cam, Shading::Unlit, true)?
+        };
         let full = pass.render_reference(cam, Shading::Unlit, true)?;
         assert_eq!(
             (occ.drawn_early, occ.drawn_late, occ.occluded),

@@ -20,7 +20,7 @@ use interface::{
     COUNTER_CULLED_CONE, COUNTER_CULLED_FRUSTUM, COUNTER_DRAWN, COUNTER_DRAWN_LATE,
     COUNTER_OCCLUDED, COUNTER_TRIANGLES_CONE, COUNTER_TRIANGLES_DRAWN,
     COUNTER_TRIANGLES_DRAWN_LATE, COUNTER_TRIANGLES_FRUSTUM, COUNTER_TRIANGLES_OCCLUDED,
-    FLAG_EARLY, FLAG_LATE, FLAG_PYRAMID_ONE_TEXEL, PYRAMID_LEVELS,
+    FLAG_EARLY, FLAG_KEEP_VISIBILITY, FLAG_LATE, FLAG_PYRAMID_ONE_TEXEL, PYRAMID_LEVELS,
 };
 
 /// Texels of every pyramid level together.
@@ -152,8 +152,9 @@ impl OcclusionFrame {
 /// What a frame draws.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Phases {
-    /// Frustum and cone culling, one phase (what occlusion culling is checked against).
-    Reference,
+    /// Frustum and cone culling, one phase (what occlusion culling is checked against); with
+    /// `keep`, every slot's visibility recorded for the next occlusion frame.
+    Reference { keep: bool },
     /// Early phase, pyramid, late phase; `one_texel` breaks the pyramid test on purpose.
     Occlusion { one_texel: bool },
 }
@@ -207,7 +208,19 @@ impl Pass<'_> {
         shading: Shading,
         check: bool,
     ) -> Result<OcclusionFrame, RenderError> {
-        self.occlusion_frame(camera, shading, check, Phases::Reference)
+        self.occlusion_frame(camera, shading, check, Phases::Reference { keep: false })
+    }
+
+    /// A frame that skips occlusion culling (frustum and cone only, one phase, no pyramid) but
+    /// records what it drew as visible, so a later [`Pass::render_occlusion`] starts from it:
+    /// for frames where the pyramid did not pay.
+    pub fn render_without_pyramid(
+        &self,
+        camera: &Camera,
+        shading: Shading,
+        check: bool,
+    ) -> Result<OcclusionFrame, RenderError> {
+        self.occlusion_frame(camera, shading, check, Phases::Reference { keep: true })
     }
 
     fn objects(&self) -> Result<&Objects, RenderError> {
@@ -434,13 +447,16 @@ impl Pass<'_> {
                 .collect()
         };
         let (first, second) = match phases {
-            Phases::Reference => (with(0), Vec::new()),
+            Phases::Reference { keep } => (
+                with(if keep { FLAG_KEEP_VISIBILITY } else { 0 }),
+                Vec::new(),
+            ),
             Phases::Occlusion { one_texel } => (
                 with(FLAG_EARLY),
                 with(FLAG_LATE | if one_texel { FLAG_PYRAMID_ONE_TEXEL } else { 0 }),
             ),
         };
-        let two = phases != Phases::Reference;
+        let two = matches!(phases, Phases::Occlusion { .. });
         let [msaa, resolve, depth] = &self.targets;
         let (msaa, resolve, depth) = (
             (msaa.image.get(), msaa.view.get()),
