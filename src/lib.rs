@@ -9,7 +9,9 @@
 //! from a file with [`mesh::load`] (PLY, OBJ, glTF/GLB, STL, optionally zstd-compressed) or hand
 //! over the arrays an engine holds with [`mesh::Mesh::from_slices`] /
 //! [`mesh::Mesh::from_strided`]; every constructor validates (finite positions, indices in range,
-//! at least one triangle) and returns a typed [`mesh::MeshError`] that names the source.
+//! at least one triangle) and returns a typed [`mesh::MeshError`] that names the source. A scene
+//! whose nodes place meshes several times ([`mesh::load_scene`], [`mesh::Scene`]) keeps each mesh
+//! once: build its meshlets once and draw them per instance.
 //!
 //! **Out:** [`meshlet::Meshlets`], flat arrays as a mesh shader reads them: per meshlet a
 //! [`meshlet::Meshlet`] (offsets and counts), the global vertex indices it uses, and three u8

@@ -1,7 +1,9 @@
 //! The mesh-shader render benchmark (ash + VK_EXT_mesh_shader, shaders in glsl/): a headless
 //! [`Context`], the [`Pass`] that draws meshlets through task and mesh shaders or the whole mesh
 //! through the vertex pipeline, compressed meshlets decoded by the shaders from their encoded
-//! bytes ([`compressed`]), and the camera protocol.
+//! bytes ([`compressed`]), and the camera protocol. Instanced scenes ([`Pass::instanced`]: meshlets
+//! uploaded once per mesh, one draw per instance) and two-phase occlusion culling with its
+//! sample-exact check ([`Pass::render_occlusion`], measured along camera paths by [`occlusion`]).
 
 pub mod compressed;
 pub mod context;

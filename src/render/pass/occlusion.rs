@@ -6,7 +6,8 @@
 //! 2. **pyramid** (`glsl/pyramid.comp`): the early depth, each pixel's largest depth over its
 //!    samples, then level by level the largest of 2 x 2 texels (odd edges covered), down to 1 x 1;
 //! 3. **late phase**: every meshlet is tested (frustum, cone, then its bounding sphere's screen
-//!    rectangle and nearest depth against the pyramid, `glsl/occlusion.glsl`); what passes and was
+//!    rectangle and nearest depth against the pyramid texels covering the rectangle, at the finest
+//!    level where it is at most 8 texels across, `glsl/occlusion.glsl`); what passes and was
 //!    not drawn early is drawn now, and every slot's visibility is kept for the next frame.
 //!
 //! The early depth is never nearer than the final one (it has fewer occluders), so a meshlet
