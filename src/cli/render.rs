@@ -5,6 +5,7 @@ use crate::compress::file::{CompressedFile, Format as CompressedFormat};
 use crate::lod::flat::Flat;
 use crate::mesh::Scene;
 use crate::meshlet::descriptor::Format;
+use crate::meshlet::Meshlets;
 use crate::render::{Camera, Context, Pass, Pipeline, Shading, HEIGHT, WIDTH};
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
@@ -233,11 +234,8 @@ struct SceneRow {
     mesh_primitives_generated: Option<u64>,
 }
 
-/// `render` of an instanced scene: meshlets built once per mesh, drawn once per instance.
-fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
-    if a.descriptor != Format::Split {
-        bail!("an instanced scene is drawn in the split descriptor layout only");
-    }
+/// Each of `scene`'s meshes' meshlets, built once and validated.
+fn build_per_mesh(a: &RenderArgs, scene: &Scene, quiet: bool) -> Result<Vec<Meshlets>> {
     let name = &a.strategy;
     let pb = super::spinner(
         quiet || a.json,
@@ -252,6 +250,16 @@ fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
         })
         .collect::<Result<Vec<_>>>()?;
     pb.finish_and_clear();
+    Ok(meshlets)
+}
+
+/// `render` of an instanced scene: meshlets built once per mesh, drawn once per instance.
+fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
+    if a.descriptor != Format::Split {
+        bail!("an instanced scene is drawn in the split descriptor layout only");
+    }
+    let name = &a.strategy;
+    let meshlets = build_per_mesh(&a, &scene, quiet)?;
     let built: usize = meshlets.iter().map(|m| m.len()).sum();
     let per_instance: usize = scene
         .instances
@@ -345,19 +353,7 @@ fn run_occlusion(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
         bail!("--occlusion culls on top of the frustum and cone tests: drop --no-cull");
     }
     let name = &a.strategy;
-    let pb = super::spinner(
-        quiet || a.json,
-        format!("building {name} meshlets per mesh"),
-    );
-    let meshlets = scene
-        .meshes
-        .iter()
-        .enumerate()
-        .map(|(i, m)| {
-            build_validated(m, &a.mesh, name, &a.args).with_context(|| format!("mesh {i}"))
-        })
-        .collect::<Result<Vec<_>>>()?;
-    pb.finish_and_clear();
+    let meshlets = build_per_mesh(&a, &scene, quiet)?;
     let built: usize = meshlets.iter().map(|m| m.len()).sum();
     let ctx = Context::new(a.validate)?;
     if !ctx.id_check {

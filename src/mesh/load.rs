@@ -74,13 +74,8 @@ pub fn load(path: &Path) -> Result<Mesh, MeshError> {
 pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
     let err = |k| MeshError::new(path, k);
     let (format, zst) = Format::of(path).ok_or_else(|| err(MeshErrorKind::UnknownFormat))?;
-    let owned;
-    let data: &[u8] = if zst {
-        owned = decompress(bytes).map_err(err)?;
-        &owned
-    } else {
-        bytes
-    };
+    let data = plain(bytes, zst).map_err(err)?;
+    let data = &data[..];
     let (positions, indices) = match format {
         Format::Ply => ply::parse(data),
         Format::Obj => obj::parse(data),
@@ -114,13 +109,8 @@ pub fn scene_from_bytes(bytes: &[u8], path: &Path) -> Result<Scene, MeshError> {
     let Some((Format::Gltf | Format::Glb, zst)) = Format::of(path) else {
         return load_bytes(bytes, path).map(Scene::single);
     };
-    let owned;
-    let data: &[u8] = if zst {
-        owned = decompress(bytes).map_err(err)?;
-        &owned
-    } else {
-        bytes
-    };
+    let data = plain(bytes, zst).map_err(err)?;
+    let data = &data[..];
     let (meshes, instances) = gltf_io::parse_scene(data, path.parent()).map_err(err)?;
     let meshes = meshes
         .into_iter()
@@ -132,6 +122,15 @@ pub fn scene_from_bytes(bytes: &[u8], path: &Path) -> Result<Scene, MeshError> {
             .into_iter()
             .map(|(mesh, transform)| Instance { mesh, transform })
             .collect(),
+    })
+}
+
+/// The bytes a reader parses: `bytes` decompressed when the name ends in `.zst`.
+fn plain(bytes: &[u8], zst: bool) -> Result<std::borrow::Cow<'_, [u8]>, MeshErrorKind> {
+    Ok(if zst {
+        std::borrow::Cow::Owned(decompress(bytes)?)
+    } else {
+        std::borrow::Cow::Borrowed(bytes)
     })
 }
 

@@ -130,6 +130,59 @@ impl Pass<'_> {
         }
     }
 
+    /// Records the copy of the resolved colour image (in `COLOR_ATTACHMENT_OPTIMAL`, written by
+    /// a rendering) to the readback buffer, and makes every write visible to the host.
+    ///
+    /// # Safety
+    /// `cmd` is recording outside a rendering; `resolve` is this pass's resolve image.
+    pub(super) unsafe fn record_readback(&self, cmd: vk::CommandBuffer, resolve: vk::Image) {
+        let d = &self.ctx.device;
+        let to_copy = [vk::ImageMemoryBarrier2::default()
+            .image(resolve)
+            .old_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .new_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+            .src_stage_mask(vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT)
+            .src_access_mask(vk::AccessFlags2::COLOR_ATTACHMENT_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::TRANSFER)
+            .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
+            .subresource_range(
+                vk::ImageSubresourceRange::default()
+                    .aspect_mask(vk::ImageAspectFlags::COLOR)
+                    .level_count(1)
+                    .layer_count(1),
+            )];
+        let host = [vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+            .dst_access_mask(vk::AccessFlags2::HOST_READ)];
+        // SAFETY: the caller's contract; the readback buffer holds a whole RGBA8 image.
+        unsafe {
+            d.cmd_pipeline_barrier2(
+                cmd,
+                &vk::DependencyInfo::default().image_memory_barriers(&to_copy),
+            );
+            d.cmd_copy_image_to_buffer(
+                cmd,
+                resolve,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                self.readback.buf,
+                &[vk::BufferImageCopy::default()
+                    .image_subresource(
+                        vk::ImageSubresourceLayers::default()
+                            .aspect_mask(vk::ImageAspectFlags::COLOR)
+                            .layer_count(1),
+                    )
+                    .image_extent(vk::Extent3D {
+                        width: WIDTH,
+                        height: HEIGHT,
+                        depth: 1,
+                    })],
+            );
+            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&host));
+        }
+    }
+
     pub(super) fn frame(
         &self,
         camera: &Camera,
@@ -290,43 +343,7 @@ impl Pass<'_> {
                 d.cmd_end_query(cmd, stats, 0);
             }
             d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, timestamps, 1);
-            let to_copy = [barrier(
-                resolve.0,
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                vk::ImageAspectFlags::COLOR,
-                colour_out,
-                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
-                vk::PipelineStageFlags2::TRANSFER,
-                vk::AccessFlags2::TRANSFER_READ,
-            )];
-            d.cmd_pipeline_barrier2(
-                cmd,
-                &vk::DependencyInfo::default().image_memory_barriers(&to_copy),
-            );
-            d.cmd_copy_image_to_buffer(
-                cmd,
-                resolve.0,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                self.readback.buf,
-                &[vk::BufferImageCopy::default()
-                    .image_subresource(
-                        vk::ImageSubresourceLayers::default()
-                            .aspect_mask(vk::ImageAspectFlags::COLOR)
-                            .layer_count(1),
-                    )
-                    .image_extent(vk::Extent3D {
-                        width: WIDTH,
-                        height: HEIGHT,
-                        depth: 1,
-                    })],
-            );
-            let host = [vk::MemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-                .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-                .dst_access_mask(vk::AccessFlags2::HOST_READ)];
-            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&host));
+            self.record_readback(cmd, resolve.0);
         })?;
         let mut ts = [0u64; 2];
         // SAFETY: the submission that wrote both timestamps has completed (`submit` waits).

@@ -147,3 +147,90 @@ pub(super) fn pipeline(
         .map(|p| Owned::new(d, p[0], vkc::destroy_pipeline))
         .map_err(|(_, e)| RenderError::Vulkan("create graphics pipeline", e))
 }
+
+/// A descriptor set layout of `bindings`, a pool for one set of it and that set (freed with the
+/// pool), each owned as soon as it exists.
+pub(super) fn descriptor_set(
+    d: &ash::Device,
+    bindings: &[vk::DescriptorSetLayoutBinding],
+) -> Result<
+    (
+        Owned<vk::DescriptorSetLayout>,
+        Owned<vk::DescriptorPool>,
+        vk::DescriptorSet,
+    ),
+    RenderError,
+> {
+    // SAFETY (this function's calls): valid create infos on a live device; every handle goes
+    // straight into an `Owned`, which destroys it on every path out of here.
+    let set_layout = Owned::new(
+        d,
+        unsafe {
+            d.create_descriptor_set_layout(
+                &vk::DescriptorSetLayoutCreateInfo::default().bindings(bindings),
+                None,
+            )
+        }
+        .map_err(vk_err("descriptor set layout"))?,
+        vkc::destroy_descriptor_set_layout,
+    );
+    let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
+    for b in bindings {
+        match sizes.iter_mut().find(|s| s.ty == b.descriptor_type) {
+            Some(s) => s.descriptor_count += b.descriptor_count,
+            None => sizes.push(
+                vk::DescriptorPoolSize::default()
+                    .ty(b.descriptor_type)
+                    .descriptor_count(b.descriptor_count),
+            ),
+        }
+    }
+    let pool = Owned::new(
+        d,
+        unsafe {
+            d.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default()
+                    .max_sets(1)
+                    .pool_sizes(&sizes),
+                None,
+            )
+        }
+        .map_err(vk_err("descriptor pool"))?,
+        vkc::destroy_descriptor_pool,
+    );
+    let layouts = [set_layout.get()];
+    // One set from a pool sized for it; freed with the pool.
+    let set = unsafe {
+        d.allocate_descriptor_sets(
+            &vk::DescriptorSetAllocateInfo::default()
+                .descriptor_pool(pool.get())
+                .set_layouts(&layouts),
+        )
+    }
+    .map_err(vk_err("descriptor set"))?[0];
+    Ok((set_layout, pool, set))
+}
+
+/// A pipeline layout of one descriptor set and `push` bytes of push constants for `stages`.
+pub(super) fn pipeline_layout(
+    d: &ash::Device,
+    set_layout: vk::DescriptorSetLayout,
+    push: u32,
+    stages: vk::ShaderStageFlags,
+) -> Result<Owned<vk::PipelineLayout>, RenderError> {
+    let layouts = [set_layout];
+    let ranges = [vk::PushConstantRange::default()
+        .stage_flags(stages)
+        .size(push)];
+    // SAFETY: a valid create info on a live device; owned right away.
+    let layout = unsafe {
+        d.create_pipeline_layout(
+            &vk::PipelineLayoutCreateInfo::default()
+                .set_layouts(&layouts)
+                .push_constant_ranges(&ranges),
+            None,
+        )
+    }
+    .map_err(vk_err("pipeline layout"))?;
+    Ok(Owned::new(d, layout, vkc::destroy_pipeline_layout))
+}

@@ -269,47 +269,7 @@ impl Pass<'_> {
                 .descriptor_count(1)
                 .stage_flags(vk::ShaderStageFlags::COMPUTE),
         ];
-        let set_layout = Owned::new(
-            d,
-            unsafe {
-                d.create_descriptor_set_layout(
-                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
-                    None,
-                )
-            }
-            .map_err(vk_err("descriptor set layout"))?,
-            vkc::destroy_descriptor_set_layout,
-        );
-        let sizes = [
-            vk::DescriptorPoolSize::default()
-                .ty(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .descriptor_count(1),
-            vk::DescriptorPoolSize::default()
-                .ty(vk::DescriptorType::STORAGE_BUFFER)
-                .descriptor_count(2),
-        ];
-        let pool = Owned::new(
-            d,
-            unsafe {
-                d.create_descriptor_pool(
-                    &vk::DescriptorPoolCreateInfo::default()
-                        .max_sets(1)
-                        .pool_sizes(&sizes),
-                    None,
-                )
-            }
-            .map_err(vk_err("descriptor pool"))?,
-            vkc::destroy_descriptor_pool,
-        );
-        let layouts = [set_layout.get()];
-        let set = unsafe {
-            d.allocate_descriptor_sets(
-                &vk::DescriptorSetAllocateInfo::default()
-                    .descriptor_pool(pool.get())
-                    .set_layouts(&layouts),
-            )
-        }
-        .map_err(vk_err("descriptor set"))?[0];
+        let (set_layout, pool, set) = super::objects::descriptor_set(d, &bindings)?;
         let samples = ctx.buffer(
             4 * SAMPLES.as_raw() as u64 * WIDTH as u64 * HEIGHT as u64,
             vk::BufferUsageFlags::STORAGE_BUFFER,
@@ -342,22 +302,12 @@ impl Pass<'_> {
                 .buffer_info(&sample_info),
         ];
         unsafe { d.update_descriptor_sets(&writes, &[]) };
-        let ranges = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            .size(std::mem::size_of::<ComputePush>() as u32)];
-        let layout = Owned::new(
+        let layout = super::objects::pipeline_layout(
             d,
-            unsafe {
-                d.create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::default()
-                        .set_layouts(&layouts)
-                        .push_constant_ranges(&ranges),
-                    None,
-                )
-            }
-            .map_err(vk_err("pipeline layout"))?,
-            vkc::destroy_pipeline_layout,
-        );
+            set_layout.get(),
+            std::mem::size_of::<ComputePush>() as u32,
+            vk::ShaderStageFlags::COMPUTE,
+        )?;
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module.get())
@@ -652,39 +602,7 @@ impl Pass<'_> {
                 bind_compute();
                 compute(2, 0, (cw, ch));
             }
-            let to_copy = [image_barrier(
-                resolve.0,
-                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                vk::ImageAspectFlags::COLOR,
-            )];
-            d.cmd_pipeline_barrier2(
-                cmd,
-                &vk::DependencyInfo::default().image_memory_barriers(&to_copy),
-            );
-            d.cmd_copy_image_to_buffer(
-                cmd,
-                resolve.0,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                self.readback.buf,
-                &[vk::BufferImageCopy::default()
-                    .image_subresource(
-                        vk::ImageSubresourceLayers::default()
-                            .aspect_mask(vk::ImageAspectFlags::COLOR)
-                            .layer_count(1),
-                    )
-                    .image_extent(vk::Extent3D {
-                        width: WIDTH,
-                        height: HEIGHT,
-                        depth: 1,
-                    })],
-            );
-            let host = [vk::MemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-                .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
-                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
-                .dst_access_mask(vk::AccessFlags2::HOST_READ)];
-            d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&host));
+            self.record_readback(cmd, resolve.0);
         })?;
         let mut t = [0u64; 4];
         // SAFETY: the submission that wrote the timestamps has completed (`submit` waits).

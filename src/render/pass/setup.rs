@@ -79,46 +79,7 @@ impl<'a> Pass<'a> {
                     .stage_flags(stages)
             })
             .collect();
-        // SAFETY: valid create infos on the context's live device; each handle goes straight
-        // into an `Owned`, which destroys it on every path out of here.
-        let set_layout = Owned::new(
-            d,
-            unsafe {
-                d.create_descriptor_set_layout(
-                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
-                    None,
-                )
-            }
-            .map_err(vk_err("descriptor set layout"))?,
-            vkc::destroy_descriptor_set_layout,
-        );
-        let sizes = [vk::DescriptorPoolSize::default()
-            .ty(vk::DescriptorType::STORAGE_BUFFER)
-            .descriptor_count(interface::BINDINGS.len() as u32)];
-        // SAFETY: as above.
-        let pool = Owned::new(
-            d,
-            unsafe {
-                d.create_descriptor_pool(
-                    &vk::DescriptorPoolCreateInfo::default()
-                        .max_sets(1)
-                        .pool_sizes(&sizes),
-                    None,
-                )
-            }
-            .map_err(vk_err("descriptor pool"))?,
-            vkc::destroy_descriptor_pool,
-        );
-        let layouts = [set_layout.get()];
-        // SAFETY: one set from a pool sized for it; freed with the pool.
-        let set = unsafe {
-            d.allocate_descriptor_sets(
-                &vk::DescriptorSetAllocateInfo::default()
-                    .descriptor_pool(pool.get())
-                    .set_layouts(&layouts),
-            )
-        }
-        .map_err(vk_err("descriptor set"))?[0];
+        let (set_layout, pool, set) = objects::descriptor_set(d, &layout_bindings)?;
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
             .in_order()
             .iter()
@@ -141,23 +102,12 @@ impl<'a> Pass<'a> {
             .collect();
         // SAFETY: the set is not in use yet; every write names a live buffer of this device.
         unsafe { d.update_descriptor_sets(&writes, &[]) };
-        let ranges = [vk::PushConstantRange::default()
-            .stage_flags(stages)
-            .size(std::mem::size_of::<Push>() as u32)];
-        // SAFETY: as for the set layout.
-        let layout = Owned::new(
+        let layout = objects::pipeline_layout(
             d,
-            unsafe {
-                d.create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::default()
-                        .set_layouts(&layouts)
-                        .push_constant_ranges(&ranges),
-                    None,
-                )
-            }
-            .map_err(vk_err("pipeline layout"))?,
-            vkc::destroy_pipeline_layout,
-        );
+            set_layout.get(),
+            std::mem::size_of::<Push>() as u32,
+            stages,
+        )?;
         // Shader modules live until the pipelines are made: dropped at the end of this function.
         let module = |bytes: &[u8]| -> Result<Owned<vk::ShaderModule>, RenderError> {
             let code = spirv(bytes)?;
