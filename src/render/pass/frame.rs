@@ -130,6 +130,55 @@ impl Pass<'_> {
         }
     }
 
+    /// Begins a rendering of the whole image into `colour` and `depth`, with the viewport,
+    /// scissor, `pipeline` and this pass's descriptor set bound.
+    ///
+    /// # Safety
+    /// `cmd` is recording outside a rendering; the attachments are this pass's targets in the
+    /// layouts they name.
+    pub(super) unsafe fn begin_drawing(
+        &self,
+        cmd: vk::CommandBuffer,
+        colour: &[vk::RenderingAttachmentInfo],
+        depth: &vk::RenderingAttachmentInfo,
+        pipeline: vk::Pipeline,
+    ) {
+        let d = &self.ctx.device;
+        let area = vk::Rect2D::default().extent(vk::Extent2D {
+            width: WIDTH,
+            height: HEIGHT,
+        });
+        // SAFETY: the caller's contract; every handle is this pass's.
+        unsafe {
+            d.cmd_begin_rendering(
+                cmd,
+                &vk::RenderingInfo::default()
+                    .render_area(area)
+                    .layer_count(1)
+                    .color_attachments(colour)
+                    .depth_attachment(depth),
+            );
+            d.cmd_set_viewport(
+                cmd,
+                0,
+                &[vk::Viewport::default()
+                    .width(WIDTH as f32)
+                    .height(HEIGHT as f32)
+                    .max_depth(1.0)],
+            );
+            d.cmd_set_scissor(cmd, 0, &[area]);
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.layout.get(),
+                0,
+                &[self.set],
+                &[],
+            );
+        }
+    }
+
     /// Records the copy of the resolved colour image (in `COLOR_ATTACHMENT_OPTIMAL`, written by
     /// a rendering) to the readback buffer, and makes every write visible to the host.
     ///
@@ -299,10 +348,6 @@ impl Pass<'_> {
                         stencil: 0,
                     },
                 });
-            let area = vk::Rect2D::default().extent(vk::Extent2D {
-                width: WIDTH,
-                height: HEIGHT,
-            });
             d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, timestamps, 0);
             // Queries span the whole rendering (lavapipe left them unavailable when begun inside).
             let mesh_queries = if mesh { mesh_pools } else { None };
@@ -310,32 +355,7 @@ impl Pass<'_> {
                 d.cmd_begin_query(cmd, stats, 0, vk::QueryControlFlags::empty());
                 d.cmd_begin_query(cmd, prims, 0, vk::QueryControlFlags::empty());
             }
-            d.cmd_begin_rendering(
-                cmd,
-                &vk::RenderingInfo::default()
-                    .render_area(area)
-                    .layer_count(1)
-                    .color_attachments(&colour)
-                    .depth_attachment(&depth_att),
-            );
-            d.cmd_set_viewport(
-                cmd,
-                0,
-                &[vk::Viewport::default()
-                    .width(WIDTH as f32)
-                    .height(HEIGHT as f32)
-                    .max_depth(1.0)],
-            );
-            d.cmd_set_scissor(cmd, 0, &[area]);
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.layout.get(),
-                0,
-                &[self.set],
-                &[],
-            );
+            self.begin_drawing(cmd, &colour, &depth_att, pipeline);
             self.record_draws(cmd, &draws, mesh);
             d.cmd_end_rendering(cmd);
             if let Some((stats, prims)) = mesh_queries {

@@ -415,10 +415,6 @@ impl Pass<'_> {
             (depth.image.get(), depth.view.get()),
         );
         let ts = objects.queries.get();
-        let area = vk::Rect2D::default().extent(vk::Extent2D {
-            width: WIDTH,
-            height: HEIGHT,
-        });
         let (cw, ch) = (WIDTH.div_ceil(16), HEIGHT.div_ceil(16));
         // SAFETY: `submit` hands a recording command buffer and waits for it; every handle
         // recorded is owned by this pass and lives past the wait.
@@ -511,32 +507,7 @@ impl Pass<'_> {
                             stencil: 0,
                         },
                     });
-                d.cmd_begin_rendering(
-                    cmd,
-                    &vk::RenderingInfo::default()
-                        .render_area(area)
-                        .layer_count(1)
-                        .color_attachments(&colour)
-                        .depth_attachment(&depth_att),
-                );
-                d.cmd_set_viewport(
-                    cmd,
-                    0,
-                    &[vk::Viewport::default()
-                        .width(WIDTH as f32)
-                        .height(HEIGHT as f32)
-                        .max_depth(1.0)],
-                );
-                d.cmd_set_scissor(cmd, 0, &[area]);
-                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
-                d.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    self.layout.get(),
-                    0,
-                    &[self.set],
-                    &[],
-                );
+                self.begin_drawing(cmd, &colour, &depth_att, pipeline);
                 self.record_draws(cmd, draws, true);
                 d.cmd_end_rendering(cmd);
             };
