@@ -265,12 +265,14 @@ fn load(path: &Path, quiet: bool) -> Result<Mesh> {
     Ok(m?)
 }
 
-/// [`mesh::load_scene`] behind a spinner.
+/// [`mesh::load_scene`] behind a spinner; a scene that places each mesh once comes back baked
+/// into one mesh, as [`mesh::load`] reads it.
 fn load_scene(path: &Path, quiet: bool) -> Result<mesh::Scene> {
     let pb = spinner(quiet, format!("loading {}", path.display()));
     let s = mesh::load_scene(path);
     pb.finish_and_clear();
-    Ok(s?)
+    let s = s?;
+    Ok(if s.is_instanced() { s } else { s.baked() })
 }
 
 fn strategies(spec: &str, opts: &Options) -> Result<Vec<Box<dyn Strategy>>> {

@@ -112,15 +112,28 @@ pub fn scene_from_bytes(bytes: &[u8], path: &Path) -> Result<Scene, MeshError> {
     let data = plain(bytes, zst).map_err(err)?;
     let data = &data[..];
     let (meshes, instances) = gltf_io::parse_scene(data, path.parent()).map_err(err)?;
-    let meshes = meshes
-        .into_iter()
-        .map(|(p, i)| Mesh::new(p, i, path))
-        .collect::<Result<Vec<_>, _>>()?;
+    // Meshes without triangles (points, lines) place nothing: dropped with their instances, as
+    // baking drops them; a scene with no triangle at all is empty.
+    let mut slot = vec![u32::MAX; meshes.len()];
+    let mut kept = Vec::new();
+    for (k, (p, i)) in meshes.into_iter().enumerate() {
+        if !i.is_empty() {
+            slot[k] = kept.len() as u32;
+            kept.push(Mesh::new(p, i, path)?);
+        }
+    }
+    if kept.is_empty() {
+        return Err(err(MeshErrorKind::Empty("no triangle in any mesh".into())));
+    }
     Ok(Scene {
-        meshes,
+        meshes: kept,
         instances: instances
             .into_iter()
-            .map(|(mesh, transform)| Instance { mesh, transform })
+            .filter(|&(mesh, _)| slot[mesh as usize] != u32::MAX)
+            .map(|(mesh, transform)| Instance {
+                mesh: slot[mesh as usize],
+                transform,
+            })
             .collect(),
     })
 }

@@ -95,9 +95,25 @@ impl Scene {
         }
     }
 
-    /// Whether drawing it needs instancing: more than one placement, or a transformed one.
+    /// Whether instancing saves anything: some mesh is placed more than once. A scene that places
+    /// each mesh once is as well baked ([`Scene::baked`]), which keeps the geometry strategies see
+    /// in world space (a glTF node's transform may scale unevenly, as gltfpack's dequantisation
+    /// does).
     pub fn is_instanced(&self) -> bool {
-        self.instances.len() != 1 || self.instances[0].transform != Mat4::IDENTITY
+        self.instances.len() > self.meshes.len()
+    }
+
+    /// The scene as one mesh placed once: itself when it is that already, else
+    /// [`Scene::flatten`]'s mesh.
+    pub fn baked(self) -> Self {
+        let single = self.meshes.len() == 1
+            && self.instances.len() == 1
+            && self.instances[0].transform == Mat4::IDENTITY;
+        if single {
+            self
+        } else {
+            Self::single(self.flatten())
+        }
     }
 
     /// Triangles built (each mesh once).
