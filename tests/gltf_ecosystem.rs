@@ -301,10 +301,7 @@ fn required_extensions_are_refused_by_name_unless_read_or_geometry_neutral() {
         let p = gltf_file(&dir, &format!("{neutral}.gltf"), &bin, doc(&[neutral]));
         assert_eq!(mesh::load(&p).unwrap().triangle_count(), 1, "{neutral}");
     }
-    for refused in [
-        "KHR_draco_mesh_compression",
-        "VENDOR_made_up",
-    ] {
+    for refused in ["KHR_draco_mesh_compression", "VENDOR_made_up"] {
         let p = gltf_file(&dir, &format!("{refused}.gltf"), &bin, doc(&[refused]));
         let e = mesh::load(&p).unwrap_err();
         assert!(
