@@ -25,9 +25,9 @@ uint pyramid_offset(uint k) {
 // pyramid level is the finest at which the rectangle is at most 8 texels across; the texels it
 // touches there cover it whole. Square roots, divisions and rounding are paid for with a pixel of
 // margin on each side and a relative 1e-5 of depth, always towards keeping the meshlet.
-bool occluded(vec4 s) {
+bool occluded_in(vec4 s, mat4 view_proj) {
     if (instanced()) { s = vec4(to_world(s.xyz), s.w * instances[pc.instance].extra.x * 1.00001); }
-    mat4 m = transpose(pc.view_proj);
+    mat4 m = transpose(view_proj);
     vec4 c = vec4(s.xyz, 1.0);
     float p00 = length(m[0].xyz), p11 = length(m[1].xyz), pw = length(m[3].xyz);
     float cx = dot(m[0], c) / p00, cy = dot(m[1], c) / p11, cz = dot(m[3], c) / pw;
@@ -77,4 +77,18 @@ bool occluded(vec4 s) {
         }
     }
     return nearest * (1.0 - 1e-5) > deepest;
+}
+
+bool occluded(vec4 s) { return occluded_in(s, pc.view_proj); }
+
+// The view-projection the pyramid was built with, after its levels (LOD passes, whose early phase
+// tests against the previous frame's pyramid; the host writes it).
+mat4 previous_view_proj() {
+    uint o = pyramid_offset(PYRAMID_LEVELS);
+    mat4 m;
+    for (int c = 0; c < 4; c++) {
+        m[c] = vec4(pyramid[o + 4u * uint(c)], pyramid[o + 4u * uint(c) + 1u],
+                    pyramid[o + 4u * uint(c) + 2u], pyramid[o + 4u * uint(c) + 3u]);
+    }
+    return m;
 }

@@ -754,6 +754,25 @@ fn render_occlusion_checks_every_frame_and_reports_json() {
     let views = r["views"].as_array().unwrap();
     assert_eq!(views.len(), 1);
     assert_eq!(views[0]["warm_up"]["meshlets_early"], 0);
+    // With the LOD cut: the same report and check.
+    let lod: serde_json::Value = serde_json::from_str(&ok(&[
+        "render",
+        "-q",
+        "gen:scene-small",
+        "--lod",
+        "--threshold",
+        "4",
+        "--occlusion",
+        "--views",
+        "1",
+        "--frames",
+        "3",
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(lod["images_identical"], true, "{lod}");
+    assert!(lod["lod_levels"].as_u64().unwrap() > 1);
+    assert!(lod["triangles_occlusion"].as_u64() <= lod["triangles_frustum_cone"].as_u64());
     // Occlusion is drawn in the split layout only, and never without frustum and cone culling.
     let bad = cli(&[
         "render",

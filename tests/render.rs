@@ -510,3 +510,49 @@ fn occlusion_culling_hides_nothing_and_the_check_catches_a_wrong_pyramid() {
     let (errors, first) = ctx.validation.as_ref().unwrap().errors();
     assert_eq!(errors, 0, "validation layer errors: {first:#?}");
 }
+
+/// The LOD cut and occlusion culling together: the early phase tests against the previous frame's
+/// pyramid (visibility words do not survive a change of cut), the late phase against this frame's;
+/// every frame's depth samples and id image equal those of the cut drawn with frustum and cone
+/// culling alone, and the cut drawn is the CPU's minus what the pyramid hid.
+#[test]
+fn occlusion_culling_with_a_lod_cut_hides_nothing() {
+    use meshletlab::lod::{self, flat};
+    let ctx = Context::new(true).expect("lavapipe with VK_EXT_mesh_shader (make setup)");
+    let m = meshletlab::mesh::load_scene("gen:scene-small".as_ref())
+        .unwrap()
+        .flatten();
+    let s = strategy::by_name("meshopt", &Options::default()).unwrap();
+    let dag = lod::build(&m, s.as_ref(), Limits::DEFAULT, &Default::default());
+    let fl = flat::Flat::new(&m, &dag);
+    let pass = Pass::with_lod(&ctx, &m, &fl).unwrap();
+    let mut occluded = 0;
+    for view in Camera::random_views(&m, 2, 5, 1.6) {
+        pass.reset_visibility();
+        for (f, cam) in view.approach(4).iter().enumerate() {
+            // A threshold that makes the cut change along the path.
+            let q = cam.lod_query(4.0, 0, true);
+            let occ = pass
+                .render_lod_occlusion(cam, &q, Shading::Unlit, true)
+                .unwrap();
+            let full = pass
+                .render_lod_reference(cam, &q, Shading::Unlit, true)
+                .unwrap();
+            let (a, b) = (
+                occ.checked.as_ref().unwrap(),
+                full.checked.as_ref().unwrap(),
+            );
+            assert_eq!(a.differences(b), (0, 0), "frame {f}");
+            assert_eq!(
+                full.drawn() as usize,
+                flat::select(&fl, &q).len(),
+                "frame {f}"
+            );
+            assert!(occ.drawn() <= full.drawn());
+            if f > 0 {
+                occluded += occ.occluded;
+            }
+        }
+    }
+    assert!(occluded > 0, "the pyramid hid nothing");
+}

@@ -151,7 +151,7 @@ fn scene_row(
     totals.images_identical = true;
     warm_up.images_identical = true;
     for (i, cam) in cams.iter().enumerate() {
-        let p = measure_path(&pass, cam, i, frames, &slots, Policy::default())?;
+        let p = measure_path(&pass, cam, i, frames, &slots, Policy::default(), None)?;
         totals.add(&p.frames);
         warm_up.add(&p.warm_up);
     }

@@ -73,8 +73,9 @@ pub struct RenderArgs {
     /// late phase tests the rest against the pyramid. Every frame is also drawn with frustum and
     /// cone culling alone, and the two are checked pixel for pixel through an id image (exit 1 on
     /// any difference); the meshlets that own a pixel are the oracle the result is reported
-    /// against. Draws the split layout, for meshes and instanced scenes.
-    #[arg(long, conflicts_with_all = ["lod", "format", "compressed"])]
+    /// against. Draws the split layout, for meshes and instanced scenes, and with `--lod` the cut
+    /// (the early phase then tests against the previous frame's pyramid).
+    #[arg(long, conflicts_with_all = ["format", "compressed"])]
     occlusion: bool,
     /// Draw N x N x N copies of the mesh, spaced at `--spacing` of its largest extent, as an
     /// instanced scene (the mesh's meshlets built once).
@@ -345,13 +346,8 @@ fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
 /// `render --occlusion`: camera paths with two-phase occlusion culling, checked against the
 /// frustum-and-cone render frame by frame.
 fn run_occlusion(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
-    use crate::render::occlusion::{measure_path, slot_triangles, Policy, Totals};
-    if a.descriptor != Format::Split {
-        bail!("--occlusion draws the split descriptor layout only");
-    }
-    if a.no_cull {
-        bail!("--occlusion culls on top of the frustum and cone tests: drop --no-cull");
-    }
+    use crate::render::occlusion::{slot_triangles, Policy};
+    check_occlusion_args(&a)?;
     let name = &a.strategy;
     let meshlets = build_per_mesh(&a, &scene, quiet)?;
     let built: usize = meshlets.iter().map(|m| m.len()).sum();
@@ -363,22 +359,72 @@ fn run_occlusion(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
         .with_context(|| format!("{}: {name}", a.mesh.display()))?;
     let slots = slot_triangles(&scene, &meshlets);
     let (views, _) = cameras(&a, &scene.box_corners());
+    let policy = if a.always_pyramid {
+        Policy::ALWAYS
+    } else {
+        Policy::default()
+    };
+    let header = serde_json::json!({
+        "mesh": a.mesh.display().to_string(),
+        "meshes": scene.meshes.len(),
+        "instances": scene.instances.len(),
+        "triangles_built": scene.triangles_built(),
+        "strategy": name,
+        "limits": a.args.limits.to_string(),
+        "meshlets_built": built,
+        "frames_per_view": a.frames,
+        "device_bytes_scene": pass.scene_bytes(),
+    });
+    let line = format!(
+        "{}: {} meshes, {} instances, {} triangles built; {name}: {built} meshlets built",
+        a.mesh.display(),
+        scene.meshes.len(),
+        scene.instances.len(),
+        scene.triangles_built()
+    );
+    occlusion_paths(
+        &a, &ctx, &pass, &views, &slots, policy, None, header, line, quiet,
+    )
+}
+
+fn check_occlusion_args(a: &RenderArgs) -> Result<()> {
+    if a.descriptor != Format::Split {
+        bail!("--occlusion draws the split descriptor layout only");
+    }
+    if a.no_cull {
+        bail!("--occlusion culls on top of the frustum and cone tests: drop --no-cull");
+    }
+    Ok(())
+}
+
+/// Runs every view's camera path with occlusion culling and reports it (`header`: the command's
+/// own JSON fields; `line`: its first line of text); exit 1 unless every frame was exact.
+#[allow(clippy::too_many_arguments)]
+fn occlusion_paths(
+    a: &RenderArgs,
+    ctx: &Context,
+    pass: &Pass,
+    views: &[Camera],
+    slots: &[u32],
+    policy: crate::render::occlusion::Policy,
+    lod: Option<crate::render::occlusion::LodCut>,
+    mut header: serde_json::Value,
+    line: String,
+    quiet: bool,
+) -> Result<()> {
+    use crate::render::occlusion::{measure_path, Totals};
     let bar = super::bar(quiet || a.json, views.len() as u64);
     bar.set_message("camera paths");
     let mut paths = Vec::new();
     for (i, cam) in views.iter().enumerate() {
-        let policy = if a.always_pyramid {
-            Policy::ALWAYS
-        } else {
-            Policy::default()
-        };
         paths.push(measure_path(
-            &pass,
+            pass,
             cam,
             i,
             a.frames as usize,
-            &slots,
+            slots,
             policy,
+            lod,
         )?);
         bar.inc(1);
     }
@@ -394,32 +440,21 @@ fn run_occlusion(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
     if a.json {
         let mut out = serde_json::to_value(&total)?;
         let o = out.as_object_mut().expect("an object");
-        for (k, v) in [
-            ("mesh", serde_json::json!(a.mesh.display().to_string())),
-            ("meshes", scene.meshes.len().into()),
-            ("instances", scene.instances.len().into()),
-            ("triangles_built", scene.triangles_built().into()),
-            ("strategy", name.as_str().into()),
-            ("limits", a.args.limits.to_string().into()),
-            ("meshlets_built", built.into()),
-            ("frames_per_view", a.frames.into()),
-            ("device_bytes_scene", pass.scene_bytes().into()),
-            ("triangle_ratio", total.triangle_ratio().into()),
-            ("oracle_ratio", total.oracle_ratio().into()),
-            ("time_ratio", total.time_ratio().into()),
-        ] {
-            o.insert(k.into(), v);
+        for (k, v) in header.as_object_mut().expect("an object").iter() {
+            o.insert(k.clone(), v.clone());
         }
-        print_json(out, &ctx, true, &a, &validation_errors, &paths)?;
+        for (k, v) in [
+            ("triangle_ratio", total.triangle_ratio()),
+            ("oracle_ratio", total.oracle_ratio()),
+            ("time_ratio", total.time_ratio()),
+        ] {
+            o.insert(k.into(), v.into());
+        }
+        print_json(out, ctx, true, a, &validation_errors, &paths)?;
     } else {
         println!(
-            "{}: {} meshes, {} instances, {} triangles built; {name}: {built} meshlets built; {} frames per view, the first apart; device: {}",
-            a.mesh.display(),
-            scene.meshes.len(),
-            scene.instances.len(),
-            scene.triangles_built(),
-            a.frames,
-            ctx.name
+            "{line}; {} frames per view, the first apart; device: {}",
+            a.frames, ctx.name
         );
         for p in &paths {
             let t = &p.frames;
@@ -490,6 +525,49 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
     let ctx = Context::new(a.validate)?;
     let pass = Pass::with_lod(&ctx, &m, &flat)
         .with_context(|| format!("{}: {name} LOD", a.mesh.display()))?;
+    if a.occlusion {
+        // The cut and occlusion culling together, checked frame by frame as for a scene.
+        check_occlusion_args(&a)?;
+        if !ctx.id_check {
+            bail!(crate::render::RenderError::NoIdCheck);
+        }
+        let slots: Vec<u32> = flat.records.iter().map(|r| r.triangles).collect();
+        let (views, _) = cameras(&a, &m);
+        let header = serde_json::json!({
+            "mesh": a.mesh.display().to_string(),
+            "triangles": m.triangle_count(),
+            "strategy": name,
+            "limits": a.args.limits.to_string(),
+            "lod_levels": levels,
+            "lod_levels_loaded": loaded_levels,
+            "lod_meshlets": flat.meshlets.len(),
+            "threshold_px": a.threshold,
+            "frames_per_view": a.frames,
+        });
+        let line = format!(
+            "{}: {} triangles, {name} LOD DAG: {levels} levels ({loaded_levels} loaded), {} meshlets, threshold {} px",
+            a.mesh.display(),
+            m.triangle_count(),
+            flat.meshlets.len(),
+            a.threshold
+        );
+        let cut = crate::render::occlusion::LodCut {
+            threshold: a.threshold,
+            finest,
+        };
+        return occlusion_paths(
+            &a,
+            &ctx,
+            &pass,
+            &views,
+            &slots,
+            crate::render::occlusion::Policy::ALWAYS,
+            Some(cut),
+            header,
+            line,
+            quiet,
+        );
+    }
     // Full detail through the same strategy's meshlets, for the time comparison.
     let full = Pass::new(&ctx, &m, &lod.levels[0].meshlets)?;
     if !a.json {

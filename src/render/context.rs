@@ -486,8 +486,13 @@ impl Buffer {
 
     /// Overwrites the start of the buffer with `data`.
     pub fn write(&self, data: &[u8]) {
-        assert!(data.len() as u64 <= self.size);
-        // SAFETY: as in `read`.
-        unsafe { std::ptr::copy_nonoverlapping(data.as_ptr(), self.ptr, data.len()) };
+        self.write_at(0, data);
+    }
+
+    /// Overwrites the buffer from byte `at` with `data`.
+    pub fn write_at(&self, at: usize, data: &[u8]) {
+        assert!((at + data.len()) as u64 <= self.size);
+        // SAFETY: as in `read`; the range lies inside the mapping (checked above).
+        unsafe { std::ptr::copy_nonoverlapping(data.as_ptr(), self.ptr.add(at), data.len()) };
     }
 }

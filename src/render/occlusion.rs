@@ -180,9 +180,18 @@ pub fn slot_triangles(
         .collect()
 }
 
+/// A LOD pass's cut: the error threshold in pixels and the finest level loaded.
+#[derive(Clone, Copy, Debug)]
+pub struct LodCut {
+    /// Error threshold in pixels.
+    pub threshold: f32,
+    /// Finest level loaded.
+    pub finest: usize,
+}
+
 /// Runs `view`'s path of `frames` frames on `pass` (timed, then checked), building the pyramid
-/// as `policy` says; `slot_triangles[s]` is the triangle count of (instance, meshlet) slot `s`
-/// (for the oracle's triangles).
+/// as `policy` says (every frame for a LOD pass, given its `lod` cut); `slot_triangles[s]` is the
+/// triangle count of (instance, meshlet) slot `s` (for the oracle's triangles).
 pub fn measure_path(
     pass: &Pass,
     view: &Camera,
@@ -190,7 +199,32 @@ pub fn measure_path(
     frames: usize,
     slot_triangles: &[u32],
     policy: Policy,
+    lod: Option<LodCut>,
 ) -> Result<ViewPath, RenderError> {
+    let occlusion = |cam: &Camera, shading, check, build: bool| match lod {
+        Some(c) => pass.render_lod_occlusion(
+            cam,
+            &cam.lod_query(c.threshold, c.finest, true),
+            shading,
+            check,
+        ),
+        None if build => pass.render_occlusion(cam, shading, check),
+        None => pass.render_without_pyramid(cam, shading, check),
+    };
+    let reference = |cam: &Camera, shading, check| match lod {
+        Some(c) => pass.render_lod_reference(
+            cam,
+            &cam.lod_query(c.threshold, c.finest, true),
+            shading,
+            check,
+        ),
+        None => pass.render_reference(cam, shading, check),
+    };
+    let policy = if lod.is_some() {
+        Policy::ALWAYS
+    } else {
+        policy
+    };
     let path = view.approach(frames.max(1));
     let mut totals = [Totals::new(), Totals::new()];
     let mut drawn = Vec::with_capacity(path.len());
@@ -200,11 +234,7 @@ pub fn measure_path(
     pass.reset_visibility();
     for (f, cam) in path.iter().enumerate() {
         pyramid.push(build);
-        let occ = if build {
-            pass.render_occlusion(cam, Shading::Lit, false)?
-        } else {
-            pass.render_without_pyramid(cam, Shading::Lit, false)?
-        };
+        let occ = occlusion(cam, Shading::Lit, false, build)?;
         if !build {
             skipped += 1;
             build = skipped >= policy.probe_every;
@@ -214,7 +244,7 @@ pub fn measure_path(
             build = hidden / (hidden + occ.triangles() as f64).max(1.0) >= policy.min_share;
             skipped = 0;
         }
-        let full = pass.render_reference(cam, Shading::Lit, false)?;
+        let full = reference(cam, Shading::Lit, false)?;
         drawn.push((occ.drawn_early, occ.drawn_late, occ.occluded));
         let t = &mut totals[usize::from(f > 0)];
         t.frames += 1;
@@ -240,12 +270,8 @@ pub fn measure_path(
     // The same path through the check: the same visibility, so the same draws, which is checked.
     pass.reset_visibility();
     for (f, cam) in path.iter().enumerate() {
-        let occ = if pyramid[f] {
-            pass.render_occlusion(cam, Shading::Unlit, true)?
-        } else {
-            pass.render_without_pyramid(cam, Shading::Unlit, true)?
-        };
-        let full = pass.render_reference(cam, Shading::Unlit, true)?;
+        let occ = occlusion(cam, Shading::Unlit, true, pyramid[f])?;
+        let full = reference(cam, Shading::Unlit, true)?;
         assert_eq!(
             (occ.drawn_early, occ.drawn_late, occ.occluded),
             drawn[f],

@@ -307,6 +307,10 @@ pub struct Pass<'a> {
     draws: Option<Vec<instances::Draw>>,
     /// Visibility words (one per (instance, meshlet) slot).
     slots: u32,
+    /// LOD passes: the view-projection the pyramid was last built with.
+    pyramid_view: std::cell::Cell<Option<[f32; 16]>>,
+    /// The LOD task shader through the occlusion check's id shader.
+    lod_check: Option<Owned<vk::Pipeline>>,
     /// Occlusion culling's compute pipeline and check buffers, made at first use.
     occlusion: std::cell::OnceCell<occlusion::Objects>,
 }

@@ -167,6 +167,11 @@ impl Pass<'_> {
         self.bindings
             .visibility
             .write(&vec![0u8; 4 * self.slots as usize]);
+        // LOD passes start from no pyramid instead.
+        self.bindings
+            .pyramid
+            .write(&vec![0u8; self.bindings.pyramid.size as usize]);
+        self.pyramid_view.set(None);
     }
 
     /// One frame from `camera` with two-phase occlusion culling on top of frustum and cone
@@ -346,6 +351,43 @@ impl Pass<'_> {
         })
     }
 
+    /// [`Pass::render_occlusion`] of a LOD pass ([`Pass::with_lod`]): the cut for `q` (its
+    /// view should be the camera's), with the early phase tested against the previous frame's
+    /// pyramid as the previous camera saw it (visibility words do not survive a change of cut).
+    pub fn render_lod_occlusion(
+        &self,
+        camera: &Camera,
+        q: &Query,
+        shading: Shading,
+        check: bool,
+    ) -> Result<OcclusionFrame, RenderError> {
+        self.occlusion_frame_of(
+            camera,
+            shading,
+            check,
+            Phases::Occlusion { one_texel: false },
+            Some(q),
+        )
+    }
+
+    /// [`Pass::render_reference`] of a LOD pass: the cut for `q` with frustum and cone culling
+    /// alone.
+    pub fn render_lod_reference(
+        &self,
+        camera: &Camera,
+        q: &Query,
+        shading: Shading,
+        check: bool,
+    ) -> Result<OcclusionFrame, RenderError> {
+        self.occlusion_frame_of(
+            camera,
+            shading,
+            check,
+            Phases::Reference { keep: false },
+            Some(q),
+        )
+    }
+
     fn occlusion_frame(
         &self,
         camera: &Camera,
@@ -353,24 +395,65 @@ impl Pass<'_> {
         check: bool,
         phases: Phases,
     ) -> Result<OcclusionFrame, RenderError> {
+        self.occlusion_frame_of(camera, shading, check, phases, None)
+    }
+
+    fn occlusion_frame_of(
+        &self,
+        camera: &Camera,
+        shading: Shading,
+        check: bool,
+        phases: Phases,
+        lod: Option<&Query>,
+    ) -> Result<OcclusionFrame, RenderError> {
         let ctx = self.ctx;
         let d = &ctx.device;
-        if !matches!(self.drawn, Drawn::Descriptors(_)) || self.lod.is_some() {
+        if !matches!(self.drawn, Drawn::Descriptors(_)) {
             return Err(RenderError::NoShaderDecoder(
-                "occlusion culling of a compressed or LOD pass".into(),
+                "occlusion culling of a compressed pass".into(),
             ));
         }
-        let pipeline = if check {
-            self.mesh_check
+        let (lod_pipelines, meshlet_count) = match (lod, &self.lod) {
+            (Some(q), Some((layout, pair))) => {
+                let view = ViewData::new(q, layout.loaded(q.finest));
+                self.bindings.lod_view.write(bytemuck::bytes_of(&view));
+                (Some(pair), view.loaded)
+            }
+            (None, None) => (None, self.meshlet_count),
+            (Some(_), None) => return Err(RenderError::NotLod),
+            (None, Some(_)) => {
+                return Err(RenderError::NoShaderDecoder(
+                    "occlusion culling of a LOD pass without its cut (render_lod_occlusion)".into(),
+                ))
+            }
+        };
+        let pipeline = match (check, lod_pipelines) {
+            (true, None) => self
+                .mesh_check
                 .as_ref()
                 .ok_or(RenderError::NoIdCheck)?
-                .get()
-        } else {
-            self.mesh_shade
+                .get(),
+            (true, Some(_)) => self.lod_check.as_ref().ok_or(RenderError::NoIdCheck)?.get(),
+            (false, None) => self
+                .mesh_shade
                 .as_ref()
                 .expect("a descriptor pass has one")
-                .get()
+                .get(),
+            (false, Some((shade, _))) => shade.get(),
         };
+        let view_proj = camera
+            .view_proj(WIDTH as f32 / HEIGHT as f32)
+            .to_cols_array();
+        if lod.is_some() && matches!(phases, Phases::Occlusion { .. }) {
+            // The camera the pyramid was built from, after its levels (the first frame after a
+            // reset: this one, over a pyramid of zeros that hides everything it can test).
+            let previous = self.pyramid_view.get().unwrap_or(view_proj);
+            let at = 4 * pyramid_texels() as usize;
+            self.bindings
+                .pyramid
+                .write_at(at, bytemuck::cast_slice(&previous));
+            self.pyramid_view.set(Some(view_proj));
+        }
         let objects = self.objects()?;
         self.bindings.counters.write(&[0u8; COUNTER_BYTES as usize]);
         if check {
@@ -379,7 +462,7 @@ impl Pass<'_> {
                 .write(&vec![0xffu8; self.bindings.ids.size as usize]);
         }
         let base = FLAG_FRUSTUM | FLAG_CONE;
-        let push = self.push(camera, base, shading, self.meshlet_count);
+        let push = self.push(camera, base, shading, meshlet_count);
         let (draws, culled_instances) = self.draw_list(camera, push);
         let with = |flags: u32| -> Vec<frame::DrawCmd> {
             draws

@@ -55,7 +55,8 @@ impl<'a> Pass<'a> {
             lod_view,
             instances,
             visibility: ctx.buffer(4 * fields.slots as u64, storage)?,
-            pyramid: ctx.buffer(4 * occlusion::pyramid_texels() as u64, storage)?,
+            // The levels, then the view-projection they were built with (16 floats).
+            pyramid: ctx.buffer(4 * (occlusion::pyramid_texels() as u64 + 16), storage)?,
             ids: ctx.buffer(
                 8 * SAMPLES.as_raw() as u64 * WIDTH as u64 * HEIGHT as u64,
                 storage | vk::BufferUsageFlags::TRANSFER_DST,
@@ -151,7 +152,7 @@ impl<'a> Pass<'a> {
             Ok::<_, RenderError>((pair(&shade)?, pair(&ids)?))
         };
         let (mut mesh_shade, mut mesh_ids, mut lod_pipelines) = (None, None, None);
-        let mut mesh_check = None;
+        let (mut mesh_check, mut lod_check) = (None, None);
         if let (Some(task), Some(mesh)) = (modules.task, modules.mesh) {
             let meshm = module(mesh)?;
             let (s, i) = mesh_pair(task, meshm.get())?;
@@ -172,6 +173,19 @@ impl<'a> Pass<'a> {
             }
             if let Some(lod_task) = modules.lod_task {
                 lod_pipelines = Some(mesh_pair(lod_task, meshm.get())?);
+                if ctx.id_check {
+                    let (t, f) = (module(lod_task)?, module(shader(Shader::DepthIdFrag))?);
+                    lod_check = Some(pipeline(
+                        d,
+                        layout.get(),
+                        &[
+                            (vk::ShaderStageFlags::TASK_EXT, t.get()),
+                            (vk::ShaderStageFlags::MESH_EXT, meshm.get()),
+                            (vk::ShaderStageFlags::FRAGMENT, f.get()),
+                        ],
+                        Input::Mesh,
+                    )?);
+                }
             }
         }
         let targets = [
@@ -248,6 +262,8 @@ impl<'a> Pass<'a> {
             readback,
             draws: None,
             slots: fields.slots,
+            pyramid_view: Default::default(),
+            lod_check,
             occlusion: Default::default(),
         })
     }
