@@ -26,8 +26,8 @@ layout(std430, set = 0, binding = BINDING_COUNTERS) buffer Counters { uint count
 vec3 position(uint v) { return vec3(positions[3 * v], positions[3 * v + 1], positions[3 * v + 2]); }
 
 // Per instance: object-to-world rows, world-to-object rows, (largest stretch, first slot as
-// bits, 0, 0).
-struct Instance { vec4 to_world[3]; vec4 to_object[3]; vec4 extra; };
+// bits, 0, 0), the mesh's bounding sphere in object space.
+struct Instance { vec4 to_world[3]; vec4 to_object[3]; vec4 extra; vec4 sphere; };
 layout(std430, set = 0, binding = BINDING_INSTANCES) readonly buffer Instances { Instance instances[]; };
 
 bool instanced() { return (pc.flags & FLAG_INSTANCED) != 0u; }

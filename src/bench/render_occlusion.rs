@@ -276,6 +276,6 @@ pub fn write(md: &mut String, args: &OcclusionArgs, rows: &[SceneRow]) -> Result
             mark(t.images_identical && r.warm_up.images_identical)
         )?;
     }
-    writeln!(md, "\nDevice bytes: positions, meshlets, culling data and index buffer are held once per mesh; the per-instance part is the instance records (112 B each) and one visibility word per (instance, meshlet). Strategies on the grid: {}.\n", args.occlusion_strategy.join(", "))?;
+    writeln!(md, "\nDevice bytes: positions, meshlets, culling data and index buffer are held once per mesh; the per-instance part is the instance records (128 B each) and one visibility word per (instance, meshlet). Strategies on the grid: {}.\n", args.occlusion_strategy.join(", "))?;
     Ok(())
 }

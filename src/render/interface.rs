@@ -121,7 +121,9 @@ pub const COUNTER_TRIANGLES_DRAWN: usize = 8;
 pub const COUNTER_DRAWN_LATE: usize = 9;
 /// Counter slot: their triangles.
 pub const COUNTER_TRIANGLES_DRAWN_LATE: usize = 10;
-/// Counter words before the drawn-meshlet bitmap (slots 11 to 15 are spare).
+/// Counter slot: instances the late phase found wholly hidden behind the pyramid.
+pub const COUNTER_INSTANCES_OCCLUDED: usize = 11;
+/// Counter words before the drawn-meshlet bitmap (slots 12 to 15 are spare).
 pub const COUNTER_WORDS: usize = 16;
 
 /// Meshlets per task workgroup (one task invocation each).
@@ -166,6 +168,7 @@ pub fn glsl_header() -> String {
         ("COUNTER_TRIANGLES_DRAWN", COUNTER_TRIANGLES_DRAWN),
         ("COUNTER_DRAWN_LATE", COUNTER_DRAWN_LATE),
         ("COUNTER_TRIANGLES_DRAWN_LATE", COUNTER_TRIANGLES_DRAWN_LATE),
+        ("COUNTER_INSTANCES_OCCLUDED", COUNTER_INSTANCES_OCCLUDED),
         ("COUNTER_WORDS", COUNTER_WORDS),
     ];
     for (name, v) in counters {

@@ -75,6 +75,9 @@ pub struct Totals {
     pub triangles_late: u64,
     /// Instances skipped whole by the frustum (host).
     pub instances_culled_frustum: u64,
+    /// Instances found wholly behind the pyramid (late phase; their meshlets are in
+    /// `meshlets_occluded`).
+    pub instances_occluded: u64,
     /// Meshlets skipped by the frustum, the normal cone and the pyramid (late phase).
     pub meshlets_culled_frustum: u64,
     /// See `meshlets_culled_frustum`.
@@ -122,6 +125,7 @@ impl Totals {
         self.meshlets_late += o.meshlets_late;
         self.triangles_late += o.triangles_late;
         self.instances_culled_frustum += o.instances_culled_frustum;
+        self.instances_occluded += o.instances_occluded;
         self.meshlets_culled_frustum += o.meshlets_culled_frustum;
         self.meshlets_culled_cone += o.meshlets_culled_cone;
         self.meshlets_occluded += o.meshlets_occluded;
@@ -258,6 +262,7 @@ pub fn measure_path(
         t.meshlets_late += occ.drawn_late as u64;
         t.triangles_late += occ.triangles_late as u64;
         t.instances_culled_frustum += occ.culled_instances as u64;
+        t.instances_occluded += occ.occluded_instances as u64;
         t.meshlets_culled_frustum += occ.culled_frustum as u64;
         t.meshlets_culled_cone += occ.culled_cone as u64;
         t.meshlets_occluded += occ.occluded as u64;

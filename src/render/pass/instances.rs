@@ -25,11 +25,15 @@ pub struct InstanceRecord {
     pub slot_base: u32,
     /// Padding to 16 bytes.
     pub pad: [u32; 2],
+    /// The whole mesh's bounding sphere in object space (centre, radius): the late phase's
+    /// instance-level occlusion test.
+    pub sphere: [f32; 4],
 }
 
 impl InstanceRecord {
-    /// The record of `inst`, whose meshlets' slots start at `slot_base`.
-    pub fn new(inst: &Instance, slot_base: u32) -> Self {
+    /// The record of `inst`, whose meshlets' slots start at `slot_base` and whose mesh lies in
+    /// `sphere` (object space).
+    pub fn new(inst: &Instance, slot_base: u32, sphere: [f32; 4]) -> Self {
         let m = inst.transform.as_dmat4();
         let inv = m.inverse();
         let rows = |m: DMat4| {
@@ -42,6 +46,7 @@ impl InstanceRecord {
             scale: inst.max_scale(),
             slot_base,
             pad: [0; 2],
+            sphere,
         }
     }
 }
@@ -154,7 +159,11 @@ impl<'a> Pass<'a> {
             .iter()
             .zip(&draws)
             .map(|(inst, d)| {
-                let r = InstanceRecord::new(inst, slots);
+                let (lo, hi) = scene.meshes[inst.mesh as usize].bounding_box();
+                let centre = (lo + hi) * 0.5;
+                // Rounded up: the sphere holds every vertex despite f32 rounding.
+                let radius = (((hi - lo).length() * 0.5) * (1.0 + 1e-6)).next_up();
+                let r = InstanceRecord::new(inst, slots, centre.extend(radius).to_array());
                 slots += d.meshlet_count;
                 r
             })
@@ -195,7 +204,7 @@ mod tests {
                 Vec3::new(3.0, 1.0, -2.0),
             ),
         };
-        let r = InstanceRecord::new(&inst, 0);
+        let r = InstanceRecord::new(&inst, 0, [0.0; 4]);
         let p = glam::Vec4::new(0.3, -1.2, 2.0, 1.0);
         let row = |m: &[[f32; 4]; 3], q: glam::Vec4| {
             Vec3::new(

@@ -19,7 +19,7 @@
 use super::*;
 use interface::{
     COUNTER_CULLED_CONE, COUNTER_CULLED_FRUSTUM, COUNTER_DRAWN, COUNTER_DRAWN_LATE,
-    COUNTER_OCCLUDED, COUNTER_TRIANGLES_CONE, COUNTER_TRIANGLES_DRAWN,
+    COUNTER_INSTANCES_OCCLUDED, COUNTER_OCCLUDED, COUNTER_TRIANGLES_CONE, COUNTER_TRIANGLES_DRAWN,
     COUNTER_TRIANGLES_DRAWN_LATE, COUNTER_TRIANGLES_FRUSTUM, COUNTER_TRIANGLES_OCCLUDED,
     FLAG_EARLY, FLAG_KEEP_VISIBILITY, FLAG_LATE, FLAG_PYRAMID_ONE_TEXEL, PYRAMID_LEVELS,
 };
@@ -129,6 +129,9 @@ pub struct OcclusionFrame {
     pub culled_triangles: [u32; 3],
     /// Instances wholly outside the frustum (not drawn; their meshlets are in no other count).
     pub culled_instances: u32,
+    /// Instances the late phase found wholly behind the pyramid (their meshlets count as
+    /// occluded).
+    pub occluded_instances: u32,
     /// The check's images, when asked for.
     pub checked: Option<Checked>,
 }
@@ -699,6 +702,7 @@ impl Pass<'_> {
                 c[COUNTER_TRIANGLES_OCCLUDED],
             ],
             culled_instances,
+            occluded_instances: c[COUNTER_INSTANCES_OCCLUDED],
             checked,
         })
     }
