@@ -158,9 +158,9 @@ impl<'a> Pass<'a> {
             let (s, i) = mesh_pair(task, meshm.get())?;
             (mesh_shade, mesh_ids) = (Some(s), Some(i));
             // The occlusion check's id shader (64-bit atomics), for the meshlet layouts.
-            if ctx.id_check && matches!(fields.drawn, Drawn::Descriptors(_)) {
+            let check_pipeline = |task: &[u8]| {
                 let (t, f) = (module(task)?, module(shader(Shader::DepthIdFrag))?);
-                mesh_check = Some(pipeline(
+                pipeline(
                     d,
                     layout.get(),
                     &[
@@ -169,22 +169,15 @@ impl<'a> Pass<'a> {
                         (vk::ShaderStageFlags::FRAGMENT, f.get()),
                     ],
                     Input::Mesh,
-                )?);
+                )
+            };
+            if ctx.id_check && matches!(fields.drawn, Drawn::Descriptors(_)) {
+                mesh_check = Some(check_pipeline(task)?);
             }
             if let Some(lod_task) = modules.lod_task {
                 lod_pipelines = Some(mesh_pair(lod_task, meshm.get())?);
                 if ctx.id_check {
-                    let (t, f) = (module(lod_task)?, module(shader(Shader::DepthIdFrag))?);
-                    lod_check = Some(pipeline(
-                        d,
-                        layout.get(),
-                        &[
-                            (vk::ShaderStageFlags::TASK_EXT, t.get()),
-                            (vk::ShaderStageFlags::MESH_EXT, meshm.get()),
-                            (vk::ShaderStageFlags::FRAGMENT, f.get()),
-                        ],
-                        Input::Mesh,
-                    )?);
+                    lod_check = Some(check_pipeline(lod_task)?);
                 }
             }
         }
