@@ -141,6 +141,7 @@ pub const NAMES: &[&str] = &[
     "kmedoids-flat",
     "kmedoids-paper",
     "kmedoids-parallel",
+    "kmedoids-regions",
     "compact",
     "meshopt",
     "meshopt-scan",
@@ -282,6 +283,9 @@ pub enum Kind {
     KmedoidsPaper,
     /// [`KMedoids`], capacity-aware on regions at once with border merges: `kmedoids-parallel`.
     KmedoidsParallel,
+    /// [`KMedoids`] on regions at once, grown by integer keys (the same on the GPU):
+    /// `kmedoids-regions`.
+    KmedoidsRegions,
     /// [`Compact`]: `compact`.
     Compact,
     /// [`Meshopt`] (meshoptimizer's `build_meshlets`): `meshopt`.
@@ -298,7 +302,7 @@ pub enum Kind {
 
 impl Kind {
     /// Every kind, in [`NAMES`] (table) order.
-    pub const ALL: [Kind; 18] = [
+    pub const ALL: [Kind; 19] = [
         Kind::Nvidia,
         Kind::NvidiaTipsify,
         Kind::Greedy,
@@ -311,6 +315,7 @@ impl Kind {
         Kind::KmedoidsFlat,
         Kind::KmedoidsPaper,
         Kind::KmedoidsParallel,
+        Kind::KmedoidsRegions,
         Kind::Compact,
         Kind::Meshopt,
         Kind::MeshoptScan,
@@ -357,6 +362,7 @@ impl Kind {
             Kind::KmedoidsFlat => Box::new(kmedoids(kmedoids::Mode::Flat)),
             Kind::KmedoidsPaper => Box::new(kmedoids(kmedoids::Mode::Paper)),
             Kind::KmedoidsParallel => Box::new(kmedoids(kmedoids::Mode::Parallel)),
+            Kind::KmedoidsRegions => Box::new(kmedoids(kmedoids::Mode::Regions)),
             Kind::Compact => Box::new(Compact),
             Kind::Meshopt => Box::new(Meshopt {
                 cone_weight: opts.cone_weight,

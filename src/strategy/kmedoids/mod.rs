@@ -11,6 +11,7 @@
 //! | [`Mode::Capacity`] (the default) | `kmedoids` | [`capacity`]: clusters grow to the limits, nothing is split | `gpu::kmedoids::cluster_capacity` |
 //! | [`Mode::Flat`] | `kmedoids-flat` | [`flat`]: nearest-medoid assignment, overflows split a fraction at a time | `gpu::kmedoids::cluster_flat` |
 //! | [`Mode::Parallel`] | `kmedoids-parallel` | [`parallel`]: the capacity-aware method on many regions at once, border clusters merged in matching rounds | (none yet: the per-region growth is host code) |
+//! | [`Mode::Regions`] | `kmedoids-regions` | [`regions`]: regions at once, each grown by integer keys a kernel runs | `gpu::regions` |
 //! | [`Mode::Paper`] | `kmedoids-paper` | [`flat`]: one cluster added and everything re-run per overflow | (none: slow by design) |
 //!
 //! The files, lowest first (a file reads only those above it in this list):
@@ -24,6 +25,8 @@
 //!   `wgsl/capacity.wgsl`);
 //! - [`flat`]: the flat and paper drivers;
 //! - [`parallel`]: the region-parallel driver over the capacity-aware one;
+//! - [`regions`]: the region-parallel driver with a kernel-shaped grower (CPU reference of
+//!   `wgsl/regions.wgsl`);
 //! - this file: the strategy, its settings, [`cluster`] and [`pack`].
 //!
 //! Every step is a function over flat arrays (CSR adjacency, u32 labels and distances), so a
@@ -37,6 +40,7 @@ pub mod flat;
 mod local_graph;
 pub mod merge;
 pub mod parallel;
+pub mod regions;
 pub mod seed;
 pub mod split;
 pub mod update;
@@ -65,6 +69,9 @@ pub enum Mode {
     /// The capacity-aware method on regions of the mesh at once, then border merges
     /// ([`parallel`], `kmedoids-parallel`).
     Parallel,
+    /// Regions at once, each grown by integer keys one GPU invocation runs
+    /// ([`regions`], `kmedoids-regions`).
+    Regions,
 }
 
 impl Mode {
@@ -75,6 +82,7 @@ impl Mode {
             Mode::Flat => "kmedoids-flat",
             Mode::Paper => "kmedoids-paper",
             Mode::Parallel => "kmedoids-parallel",
+            Mode::Regions => "kmedoids-regions",
         }
     }
 }
@@ -103,7 +111,7 @@ pub struct Config {
     pub parallel: bool,
     /// What a growing cluster prefers (capacity, parallel).
     pub grow: Grow,
-    /// Triangles per region, each clustered on its own (parallel): smaller regions give more
+    /// Triangles per region, each clustered on its own (parallel, regions): smaller regions give more
     /// parallel work and more partly filled clusters at their borders.
     pub region_triangles: u32,
 }
@@ -142,6 +150,7 @@ impl Strategy for KMedoids {
             Mode::Paper => "k-medoids as the paper runs it: one cluster added and everything re-run per overflow",
             Mode::Capacity => "k-medoids whose clusters grow to the limits and take triangles only while they have room",
             Mode::Parallel => "the capacity-aware k-medoids on regions of the mesh at once, border clusters merged in parallel rounds",
+            Mode::Regions => "k-medoids on regions of the mesh at once, each grown by integer keys (the same on the GPU, one invocation per region)",
         }
     }
 
@@ -171,6 +180,7 @@ pub fn cluster(mesh: &Mesh, limits: Limits, mode: Mode, cfg: &Config) -> Cluster
         }
         Mode::Flat | Mode::Paper => flat::cluster(mesh, &dual, limits, mode, cfg, t0),
         Mode::Parallel => parallel::cluster(mesh, &dual, &vt, limits, cfg, t0),
+        Mode::Regions => regions::cluster(mesh, &dual, &vt, limits, cfg, t0),
     }
 }
 

@@ -1,0 +1,534 @@
+//! `kmedoids-regions`: the region-parallel k-medoids with a grower one GPU invocation runs per
+//! region (CPU reference of `wgsl/regions.wgsl`, driven on the GPU by `gpu::regions`).
+//!
+//! [`super::parallel`] runs the capacity-aware method per region; its growth keys divide (the
+//! running centroid) and its merges and piece packing sort and allocate, so no kernel runs it.
+//! This method keeps the regions and replaces the per-region step with a grower made of integer
+//! keys, linear scans and fixed arrays, which a kernel runs line for line:
+//!
+//! 1. **Regions**: [`super::parallel::regions`] (the Morton-seeded multi-source BFS).
+//! 2. **Growth per region**, one invocation each ([`grow_region`]):
+//!    - pieces of the region's dual graph, each in reversed BFS order from its lowest triangle,
+//!      so seeds come deepest first (a piece's far end, where a grower would strand leftovers);
+//!    - a cluster grows from the first free triangle in that order by the frontier triangle of
+//!      least (vertices added, free neighbours, hops from the seed, triangle id): the first key
+//!      fills the vertex limit, the second closes pockets, the third keeps the cluster round;
+//!    - a cluster whose piece ran out while it still has room continues at the next seed (small
+//!      pieces packed together instead of one part-filled meshlet each);
+//!    - when a cluster stops, free pockets next to it of at most half the triangle limit are
+//!      absorbed, largest first, if giving back its last-grown triangles (at most half of them)
+//!      makes room: the pocket would otherwise become a meshlet of its own.
+//! 3. **Labels**: cluster `c` of region `r` is `base[r] + c`, regions in order.
+//! 4. **Medoids**: the paper's medoid of each cluster and its members' in-cluster hop distances
+//!    (one invocation per cluster on the GPU), which order the members when packing.
+//!
+//! Where it differs from the paper (section 3): k comes out of the growth, nothing is split, and
+//! no medoid iteration runs (the growth keys, not nearest-medoid assignment, shape the clusters);
+//! where it differs from `kmedoids-parallel`: no border merges (after the pocket rule they found
+//! almost nothing to merge), no re-assignment rounds, and an integer hop key in place of the
+//! distance to the running centroid. Every cluster is edge-connected except where small whole
+//! pieces are packed together. Determinism: regions share no state and every choice is a strict
+//! minimum over integer keys, so the result is the same for any thread count and on the GPU.
+//!
+//! A vertex is tracked through its canonical corner in the region ([`canonical_corners`]): the
+//! first corner, in triangle order, of the region's lowest triangle using it. Per-corner state
+//! then needs no per-region vertex numbering, and two regions sharing a vertex never touch the
+//! same word (which a kernel needs: regions run concurrently).
+
+use super::assign::{members, UNREACHED};
+use super::capacity::medoid_of;
+use super::parallel::regions;
+use super::{mean, pack, Clustering, Config};
+use crate::common::Csr;
+use crate::mesh::Mesh;
+use crate::meshlet::Limits;
+use rayon::prelude::*;
+use std::time::Instant;
+
+const NONE: u32 = UNREACHED;
+
+/// Runs steps 1-4 over the dual graph; `t0` is when the run began (the adjacency counts in).
+pub fn cluster(
+    mesh: &Mesh,
+    dual: &Csr,
+    vt: &Csr,
+    limits: Limits,
+    cfg: &Config,
+    t0: Instant,
+) -> Clustering {
+    let t = mesh.triangle_count();
+    let (region, k_regions) = regions(mesh, dual, cfg.region_triangles as usize);
+    let rows = members(&region, k_regions);
+    let local = local_index(&rows, t);
+    let canon = canonical_corners(mesh, vt, &region);
+    let input = RegionInput {
+        mesh,
+        dual,
+        region: &region,
+        local: &local,
+        canon: &canon,
+        limits,
+    };
+    let runs: Vec<(Vec<u32>, u32)> = (0..k_regions)
+        .into_par_iter()
+        .map(|r| grow_region(&input, r as u32, rows.row(r)))
+        .collect();
+    // Step 3.
+    let mut labels = vec![NONE; t];
+    let mut k = 0u32;
+    for (r, (local_labels, count)) in runs.iter().enumerate() {
+        for (&tri, &l) in rows.row(r).iter().zip(local_labels) {
+            labels[tri as usize] = k + l;
+        }
+        k += count;
+    }
+    // Step 4.
+    let (medoids, distances) = medoids_and_distances(dual, &labels, k as usize);
+    let meshlets = pack(mesh, &labels, &distances, k as usize, limits);
+    Clustering {
+        initial_mean_distance: mean(&distances),
+        medoids,
+        labels,
+        distances,
+        iterations: 0,
+        splits: 0,
+        budget_exhausted: false,
+        initial_iterations: 0,
+        initial_seconds: t0.elapsed().as_secs_f64(),
+        skipped_updates: 0,
+        meshlets,
+    }
+}
+
+/// Each triangle's position in its region's (ascending) member list.
+pub fn local_index(rows: &Csr, triangles: usize) -> Vec<u32> {
+    let mut local = vec![0; triangles];
+    for r in 0..rows.rows() {
+        for (i, &t) in rows.row(r).iter().enumerate() {
+            local[t as usize] = i as u32;
+        }
+    }
+    local
+}
+
+/// Per corner `3t + j`: the canonical corner of its vertex in `t`'s region, the corner `3u + i`
+/// of the lowest triangle `u` of that region using the vertex, `i` its first such corner.
+pub fn canonical_corners(mesh: &Mesh, vt: &Csr, region: &[u32]) -> Vec<u32> {
+    (0..mesh.triangle_count())
+        .into_par_iter()
+        .flat_map_iter(|t| {
+            let r = region[t];
+            mesh.triangle(t).map(|v| {
+                let u = vt
+                    .row(v as usize)
+                    .iter()
+                    .copied()
+                    .filter(|&x| region[x as usize] == r)
+                    .min()
+                    .expect("a vertex's triangles include this one");
+                let i = mesh
+                    .triangle(u as usize)
+                    .iter()
+                    .position(|&w| w == v)
+                    .expect("the vertex is a corner");
+                3 * u + i as u32
+            })
+        })
+        .collect()
+}
+
+/// What every region's growth reads.
+pub struct RegionInput<'a> {
+    /// The mesh.
+    pub mesh: &'a Mesh,
+    /// Its dual graph.
+    pub dual: &'a Csr,
+    /// Region of each triangle.
+    pub region: &'a [u32],
+    /// [`local_index`].
+    pub local: &'a [u32],
+    /// [`canonical_corners`].
+    pub canon: &'a [u32],
+    /// Meshlet limits.
+    pub limits: Limits,
+}
+
+/// One region's mutable state, indexed by local triangle (`i`) or local canonical corner
+/// (`3i + j`). The kernel keeps the same words in global arrays.
+struct State {
+    label: Vec<u32>,
+    /// Cluster that last put the triangle on its frontier.
+    inq: Vec<u32>,
+    /// Hops from the seed, set when put on the frontier.
+    hop: Vec<u32>,
+    /// Position in the growing cluster (while grown) or the pocket stamp `c + 1` (while free).
+    aux: Vec<u32>,
+    piece: Vec<u32>,
+    /// Per corner: the cluster that last used the vertex, and the position in that cluster of
+    /// the first triangle using it.
+    mark: Vec<u32>,
+    first: Vec<u32>,
+    /// Per corner: the pocket evaluation that last counted the vertex.
+    wmark: Vec<u32>,
+}
+
+/// Step 2 for region `r` (members `tris`, ascending): each member's cluster, numbered from 0 in
+/// the order clusters close, and the cluster count.
+pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, u32) {
+    let n = tris.len();
+    let (mv, mt) = (
+        input.limits.max_vertices as usize,
+        input.limits.max_triangles as usize,
+    );
+    let mut s = State {
+        label: vec![NONE; n],
+        inq: vec![NONE; n],
+        hop: vec![0; n],
+        aux: vec![0; n],
+        piece: vec![NONE; n],
+        mark: vec![NONE; 3 * n],
+        first: vec![0; 3 * n],
+        wmark: vec![0; 3 * n],
+    };
+    // Neighbours of local triangle `i` inside the region, as local indices.
+    let nbrs = |i: usize| {
+        input.dual.row(tris[i] as usize).iter().filter_map(move |&x| {
+            (input.region[x as usize] == r).then(|| input.local[x as usize] as usize)
+        })
+    };
+    // Local canonical corners of local triangle `i`.
+    let corners = |i: usize| {
+        let t = tris[i] as usize;
+        [0, 1, 2].map(|j| {
+            let k = input.canon[3 * t + j];
+            (3 * input.local[(k / 3) as usize] + k % 3) as usize
+        })
+    };
+    // Pieces in reversed BFS order, the seed order.
+    let mut order = Vec::with_capacity(n);
+    let mut left = Vec::new();
+    for root in 0..n {
+        if s.piece[root] != NONE {
+            continue;
+        }
+        let (p, start) = (left.len() as u32, order.len());
+        s.piece[root] = p;
+        order.push(root);
+        let mut head = start;
+        while head < order.len() {
+            let u = order[head];
+            head += 1;
+            for j in nbrs(u) {
+                if s.piece[j] == NONE {
+                    s.piece[j] = p;
+                    order.push(j);
+                }
+            }
+        }
+        left.push((order.len() - start) as u32);
+        order[start..].reverse();
+    }
+    // Distinct corners of `i` whose vertex cluster `c` does not use yet.
+    let added = |s: &State, i: usize, c: u32| {
+        let k = corners(i);
+        (0..3)
+            .filter(|&j| s.mark[k[j]] != c && !k[..j].contains(&k[j]))
+            .count()
+    };
+    let mut front: Vec<usize> = Vec::new();
+    let mut grown: Vec<usize> = Vec::new();
+    // Cluster vertices after each grown triangle.
+    let mut vcount: Vec<u32> = Vec::new();
+    let (mut cursor, mut c, mut open) = (0usize, 0u32, false);
+    let mut nv = 0usize;
+    let mut serial = 0u32;
+    loop {
+        while cursor < n && s.label[order[cursor]] != NONE {
+            cursor += 1;
+        }
+        if cursor == n {
+            if open {
+                c += 1;
+            }
+            break;
+        }
+        let seed = order[cursor];
+        if !open {
+            (nv, open) = (0, true);
+            grown.clear();
+            vcount.clear();
+        }
+        if grown.len() >= mt || nv + added(&s, seed, c) > mv {
+            // A packing cluster the next piece does not fit: it closes as it is.
+            c += 1;
+            open = false;
+            continue;
+        }
+        front.clear();
+        front.push(seed);
+        s.inq[seed] = c;
+        s.hop[seed] = 0;
+        while grown.len() < mt {
+            let mut best: Option<((usize, usize, u32, usize), usize)> = None;
+            for (fi, &i) in front.iter().enumerate() {
+                let a = added(&s, i, c);
+                if nv + a > mv {
+                    continue;
+                }
+                let free = nbrs(i).filter(|&j| s.label[j] == NONE).count();
+                let key = (a, free, s.hop[i], i);
+                if best.is_none_or(|(b, _)| key < b) {
+                    best = Some((key, fi));
+                }
+            }
+            let Some((_, fi)) = best else { break };
+            let i = front.swap_remove(fi);
+            s.label[i] = c;
+            s.aux[i] = grown.len() as u32;
+            left[s.piece[i] as usize] -= 1;
+            for k in corners(i) {
+                if s.mark[k] != c {
+                    s.mark[k] = c;
+                    s.first[k] = grown.len() as u32;
+                    nv += 1;
+                }
+            }
+            grown.push(i);
+            vcount.push(nv as u32);
+            for j in nbrs(i) {
+                if s.label[j] == NONE && s.inq[j] != c {
+                    s.inq[j] = c;
+                    s.hop[j] = s.hop[i] + 1;
+                    front.push(j);
+                }
+            }
+        }
+        let exhausted = front.is_empty() && left[s.piece[seed] as usize] == 0;
+        if exhausted && grown.len() < mt && nv < mv {
+            continue;
+        }
+        if absorb_pockets(&mut s, &nbrs, &corners, &mut grown, &vcount, c, mv, mt, &mut serial) {
+            left.fill(0);
+            for i in 0..n {
+                if s.label[i] == NONE {
+                    left[s.piece[i] as usize] += 1;
+                }
+            }
+            cursor = 0;
+        }
+        c += 1;
+        open = false;
+    }
+    (s.label, c)
+}
+
+/// The pocket rule for cluster `c` as it stops (see the module doc); returns whether it changed
+/// anything. `vcount[p]` is the cluster's vertex count after `grown[p]`.
+#[allow(clippy::too_many_arguments)]
+fn absorb_pockets<N, I>(
+    s: &mut State,
+    nbrs: &N,
+    corners: &impl Fn(usize) -> [usize; 3],
+    grown: &mut Vec<usize>,
+    vcount: &[u32],
+    c: u32,
+    mv: usize,
+    mt: usize,
+    serial: &mut u32,
+) -> bool
+where
+    N: Fn(usize) -> I,
+    I: Iterator<Item = usize>,
+{
+    let cap = mt / 2;
+    let stamp = c + 1;
+    // Pockets: triangles in `q`, each (start, size); larger free components are dropped.
+    let mut q: Vec<usize> = Vec::new();
+    let mut pockets: Vec<(usize, usize)> = Vec::new();
+    for gi in 0..grown.len() {
+        for f in nbrs(grown[gi]) {
+            if s.label[f] != NONE || s.aux[f] == stamp {
+                continue;
+            }
+            let start = q.len();
+            s.aux[f] = stamp;
+            q.push(f);
+            let mut head = start;
+            while head < q.len() {
+                let u = q[head];
+                head += 1;
+                for j in nbrs(u) {
+                    if s.label[j] == NONE && s.aux[j] != stamp {
+                        s.aux[j] = stamp;
+                        q.push(j);
+                    }
+                }
+            }
+            if q.len() - start > cap {
+                q.truncate(start);
+            } else {
+                pockets.push((start, q.len() - start));
+            }
+        }
+    }
+    if pockets.is_empty() {
+        return false;
+    }
+    let len = grown.len();
+    // Earliest grown position next to pocket `p`.
+    let touch = |s: &State, (start, size): (usize, usize)| {
+        q[start..start + size]
+            .iter()
+            .flat_map(|&i| nbrs(i))
+            .filter(|&j| s.label[j] == c)
+            .map(|j| s.aux[j] as usize)
+            .min()
+            .unwrap_or(usize::MAX)
+    };
+    let mut taken: Vec<usize> = Vec::new();
+    let mut taken_size = 0usize;
+    let mut taken_touch = usize::MAX;
+    let mut keep = len;
+    let mut hist = vec![0u32; len];
+    let mut done = vec![false; pockets.len()];
+    for _ in 0..pockets.len() {
+        // Largest first, ties in discovery order.
+        let p = (0..pockets.len())
+            .filter(|&p| !done[p])
+            .min_by_key(|&p| (std::cmp::Reverse(pockets[p].1), p))
+            .expect("one left");
+        done[p] = true;
+        let size = taken_size + pockets[p].1;
+        let touch = taken_touch.min(touch(s, pockets[p]));
+        // Vertices of the taken pockets and this one, by the first grown position using them.
+        *serial += 1;
+        hist.fill(0);
+        let mut outside = 0u32;
+        for &x in taken.iter().chain([&p]) {
+            let (start, sz) = pockets[x];
+            for &i in &q[start..start + sz] {
+                for k in corners(i) {
+                    if s.wmark[k] != *serial {
+                        s.wmark[k] = *serial;
+                        if s.mark[k] == c {
+                            hist[s.first[k] as usize] += 1;
+                        } else {
+                            outside += 1;
+                        }
+                    }
+                }
+            }
+        }
+        // The longest prefix of at least half the cluster, still touching the pockets, that
+        // fits with them.
+        let mut m = len;
+        let mut extra = outside;
+        while 2 * m >= len && m > touch {
+            let verts = vcount[m - 1] + extra;
+            if m + size <= mt && verts as usize <= mv {
+                taken.push(p);
+                (taken_size, taken_touch, keep) = (size, touch, m);
+                break;
+            }
+            m -= 1;
+            extra += hist[m];
+        }
+    }
+    if taken.is_empty() {
+        return false;
+    }
+    for &i in &grown[keep..] {
+        s.label[i] = NONE;
+        s.aux[i] = 0;
+    }
+    grown.truncate(keep);
+    for &p in &taken {
+        let (start, size) = pockets[p];
+        for &i in &q[start..start + size] {
+            s.label[i] = c;
+            grown.push(i);
+        }
+    }
+    true
+}
+
+/// Step 4: the paper's medoid of every cluster and each triangle's in-cluster hop distance to it
+/// (members in other pieces continue the count, as [`super::capacity`] numbers them).
+pub fn medoids_and_distances(dual: &Csr, labels: &[u32], k: usize) -> (Vec<u32>, Vec<u32>) {
+    let mem = members(labels, k);
+    let per: Vec<(u32, Vec<u32>)> = (0..k)
+        .into_par_iter()
+        .map(|c| medoid_of(dual, labels, c as u32, mem.row(c)))
+        .collect();
+    let mut distances = vec![0; labels.len()];
+    let mut medoids = Vec::with_capacity(k);
+    for (c, (m, d)) in per.into_iter().enumerate() {
+        medoids.push(m);
+        for (&t, &x) in mem.row(c).iter().zip(&d) {
+            distances[t as usize] = x;
+        }
+    }
+    (medoids, distances)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{cluster as run, Mode};
+    use super::*;
+    use crate::adjacency::vertex_triangles;
+    use crate::mesh::generate;
+    use crate::meshlet::validate;
+
+    #[test]
+    fn same_output_on_any_thread_count_valid_and_within_the_limits() {
+        let m = generate::knot_tube(160, 12, 3);
+        for limits in [Limits::new(32, 40).unwrap(), Limits::new(8, 6).unwrap()] {
+            let cfg = Config {
+                region_triangles: 300,
+                ..Config::default()
+            };
+            let go = |n| crate::test_pool(n).install(|| run(&m, limits, Mode::Regions, &cfg));
+            let (a, b) = (go(1), go(4));
+            assert_eq!(
+                (&a.medoids, &a.labels, &a.distances),
+                (&b.medoids, &b.labels, &b.distances)
+            );
+            assert_eq!(a.meshlets, b.meshlets);
+            validate(&m, &a.meshlets, limits).unwrap();
+            // Growth respects both limits: packing never had to chunk a cluster.
+            assert_eq!(a.meshlets.len(), a.medoids.len());
+        }
+    }
+
+    #[test]
+    fn canonical_corners_are_shared_inside_a_region_only() {
+        let m = generate::terrain(4, 1);
+        let vt = vertex_triangles(&m);
+        let t = m.triangle_count();
+        // Two regions: the first half of the triangles and the rest.
+        let region: Vec<u32> = (0..t as u32).map(|x| (x as usize >= t / 2) as u32).collect();
+        let canon = canonical_corners(&m, &vt, &region);
+        for a in 0..3 * t {
+            let ka = canon[a] as usize;
+            // The canonical corner is of the same vertex and region.
+            assert_eq!(m.indices[ka], m.indices[a]);
+            assert_eq!(region[ka / 3], region[a / 3]);
+            for b in 0..3 * t {
+                let same = m.indices[a] == m.indices[b] && region[a / 3] == region[b / 3];
+                assert_eq!(same, canon[a] == canon[b]);
+            }
+        }
+    }
+
+    #[test]
+    fn a_pocket_next_to_a_full_cluster_is_absorbed() {
+        // A strip of quads: with 8 triangles per cluster the growth would leave a 2-triangle end
+        // piece; every cluster is edge-connected and no meshlet is a lone pocket.
+        let m = generate::terrain(10, 1);
+        let limits = Limits::new(64, 8).unwrap();
+        let cfg = Config::default();
+        let out = run(&m, limits, Mode::Regions, &cfg);
+        validate(&m, &out.meshlets, limits).unwrap();
+        assert!(out.meshlets.len() <= limits.min_meshlets(m.triangle_count()) + 2);
+    }
+}
