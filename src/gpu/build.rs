@@ -3,8 +3,9 @@
 //! CPU runs.
 //!
 //! A strategy qualifies when the GPU runs all of it and the host only orders the work between
-//! kernels: `bsphere-parallel` ([`super::grow`]) and `kmedoids-flat` ([`super::kmedoids`]'s flat
-//! driver). The default `kmedoids` does not: its seeding growth, merges and packing are sequential
+//! kernels: `bsphere-parallel` ([`super::grow`]), `kmedoids-flat` ([`super::kmedoids`]'s flat
+//! driver) and `kmedoids-regions` ([`super::regions`]; its coarse regions are still computed on
+//! the host and uploaded). The default `kmedoids` does not: its seeding growth, merges and packing are sequential
 //! host code, so a GPU run of it would mostly measure the host. The ordering post-passes
 //! (`--local-order`, `--meshlet-order`) run on the host after the build, exactly as after a CPU
 //! build.
@@ -21,7 +22,11 @@ use crate::strategy::{grow, Kind, Options};
 use std::time::Instant;
 
 /// The strategies with a whole GPU path, in table order.
-pub const GPU_STRATEGIES: [Kind; 2] = [Kind::BsphereParallel, Kind::KmedoidsFlat];
+pub const GPU_STRATEGIES: [Kind; 3] = [
+    Kind::BsphereParallel,
+    Kind::KmedoidsFlat,
+    Kind::KmedoidsRegions,
+];
 
 /// One GPU build.
 #[derive(Clone, Debug)]
@@ -177,6 +182,10 @@ fn run_strategy(
         }
         Kind::BsphereParallel => {
             let (r, d) = super::grow::grow_with(gpu, mesh, limits, grow::DEFAULT_SPACING, false)?;
+            (d, r.timing)
+        }
+        Kind::KmedoidsRegions => {
+            let (r, d) = super::regions::cluster_regions(gpu, mesh, limits, &opts.kmedoids, false)?;
             (d, r.timing)
         }
         _ => unreachable!("gpu_kind admits only GPU_STRATEGIES"),

@@ -42,6 +42,7 @@ pub mod grow;
 pub mod kmedoids;
 pub mod morton;
 pub mod parity;
+pub mod regions;
 mod scan;
 pub mod select;
 

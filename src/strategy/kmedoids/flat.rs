@@ -39,7 +39,8 @@ pub fn cluster_size(limits: Limits, mode: Mode) -> usize {
         Mode::Paper => limits.max_triangles as usize,
         // A closed 64-vertex patch holds about 1.5 x 64 triangles (Euler: T ~ 2V minus the
         // boundary), so starting at that size leaves far fewer clusters to split.
-        Mode::Flat | Mode::Capacity | Mode::Parallel | Mode::Regions => (limits.max_triangles as usize)
+        Mode::Flat | Mode::Capacity | Mode::Parallel | Mode::Regions => (limits.max_triangles
+            as usize)
             .min(3 * limits.max_vertices as usize / 2)
             .max(1),
     }

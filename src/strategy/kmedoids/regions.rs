@@ -46,6 +46,8 @@ use rayon::prelude::*;
 use std::time::Instant;
 
 const NONE: u32 = UNREACHED;
+/// Marks a pocket stamp whose free component is too large to absorb.
+const BIG: u32 = 1 << 31;
 
 /// Runs steps 1-4 over the dual graph; `t0` is when the run began (the adjacency counts in).
 pub fn cluster(
@@ -164,6 +166,8 @@ struct State {
     /// Position in the growing cluster (while grown) or the pocket stamp `c + 1` (while free).
     aux: Vec<u32>,
     piece: Vec<u32>,
+    /// Position in the seed order.
+    opos: Vec<u32>,
     /// Per corner: the cluster that last used the vertex, and the position in that cluster of
     /// the first triangle using it.
     mark: Vec<u32>,
@@ -186,15 +190,20 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         hop: vec![0; n],
         aux: vec![0; n],
         piece: vec![NONE; n],
+        opos: vec![0; n],
         mark: vec![NONE; 3 * n],
         first: vec![0; 3 * n],
         wmark: vec![0; 3 * n],
     };
     // Neighbours of local triangle `i` inside the region, as local indices.
     let nbrs = |i: usize| {
-        input.dual.row(tris[i] as usize).iter().filter_map(move |&x| {
-            (input.region[x as usize] == r).then(|| input.local[x as usize] as usize)
-        })
+        input
+            .dual
+            .row(tris[i] as usize)
+            .iter()
+            .filter_map(move |&x| {
+                (input.region[x as usize] == r).then(|| input.local[x as usize] as usize)
+            })
     };
     // Local canonical corners of local triangle `i`.
     let corners = |i: usize| {
@@ -227,6 +236,9 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         }
         left.push((order.len() - start) as u32);
         order[start..].reverse();
+    }
+    for (o, &i) in order.iter().enumerate() {
+        s.opos[i] = o as u32;
     }
     // Distinct corners of `i` whose vertex cluster `c` does not use yet.
     let added = |s: &State, i: usize, c: u32| {
@@ -307,14 +319,20 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         if exhausted && grown.len() < mt && nv < mv {
             continue;
         }
-        if absorb_pockets(&mut s, &nbrs, &corners, &mut grown, &vcount, c, mv, mt, &mut serial) {
-            left.fill(0);
-            for i in 0..n {
-                if s.label[i] == NONE {
-                    left[s.piece[i] as usize] += 1;
-                }
-            }
-            cursor = 0;
+        if let Some(earliest) = absorb_pockets(
+            &mut s,
+            &nbrs,
+            &corners,
+            &mut grown,
+            &vcount,
+            &mut left,
+            c,
+            mv,
+            mt,
+            &mut serial,
+        ) {
+            // Triangles before the cursor are taken, but those given back: seeds resume there.
+            cursor = cursor.min(earliest);
         }
         c += 1;
         open = false;
@@ -322,8 +340,10 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
     (s.label, c)
 }
 
-/// The pocket rule for cluster `c` as it stops (see the module doc); returns whether it changed
-/// anything. `vcount[p]` is the cluster's vertex count after `grown[p]`.
+/// The pocket rule for cluster `c` as it stops (see the module doc), keeping `left` (free
+/// triangles per piece) up to date; returns the earliest seed-order position of a triangle it
+/// freed (`usize::MAX` if none), or `None` when it changed nothing. `vcount[p]` is the cluster's
+/// vertex count after `grown[p]`.
 #[allow(clippy::too_many_arguments)]
 fn absorb_pockets<N, I>(
     s: &mut State,
@@ -331,11 +351,12 @@ fn absorb_pockets<N, I>(
     corners: &impl Fn(usize) -> [usize; 3],
     grown: &mut Vec<usize>,
     vcount: &[u32],
+    left: &mut [u32],
     c: u32,
     mv: usize,
     mt: usize,
     serial: &mut u32,
-) -> bool
+) -> Option<usize>
 where
     N: Fn(usize) -> I,
     I: Iterator<Item = usize>,
@@ -347,24 +368,36 @@ where
     let mut pockets: Vec<(usize, usize)> = Vec::new();
     for gi in 0..grown.len() {
         for f in nbrs(grown[gi]) {
-            if s.label[f] != NONE || s.aux[f] == stamp {
+            if s.label[f] != NONE || s.aux[f] == stamp || s.aux[f] == stamp | BIG {
                 continue;
             }
             let start = q.len();
             s.aux[f] = stamp;
             q.push(f);
             let mut head = start;
-            while head < q.len() {
+            let mut big = false;
+            // A free component stops being explored once it is known to be too large: more
+            // than `cap` triangles, or one an earlier search from this cluster found large.
+            while head < q.len() && !big {
                 let u = q[head];
                 head += 1;
                 for j in nbrs(u) {
-                    if s.label[j] == NONE && s.aux[j] != stamp {
+                    if s.label[j] != NONE {
+                        continue;
+                    }
+                    if s.aux[j] == stamp | BIG {
+                        big = true;
+                    } else if s.aux[j] != stamp {
                         s.aux[j] = stamp;
                         q.push(j);
                     }
                 }
+                big |= q.len() - start > cap;
             }
-            if q.len() - start > cap {
+            if big {
+                for &i in &q[start..] {
+                    s.aux[i] = stamp | BIG;
+                }
                 q.truncate(start);
             } else {
                 pockets.push((start, q.len() - start));
@@ -372,7 +405,7 @@ where
         }
     }
     if pockets.is_empty() {
-        return false;
+        return None;
     }
     let len = grown.len();
     // Earliest grown position next to pocket `p`.
@@ -435,21 +468,25 @@ where
         }
     }
     if taken.is_empty() {
-        return false;
+        return None;
     }
+    let mut earliest = usize::MAX;
     for &i in &grown[keep..] {
         s.label[i] = NONE;
         s.aux[i] = 0;
+        left[s.piece[i] as usize] += 1;
+        earliest = earliest.min(s.opos[i] as usize);
     }
     grown.truncate(keep);
     for &p in &taken {
         let (start, size) = pockets[p];
         for &i in &q[start..start + size] {
             s.label[i] = c;
+            left[s.piece[i] as usize] -= 1;
             grown.push(i);
         }
     }
-    true
+    Some(earliest)
 }
 
 /// Step 4: the paper's medoid of every cluster and each triangle's in-cluster hop distance to it
@@ -506,7 +543,9 @@ mod tests {
         let vt = vertex_triangles(&m);
         let t = m.triangle_count();
         // Two regions: the first half of the triangles and the rest.
-        let region: Vec<u32> = (0..t as u32).map(|x| (x as usize >= t / 2) as u32).collect();
+        let region: Vec<u32> = (0..t as u32)
+            .map(|x| (x as usize >= t / 2) as u32)
+            .collect();
         let canon = canonical_corners(&m, &vt, &region);
         for a in 0..3 * t {
             let ka = canon[a] as usize;

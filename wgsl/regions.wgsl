@@ -1,0 +1,504 @@
+// kmedoids-regions on the device, mirroring src/strategy/kmedoids/regions.rs step by step
+// (driver: src/gpu/regions.rs):
+//   init      canonical_corners, and the State words of grow_region set to their start values
+//             (per triangle)
+//   grow      grow_region with absorb_pockets: one invocation per region, the same sequential
+//             steps over the same integer keys (regions share no word, so they run at once)
+//   relabel   step 3: cluster c of region r becomes base[r] + c (per triangle)
+//   medoid    medoids_and_distances: the paper's medoid of one cluster and its members' hop
+//             distances (one invocation per cluster)
+// The CPU keeps a region's state in lc arrays; here the same words live in global arrays
+// indexed by triangle id or canonical corner (the region's own), and its lists at its member
+// offset (`RS`) in `arena`.
+
+struct Params { t: u32, regions: u32, max_v: u32, max_t: u32, k: u32, pad: u32 }
+
+@group(0) @binding(0) var<uniform> p: Params;
+@group(0) @binding(1) var<storage, read> idx_a: array<u32>;
+@group(0) @binding(2) var<storage, read> idx_b: array<u32>;
+@group(0) @binding(3) var<storage, read> vt_off: array<u32>;
+@group(0) @binding(4) var<storage, read> vt_a: array<u32>;
+@group(0) @binding(5) var<storage, read> vt_b: array<u32>;
+@group(0) @binding(6) var<storage, read> dual_off: array<u32>;
+@group(0) @binding(7) var<storage, read> dual_a: array<u32>;
+@group(0) @binding(8) var<storage, read> dual_b: array<u32>;
+// [0, R] member offsets of the regions; [R + 1, 2R + 1) clusters per region; [2R + 1, 3R + 2)
+// bases (the host writes them from the counts); [3R + 2, 3R + 2 + k) medoids.
+@group(0) @binding(9) var<storage, read_write> info: array<u32>;
+// Members of each region, ascending.
+@group(0) @binding(10) var<storage, read> items: array<u32>;
+// Per triangle, six sections of T: region, lc cluster, frontier cluster, hops, aux, piece.
+@group(0) @binding(11) var<storage, read_write> tri: array<u32>;
+// Per corner: the canonical corner.
+@group(0) @binding(12) var<storage, read_write> canon: array<u32>;
+// Per canonical corner, three sections of 3T: mark, first, wmark.
+@group(0) @binding(13) var<storage, read_write> cstate: array<u32>;
+// Per region at its member offset, sections of T: order, front, pockets' triangles, pockets,
+// pieces left, members by cluster (seq), cluster starts; then per region `max_t` words each:
+// grown, vertex counts, histogram.
+@group(0) @binding(14) var<storage, read_write> arena: array<u32>;
+@group(0) @binding(15) var<storage, read_write> labels: array<u32>;
+@group(0) @binding(16) var<storage, read_write> dist: array<u32>;
+
+fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART]; }
+fn vtn(i: u32) -> u32 { if (i < PART) { return vt_a[i]; } return vt_b[i - PART]; }
+fn nb(i: u32) -> u32 { if (i < PART) { return dual_a[i]; } return dual_b[i - PART]; }
+
+// tri sections.
+fn region(x: u32) -> u32 { return tri[x]; }
+fn lab(x: u32) -> u32 { return tri[p.t + x]; }
+fn set_lab(x: u32, v: u32) { tri[p.t + x] = v; }
+fn inq(x: u32) -> u32 { return tri[2u * p.t + x]; }
+fn hop(x: u32) -> u32 { return tri[3u * p.t + x]; }
+fn aux(x: u32) -> u32 { return tri[4u * p.t + x]; }
+fn set_aux(x: u32, v: u32) { tri[4u * p.t + x] = v; }
+fn piece(x: u32) -> u32 { return tri[5u * p.t + x]; }
+// Position in the region's seed order.
+fn opos(x: u32) -> u32 { return tri[6u * p.t + x]; }
+
+// cstate sections.
+fn mark(k: u32) -> u32 { return cstate[k]; }
+fn first_pos(k: u32) -> u32 { return cstate[3u * p.t + k]; }
+fn wmark(k: u32) -> u32 { return cstate[6u * p.t + k]; }
+
+// arena sections (per-region offsets added by the callers).
+fn s_order() -> u32 { return 0u; }
+fn s_front() -> u32 { return p.t; }
+fn s_q() -> u32 { return 2u * p.t; }
+fn s_pockets() -> u32 { return 3u * p.t; }
+fn s_left() -> u32 { return 4u * p.t; }
+fn s_seq() -> u32 { return 5u * p.t; }
+fn s_cstart() -> u32 { return 6u * p.t; }
+fn s_grown(r: u32) -> u32 { return 7u * p.t + r * p.max_t; }
+fn s_vcount(r: u32) -> u32 { return 7u * p.t + (p.regions + r) * p.max_t; }
+fn s_hist(r: u32) -> u32 { return 7u * p.t + (2u * p.regions + r) * p.max_t; }
+
+// ---- init ------------------------------------------------------------------------------------
+
+@compute @workgroup_size(64)
+fn init(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let t = flat(gid);
+    if (t >= p.t) { return; }
+    let r = region(t);
+    for (var j = 0u; j < 3u; j++) {
+        let v = idx(3u * t + j);
+        var u = NONE;
+        for (var e = vt_off[v]; e < vt_off[v + 1u]; e++) {
+            let x = vtn(e);
+            if (region(x) == r) { u = min(u, x); }
+        }
+        var i = 0u;
+        if (idx(3u * u) != v) { i = 1u; if (idx(3u * u + 1u) != v) { i = 2u; } }
+        canon[3u * t + j] = 3u * u + i;
+        cstate[3u * t + j] = NONE;
+        cstate[3u * p.t + 3u * t + j] = 0u;
+        cstate[6u * p.t + 3u * t + j] = 0u;
+    }
+    set_lab(t, NONE);
+    tri[2u * p.t + t] = NONE;
+    tri[3u * p.t + t] = 0u;
+    set_aux(t, 0u);
+    tri[5u * p.t + t] = NONE;
+}
+
+// ---- grow ------------------------------------------------------------------------------------
+
+// The region and cluster the invocation works on.
+var<private> R: u32;
+var<private> RS: u32;
+var<private> C: u32;
+// A pocket stamp whose free component is too large to absorb.
+const BIG: u32 = 0x80000000u;
+// Pocket evaluations so far (the wmark stamp).
+var<private> SERIAL: u32;
+
+fn in_region(x: u32) -> bool { return region(x) == R; }
+
+// Distinct corners of `x` whose vertex the current cluster does not use yet.
+fn added(x: u32) -> u32 {
+    let k0 = canon[3u * x];
+    let k1 = canon[3u * x + 1u];
+    let k2 = canon[3u * x + 2u];
+    var a = 0u;
+    if (mark(k0) != C) { a += 1u; }
+    if (mark(k1) != C && k1 != k0) { a += 1u; }
+    if (mark(k2) != C && k2 != k0 && k2 != k1) { a += 1u; }
+    return a;
+}
+
+fn free_neighbours(x: u32) -> u32 {
+    var f = 0u;
+    for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
+        let y = nb(e);
+        if (in_region(y) && lab(y) == NONE) { f += 1u; }
+    }
+    return f;
+}
+
+// Strict order of the growth key (added vertices, free neighbours, hops, triangle id).
+fn key_less(a: vec4<u32>, b: vec4<u32>) -> bool {
+    if (a.x != b.x) { return a.x < b.x; }
+    if (a.y != b.y) { return a.y < b.y; }
+    if (a.z != b.z) { return a.z < b.z; }
+    return a.w < b.w;
+}
+
+// absorb_pockets for the cluster in `grown` (length `len`), keeping the pieces' free counts;
+// returns its new length and the earliest seed-order position it freed, or NONE when nothing
+// changed.
+fn absorb(len: u32) -> vec2<u32> {
+    let cap = p.max_t / 2u;
+    let stamp = C + 1u;
+    let G = s_grown(R);
+    let Q = s_q() + RS;
+    let P = s_pockets() + RS;
+    var qlen = 0u;
+    var npk = 0u;
+    for (var gi = 0u; gi < len; gi++) {
+        let g = arena[G + gi];
+        for (var e = dual_off[g]; e < dual_off[g + 1u]; e++) {
+            let f = nb(e);
+            if (!in_region(f) || lab(f) != NONE || aux(f) == stamp || aux(f) == (stamp | BIG)) {
+                continue;
+            }
+            let start = qlen;
+            set_aux(f, stamp);
+            arena[Q + qlen] = f;
+            qlen += 1u;
+            var head = start;
+            var big = false;
+            while (head < qlen && !big) {
+                let u = arena[Q + head];
+                head += 1u;
+                for (var e2 = dual_off[u]; e2 < dual_off[u + 1u]; e2++) {
+                    let y = nb(e2);
+                    if (!in_region(y) || lab(y) != NONE) { continue; }
+                    if (aux(y) == (stamp | BIG)) {
+                        big = true;
+                    } else if (aux(y) != stamp) {
+                        set_aux(y, stamp);
+                        arena[Q + qlen] = y;
+                        qlen += 1u;
+                    }
+                }
+                big = big || qlen - start > cap;
+            }
+            if (big) {
+                for (var i = start; i < qlen; i++) { set_aux(arena[Q + i], stamp | BIG); }
+                qlen = start;
+            } else {
+                arena[P + npk] = (start << 8u) | (qlen - start);
+                npk += 1u;
+            }
+        }
+    }
+    if (npk == 0u) { return vec2<u32>(NONE, NONE); }
+    // The front is empty of use here: it holds the taken pockets.
+    let TK = s_front() + RS;
+    let VC = s_vcount(R);
+    let H = s_hist(R);
+    var ntaken = 0u;
+    var taken_size = 0u;
+    var taken_touch = NONE;
+    var keep = len;
+    // Largest first, ties in discovery order.
+    for (var sz = cap; sz >= 1u; sz--) {
+        for (var pk = 0u; pk < npk; pk++) {
+            let pw = arena[P + pk];
+            if ((pw & 255u) != sz) { continue; }
+            let size = taken_size + sz;
+            var touch = taken_touch;
+            for (var i = pw >> 8u; i < (pw >> 8u) + sz; i++) {
+                let x = arena[Q + i];
+                for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
+                    let j = nb(e);
+                    if (in_region(j) && lab(j) == C) { touch = min(touch, aux(j)); }
+                }
+            }
+            SERIAL += 1u;
+            for (var h = 0u; h < len; h++) { arena[H + h] = 0u; }
+            var outside = 0u;
+            for (var ti = 0u; ti <= ntaken; ti++) {
+                var w = pw;
+                if (ti < ntaken) { w = arena[P + arena[TK + ti]]; }
+                for (var i = w >> 8u; i < (w >> 8u) + (w & 255u); i++) {
+                    let x = arena[Q + i];
+                    for (var j = 0u; j < 3u; j++) {
+                        let k = canon[3u * x + j];
+                        if (wmark(k) != SERIAL) {
+                            cstate[6u * p.t + k] = SERIAL;
+                            if (mark(k) == C) {
+                                arena[H + first_pos(k)] += 1u;
+                            } else {
+                                outside += 1u;
+                            }
+                        }
+                    }
+                }
+            }
+            var m = len;
+            var extra = outside;
+            while (2u * m >= len && m > touch) {
+                let verts = arena[VC + m - 1u] + extra;
+                if (m + size <= p.max_t && verts <= p.max_v) {
+                    arena[TK + ntaken] = pk;
+                    ntaken += 1u;
+                    taken_size = size;
+                    taken_touch = touch;
+                    keep = m;
+                    break;
+                }
+                m -= 1u;
+                extra += arena[H + m];
+            }
+        }
+    }
+    if (ntaken == 0u) { return vec2<u32>(NONE, NONE); }
+    let L = s_left() + RS;
+    var earliest = NONE;
+    for (var gi = keep; gi < len; gi++) {
+        let x = arena[G + gi];
+        set_lab(x, NONE);
+        set_aux(x, 0u);
+        arena[L + piece(x)] += 1u;
+        earliest = min(earliest, opos(x));
+    }
+    var glen = keep;
+    for (var ti = 0u; ti < ntaken; ti++) {
+        let w = arena[P + arena[TK + ti]];
+        for (var i = w >> 8u; i < (w >> 8u) + (w & 255u); i++) {
+            let x = arena[Q + i];
+            set_lab(x, C);
+            arena[L + piece(x)] -= 1u;
+            arena[G + glen] = x;
+            glen += 1u;
+        }
+    }
+    return vec2<u32>(glen, earliest);
+}
+
+// Closes the current cluster: its members (`grown`, `len`) go to the region's seq list.
+fn close(len: u32, written: u32) -> u32 {
+    let G = s_grown(R);
+    arena[s_cstart() + RS + C] = written;
+    for (var i = 0u; i < len; i++) { arena[s_seq() + RS + written + i] = arena[G + i]; }
+    C += 1u;
+    return written + len;
+}
+
+@compute @workgroup_size(1)
+fn grow(@builtin(workgroup_id) wid: vec3<u32>) {
+    let r = group(wid);
+    if (r >= p.regions) { return; }
+    R = r;
+    RS = info[r];
+    C = 0u;
+    SERIAL = 0u;
+    let n = info[r + 1u] - RS;
+    let O = s_order() + RS;
+    let F = s_front() + RS;
+    let L = s_left() + RS;
+    let G = s_grown(r);
+    let VC = s_vcount(r);
+    // Pieces in reversed BFS order, the seed order.
+    var olen = 0u;
+    var np = 0u;
+    for (var i = 0u; i < n; i++) {
+        let root = items[RS + i];
+        if (piece(root) != NONE) { continue; }
+        let start = olen;
+        tri[5u * p.t + root] = np;
+        arena[O + olen] = root;
+        olen += 1u;
+        var head = start;
+        while (head < olen) {
+            let u = arena[O + head];
+            head += 1u;
+            for (var e = dual_off[u]; e < dual_off[u + 1u]; e++) {
+                let x = nb(e);
+                if (in_region(x) && piece(x) == NONE) {
+                    tri[5u * p.t + x] = np;
+                    arena[O + olen] = x;
+                    olen += 1u;
+                }
+            }
+        }
+        arena[L + np] = olen - start;
+        var a = start;
+        var b = olen - 1u;
+        while (a < b) {
+            let s = arena[O + a];
+            arena[O + a] = arena[O + b];
+            arena[O + b] = s;
+            a += 1u;
+            b -= 1u;
+        }
+        np += 1u;
+    }
+    for (var o = 0u; o < n; o++) { tri[6u * p.t + arena[O + o]] = o; }
+    var cursor = 0u;
+    var open = false;
+    var nv = 0u;
+    var glen = 0u;
+    var written = 0u;
+    loop {
+        while (cursor < n && lab(arena[O + cursor]) != NONE) { cursor += 1u; }
+        if (cursor == n) {
+            if (open) { written = close(glen, written); }
+            break;
+        }
+        let seed = arena[O + cursor];
+        if (!open) {
+            nv = 0u;
+            open = true;
+            glen = 0u;
+        }
+        if (glen >= p.max_t || nv + added(seed) > p.max_v) {
+            written = close(glen, written);
+            open = false;
+            continue;
+        }
+        arena[F] = seed;
+        var flen = 1u;
+        tri[2u * p.t + seed] = C;
+        tri[3u * p.t + seed] = 0u;
+        while (glen < p.max_t) {
+            var bi = NONE;
+            var best = vec4<u32>(0u);
+            for (var fi = 0u; fi < flen; fi++) {
+                let x = arena[F + fi];
+                let a = added(x);
+                if (nv + a > p.max_v) { continue; }
+                let key = vec4<u32>(a, free_neighbours(x), hop(x), x);
+                if (bi == NONE || key_less(key, best)) {
+                    best = key;
+                    bi = fi;
+                }
+            }
+            if (bi == NONE) { break; }
+            let x = arena[F + bi];
+            flen -= 1u;
+            arena[F + bi] = arena[F + flen];
+            set_lab(x, C);
+            set_aux(x, glen);
+            arena[L + piece(x)] -= 1u;
+            for (var j = 0u; j < 3u; j++) {
+                let k = canon[3u * x + j];
+                if (mark(k) != C) {
+                    cstate[k] = C;
+                    cstate[3u * p.t + k] = glen;
+                    nv += 1u;
+                }
+            }
+            arena[G + glen] = x;
+            arena[VC + glen] = nv;
+            glen += 1u;
+            for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
+                let y = nb(e);
+                if (in_region(y) && lab(y) == NONE && inq(y) != C) {
+                    tri[2u * p.t + y] = C;
+                    tri[3u * p.t + y] = hop(x) + 1u;
+                    arena[F + flen] = y;
+                    flen += 1u;
+                }
+            }
+        }
+        let exhausted = flen == 0u && arena[L + piece(seed)] == 0u;
+        if (exhausted && glen < p.max_t && nv < p.max_v) { continue; }
+        let absorbed = absorb(glen);
+        if (absorbed.x != NONE) {
+            glen = absorbed.x;
+            cursor = min(cursor, absorbed.y);
+        }
+        written = close(glen, written);
+        open = false;
+    }
+    info[p.regions + 1u + r] = C;
+}
+
+// ---- relabel ---------------------------------------------------------------------------------
+
+@compute @workgroup_size(64)
+fn relabel(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let t = flat(gid);
+    if (t >= p.t) { return; }
+    labels[t] = info[2u * p.regions + 1u + region(t)] + lab(t);
+}
+
+// ---- medoid ----------------------------------------------------------------------------------
+
+// BFS inside cluster `g` (queue at `Q`) from `s` over the members
+// whose distance is NONE, starting at `d0`; returns (sum of the distances set, members reached).
+fn bfs(g: u32, Q: u32, s: u32, d0: u32) -> vec2<u32> {
+    dist[s] = d0;
+    arena[Q] = s;
+    var ql = 1u;
+    var head = 0u;
+    var sum = d0;
+    while (head < ql) {
+        let u = arena[Q + head];
+        head += 1u;
+        let next = dist[u] + 1u;
+        for (var e = dual_off[u]; e < dual_off[u + 1u]; e++) {
+            let y = nb(e);
+            if (labels[y] == g && dist[y] == NONE) {
+                dist[y] = next;
+                sum += next;
+                arena[Q + ql] = y;
+                ql += 1u;
+            }
+        }
+    }
+    return vec2<u32>(sum, ql);
+}
+
+@compute @workgroup_size(64)
+fn medoid(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let g = flat(gid);
+    if (g >= p.k) { return; }
+    let B = 2u * p.regions + 1u;
+    // The region: the last base at or below g.
+    var lo = 0u;
+    var hi = p.regions;
+    while (hi - lo > 1u) {
+        let mid = (lo + hi) / 2u;
+        if (info[B + mid] <= g) { lo = mid; } else { hi = mid; }
+    }
+    let r = lo;
+    let rs = info[r];
+    let n = info[r + 1u] - rs;
+    let lc = g - info[B + r];
+    let start = arena[s_cstart() + rs + lc];
+    var end = n;
+    if (lc + 1u < info[p.regions + 1u + r]) { end = arena[s_cstart() + rs + lc + 1u]; }
+    let m = end - start;
+    let M = s_seq() + rs + start;
+    let Q = s_q() + rs + start;
+    var best = NONE;
+    var best_sum = NONE;
+    for (var i = 0u; i < m; i++) {
+        for (var j = 0u; j < m; j++) { dist[arena[M + j]] = NONE; }
+        let s = arena[M + i];
+        let got = bfs(g, Q, s, 0u);
+        // Unreached members count as the member count.
+        let sum = got.x + (m - got.y) * m;
+        if (sum < best_sum || (sum == best_sum && s < best)) {
+            best_sum = sum;
+            best = s;
+        }
+    }
+    for (var j = 0u; j < m; j++) { dist[arena[M + j]] = NONE; }
+    bfs(g, Q, best, 0u);
+    // Other pieces continue the count from their lowest triangle.
+    loop {
+        var u = NONE;
+        var top = 0u;
+        for (var j = 0u; j < m; j++) {
+            let x = arena[M + j];
+            if (dist[x] == NONE) { u = min(u, x); } else { top = max(top, dist[x]); }
+        }
+        if (u == NONE) { break; }
+        bfs(g, Q, u, top + 1u);
+    }
+    info[3u * p.regions + 2u + g] = best;
+}
