@@ -33,6 +33,7 @@
 //! | speed, the usual choice | [`Kind::Meshopt`](strategy::Kind::Meshopt) (`meshopt`, meshoptimizer 1.3) | the reference point |
 //! | fewest meshlets at interactive build times | [`Kind::Partition`](strategy::Kind::Partition) (`partition`): meshoptimizer's meshlets re-partitioned and packed | a few times meshoptimizer's time |
 //! | smallest spheres at meshoptimizer's count | [`Kind::Kmedoids`](strategy::Kind::Kmedoids) (`kmedoids`, capacity-aware k-medoids) | about meshoptimizer's time |
+//! | k-medoids on the GPU, whole | [`Kind::KmedoidsRegions`](strategy::Kind::KmedoidsRegions) (`kmedoids-regions`): regions at once, each grown by one GPU invocation | close to `kmedoids-parallel` on surfaces, more meshlets on meshes of many small pieces; identical on the CPU and the GPU |
 //! | k-medoids spheres on many cores | [`Kind::KmedoidsParallel`](strategy::Kind::KmedoidsParallel) (`kmedoids-parallel`): `kmedoids` on regions at once | about a percent more meshlets than `kmedoids`; faster than it from a few hundred thousand triangles with several cores |
 //! | fewest meshlets, offline | `meshopt+refine` or `meshopt+refine-max` ([`strategy::Kind::refined`]) | tens of times meshoptimizer's time |
 //! | clustering on the GPU | `kmedoids-flat` (every step a kernel, `gpu::build::build`; on an engine's own device through `gpu::Gpu::from_device`; meshlets and their culling bounds left in device buffers by `gpu::build::build_resident`, from an engine's own vertex and index buffers by `gpu::build::build_on_device`) | more meshlets |

@@ -535,7 +535,7 @@ fn render_lod_runs_end_to_end() {
 fn building_on_the_gpu_writes_the_cpu_files_byte_for_byte() {
     let dir = common::scratch("device");
     let orders: [&[&str]; 2] = [&[], &["--local-order", "--meshlet-order", "triangles"]];
-    for s in ["kmedoids-flat", "bsphere-parallel"] {
+    for s in ["kmedoids-flat", "bsphere-parallel", "kmedoids-regions"] {
         for (i, order) in orders.iter().enumerate() {
             for (what, ext) in [("build", "mlt"), ("export", "glb")] {
                 let file = |device: &str| dir.join(format!("{s}-{i}-{device}.{ext}"));
@@ -568,7 +568,10 @@ fn stats_on_the_gpu_keeps_the_names_and_reports_build_and_setup_time() {
         .iter()
         .map(|r| r["strategy"].as_str().unwrap())
         .collect();
-    assert_eq!(names, ["bsphere-parallel", "kmedoids-flat"]);
+    assert_eq!(
+        names,
+        ["bsphere-parallel", "kmedoids-flat", "kmedoids-regions"]
+    );
     for r in rows {
         assert_eq!(r["device"], "gpu", "{r}");
         assert!(r["invalid"].is_null(), "{r}");

@@ -215,7 +215,14 @@ mod tests {
     fn only_whole_gpu_strategies_are_accepted_and_the_error_names_the_strategy() {
         assert_eq!(gpu_kind("kmedoids-flat").unwrap(), Kind::KmedoidsFlat);
         assert_eq!(gpu_kind("bsphere-parallel").unwrap(), Kind::BsphereParallel);
-        for name in ["kmedoids", "meshopt", "kmedoids-flat+refine", "nope"] {
+        assert_eq!(gpu_kind("kmedoids-regions").unwrap(), Kind::KmedoidsRegions);
+        for name in [
+            "kmedoids",
+            "kmedoids-parallel",
+            "meshopt",
+            "kmedoids-flat+refine",
+            "nope",
+        ] {
             let e = gpu_kind(name).unwrap_err().to_string();
             assert!(e.contains(&format!("'{name}'")), "{e}");
             assert!(

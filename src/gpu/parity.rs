@@ -190,6 +190,48 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
         ))
         .collect(),
     ));
+    // kmedoids-regions, at the default region size and at small regions (many per mesh, so the
+    // per-region invocations and the bases between them are exercised).
+    for (name, region_triangles) in [
+        (
+            "kmedoids-regions: medoids, labels, distances, objective, meshlets",
+            cfg.region_triangles,
+        ),
+        ("kmedoids-regions at 1024 triangles per region", 1024),
+    ] {
+        let rcfg = Config {
+            region_triangles,
+            ..cfg
+        };
+        let (r_cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, Mode::Regions, &rcfg));
+        let (r_gpu, gpu_s) =
+            timed(|| super::regions::cluster_regions(gpu, mesh, limits, &rcfg, true));
+        let r_gpu = r_gpu?.0.clustering;
+        out.push(check(
+            name,
+            cpu_s,
+            gpu_s,
+            vec![
+                first_difference("medoids", &r_gpu.medoids, &r_cpu.medoids),
+                first_difference("labels", &r_gpu.labels, &r_cpu.labels),
+                first_difference("distances", &r_gpu.distances, &r_cpu.distances),
+                (r_gpu.initial_mean_distance != r_cpu.initial_mean_distance).then(|| {
+                    format!(
+                        "objective: GPU {}, CPU {}",
+                        r_gpu.initial_mean_distance, r_cpu.initial_mean_distance
+                    )
+                }),
+            ]
+            .into_iter()
+            .chain(meshlet_differences(
+                mesh,
+                limits,
+                &r_gpu.meshlets,
+                &r_cpu.meshlets,
+            ))
+            .collect(),
+        ));
+    }
     // The capacity-aware assignment alone, from the final medoids: a run runs it only in the
     // rounds it tries (none on most surfaces) and keeps its result only when a round is accepted,
     // so the whole-run check above can miss a difference here.

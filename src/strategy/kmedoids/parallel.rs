@@ -34,8 +34,9 @@
 //! merges join clusters across an edge only. Determinism: regions, per-region runs and matching
 //! rounds depend on the input alone.
 //!
-//! No GPU path yet: step 2 is the sequential code. `docs/gpu-clustering.md` says what a kernel
-//! per region would run and which steps it still lacks.
+//! No GPU path: step 2 is the sequential code. [`super::regions`] keeps steps 1 and 4 and
+//! replaces step 2 with a grower a kernel runs (`kmedoids-regions`); `docs/gpu-clustering.md`
+//! says which of this method's steps that grower still lacks.
 
 use super::assign::{assign, members, UNREACHED};
 use super::capacity::{self, medoid_of, Grown};
