@@ -2,8 +2,9 @@
 // (driver: src/gpu/regions.rs):
 //   init      canonical_corners, and the State words of grow_region set to their start values
 //             (per triangle)
-//   grow      grow_region with absorb_pockets: one invocation per region, the same sequential
-//             steps over the same integer keys (regions share no word, so they run at once)
+//   grow      grow_region with absorb_pockets and merge_neighbours: one invocation per region,
+//             the same sequential steps over the same integer keys (regions share no word, so
+//             they run at once)
 //   relabel   step 3: cluster c of region r becomes base[r] + c (per triangle)
 //   medoid    medoids_and_distances: the paper's medoid of one cluster and its members' hop
 //             distances (one invocation per cluster)
@@ -103,7 +104,8 @@ fn init(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 // ---- grow ------------------------------------------------------------------------------------
 
-// The region and cluster the invocation works on.
+// The region and cluster the invocation works on, and the region's triangle count.
+var<private> N: u32;
 var<private> R: u32;
 var<private> RS: u32;
 var<private> C: u32;
@@ -295,6 +297,7 @@ fn grow(@builtin(workgroup_id) wid: vec3<u32>) {
     C = 0u;
     SERIAL = 0u;
     let n = info[r + 1u] - RS;
+    N = n;
     let O = s_order() + RS;
     let F = s_front() + RS;
     let L = s_left() + RS;
@@ -413,7 +416,130 @@ fn grow(@builtin(workgroup_id) wid: vec3<u32>) {
         written = close(glen, written);
         open = false;
     }
+    merge_neighbours();
     info[p.regions + 1u + r] = C;
+}
+
+// ---- merge_neighbours (step 2b, in the same invocation) -----------------------------------------
+//
+// Clusters become linked lists (`next` in the frontier-cluster section, which growth no longer
+// needs); per cluster, head, tail, size and the merge order live in the sections growth used for
+// the seed order, the frontier, the pockets' triangles and the pockets.
+
+fn next_of(x: u32) -> u32 { return tri[2u * p.t + x]; }
+fn set_next(x: u32, v: u32) { tri[2u * p.t + x] = v; }
+fn head(c: u32) -> u32 { return arena[s_order() + RS + c]; }
+fn tail(c: u32) -> u32 { return arena[s_front() + RS + c]; }
+fn size(c: u32) -> u32 { return arena[s_q() + RS + c]; }
+
+// Distinct vertices of cluster `a`, and of `a` and `b` together when `b` is not NONE.
+fn cluster_verts(a: u32, b: u32) -> u32 {
+    SERIAL += 1u;
+    var nv = 0u;
+    for (var side = 0u; side < 2u; side++) {
+        var x = head(a);
+        if (side == 1u) {
+            if (b == NONE) { break; }
+            x = head(b);
+        }
+        while (x != NONE) {
+            for (var j = 0u; j < 3u; j++) {
+                let k = canon[3u * x + j];
+                if (wmark(k) != SERIAL) {
+                    cstate[6u * p.t + k] = SERIAL;
+                    nv += 1u;
+                }
+            }
+            x = next_of(x);
+        }
+    }
+    return nv;
+}
+
+fn merge_neighbours() {
+    let k = C;
+    // Lists from the clusters' ranges in seq.
+    for (var c = 0u; c < k; c++) {
+        let lo_i = arena[s_cstart() + RS + c];
+        var hi_i = N;
+        if (c + 1u < k) { hi_i = arena[s_cstart() + RS + c + 1u]; }
+        let S = s_seq() + RS;
+        arena[s_order() + RS + c] = arena[S + lo_i];
+        arena[s_front() + RS + c] = arena[S + hi_i - 1u];
+        arena[s_q() + RS + c] = hi_i - lo_i;
+        for (var i = lo_i; i < hi_i; i++) {
+            var nx = NONE;
+            if (i + 1u < hi_i) { nx = arena[S + i + 1u]; }
+            set_next(arena[S + i], nx);
+        }
+    }
+    // Smallest first, ties to the lower id.
+    let OC = s_pockets() + RS;
+    var o = 0u;
+    for (var sz = 1u; sz <= p.max_t; sz++) {
+        for (var c = 0u; c < k; c++) {
+            if (size(c) == sz) {
+                arena[OC + o] = c;
+                o += 1u;
+            }
+        }
+    }
+    for (var oi = 0u; oi < k; oi++) {
+        let a = arena[OC + oi];
+        let sa = size(a);
+        if (sa == 0u || sa >= p.max_t) { continue; }
+        let va = cluster_verts(a, NONE);
+        if (va >= p.max_v) { continue; }
+        var best = NONE;
+        var best_common = 0u;
+        var best_union = 0u;
+        var x = head(a);
+        while (x != NONE) {
+            for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
+                let y = nb(e);
+                if (!in_region(y)) { continue; }
+                let b = lab(y);
+                if (b == a || sa + size(b) > p.max_t) { continue; }
+                let u = cluster_verts(a, b);
+                if (u > p.max_v) { continue; }
+                let common_v = va + cluster_verts(b, NONE) - u;
+                if (best == NONE || common_v > best_common || (common_v == best_common && b < best)) {
+                    best = b;
+                    best_common = common_v;
+                    best_union = u;
+                }
+            }
+            x = next_of(x);
+        }
+        if (best == NONE) { continue; }
+        let keep = min(a, best);
+        let gone = max(a, best);
+        var g = head(gone);
+        while (g != NONE) {
+            set_lab(g, keep);
+            g = next_of(g);
+        }
+        set_next(tail(keep), head(gone));
+        arena[s_front() + RS + keep] = tail(gone);
+        arena[s_q() + RS + keep] = size(keep) + size(gone);
+        arena[s_q() + RS + gone] = 0u;
+    }
+    // Survivors renumbered in order, their members back in seq.
+    var written = 0u;
+    var nc = 0u;
+    for (var c = 0u; c < k; c++) {
+        if (size(c) == 0u) { continue; }
+        arena[s_cstart() + RS + nc] = written;
+        var y = head(c);
+        while (y != NONE) {
+            set_lab(y, nc);
+            arena[s_seq() + RS + written] = y;
+            written += 1u;
+            y = next_of(y);
+        }
+        nc += 1u;
+    }
+    C = nc;
 }
 
 // ---- relabel ---------------------------------------------------------------------------------

@@ -17,15 +17,17 @@
 //!      pieces packed together instead of one part-filled meshlet each);
 //!    - when a cluster stops, free pockets next to it of at most half the triangle limit are
 //!      absorbed, largest first, if giving back its last-grown triangles (at most half of them)
-//!      makes room: the pocket would otherwise become a meshlet of its own.
+//!      makes room: the pocket would otherwise become a meshlet of its own;
+//!    - then clusters merge into a neighbour across an edge whose union fits, smallest first
+//!      (what tube ends and enclosed leftovers need: on the neurons a sixth fewer meshlets).
 //! 3. **Labels**: cluster `c` of region `r` is `base[r] + c`, regions in order.
 //! 4. **Medoids**: the paper's medoid of each cluster and its members' in-cluster hop distances
 //!    (one invocation per cluster on the GPU), which order the members when packing.
 //!
 //! Where it differs from the paper (section 3): k comes out of the growth, nothing is split, and
 //! no medoid iteration runs (the growth keys, not nearest-medoid assignment, shape the clusters);
-//! where it differs from `kmedoids-parallel`: no border merges (after the pocket rule they found
-//! almost nothing to merge), no re-assignment rounds, and an integer hop key in place of the
+//! where it differs from `kmedoids-parallel`: merges only inside a region (none across region
+//! borders), no packing of whole pieces by distance, no re-assignment rounds, and an integer hop key in place of the
 //! distance to the running centroid. Every cluster is edge-connected except where small whole
 //! pieces are packed together. Determinism: regions share no state and every choice is a strict
 //! minimum over integer keys, so the result is the same for any thread count and on the GPU.
@@ -337,7 +339,104 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         c += 1;
         open = false;
     }
-    (s.label, c)
+    let k = merge_neighbours(&mut s, &nbrs, &corners, n, c, mv, mt, &mut serial);
+    (s.label, k)
+}
+
+/// Step 2b for one region: clusters merged into a neighbour across an edge whose union fits,
+/// smallest first (ties to the lower id; among neighbours, the one sharing most vertices, then
+/// the lower id); the survivors renumbered in order. Returns the cluster count.
+#[allow(clippy::too_many_arguments)]
+fn merge_neighbours<N, I>(
+    s: &mut State,
+    nbrs: &N,
+    corners: &impl Fn(usize) -> [usize; 3],
+    n: usize,
+    k: u32,
+    mv: usize,
+    mt: usize,
+    serial: &mut u32,
+) -> u32
+where
+    N: Fn(usize) -> I,
+    I: Iterator<Item = usize>,
+{
+    let k = k as usize;
+    let mut mem: Vec<Vec<usize>> = vec![Vec::new(); k];
+    for i in 0..n {
+        mem[s.label[i] as usize].push(i);
+    }
+    // Distinct vertices of the clusters in `cs` (a stamp per evaluation).
+    let verts = |s: &mut State, mem: &[Vec<usize>], cs: &[usize], serial: &mut u32| {
+        *serial += 1;
+        let mut nv = 0;
+        for &c in cs {
+            for &i in &mem[c] {
+                for kk in corners(i) {
+                    if s.wmark[kk] != *serial {
+                        s.wmark[kk] = *serial;
+                        nv += 1;
+                    }
+                }
+            }
+        }
+        nv
+    };
+    let mut nverts: Vec<usize> = (0..k).map(|c| verts(s, &mem, &[c], serial)).collect();
+    let mut order: Vec<usize> = (0..k).collect();
+    order.sort_by_key(|&c| (mem[c].len(), c));
+    let mut alive = vec![true; k];
+    let mut cstamp = vec![usize::MAX; k];
+    for a in order {
+        if !alive[a] || mem[a].len() >= mt || nverts[a] >= mv {
+            continue;
+        }
+        let mut best: Option<(usize, usize, usize)> = None;
+        for idx in 0..mem[a].len() {
+            let i = mem[a][idx];
+            for j in nbrs(i) {
+                let b = s.label[j] as usize;
+                if b == a || cstamp[b] == a {
+                    continue;
+                }
+                cstamp[b] = a;
+                if mem[a].len() + mem[b].len() > mt {
+                    continue;
+                }
+                let union = verts(s, &mem, &[a, b], serial);
+                if union > mv {
+                    continue;
+                }
+                let shared = nverts[a] + nverts[b] - union;
+                if best.is_none_or(|(sh, c, _)| {
+                    (shared, std::cmp::Reverse(b)) > (sh, std::cmp::Reverse(c))
+                }) {
+                    best = Some((shared, b, union));
+                }
+            }
+        }
+        let Some((_, b, union)) = best else { continue };
+        let (keep, gone) = (a.min(b), a.max(b));
+        let moved = std::mem::take(&mut mem[gone]);
+        for &i in &moved {
+            s.label[i] = keep as u32;
+        }
+        mem[keep].extend(moved);
+        nverts[keep] = union;
+        alive[gone] = false;
+    }
+    let mut new_id = vec![NONE; k];
+    let mut next = 0;
+    for c in 0..k {
+        if alive[c] {
+            new_id[c] = next;
+            next += 1;
+        }
+    }
+    for l in s.label.iter_mut() {
+        *l = new_id[*l as usize];
+    }
+    next
 }
 
 /// The pocket rule for cluster `c` as it stops (see the module doc), keeping `left` (free
