@@ -80,8 +80,20 @@ struct Row {
     cap: Cap,
     /// `kmedoids-parallel` (no GPU path): meshlets, one thread and rayon seconds.
     par: (usize, Option<f64>, f64),
+    /// `kmedoids-regions`.
+    reg: Reg,
     /// The library's GPU builds, per GPU strategy that ran here.
     resident: Vec<Resident>,
+}
+
+/// `kmedoids-regions` on one mesh: CPU one thread and rayon, and the GPU (checked identical).
+struct Reg {
+    meshlets: usize,
+    regions: usize,
+    cpu1: Option<f64>,
+    rayon: f64,
+    /// Wall seconds, upload/kernel/readback, host seconds for the regions.
+    gpu: Option<(f64, gpu::adjacency::Timing, f64)>,
 }
 
 /// One GPU strategy built three ways through `gpu::build`: meshlets read back, left on the
@@ -249,6 +261,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     gpu::adjacency::adjacency(&g, &warm)?;
     gpu::kmedoids::cluster_flat(&g, &warm, cfg.limits, &KConfig::default())?;
     gpu::grow::grow(&g, &warm, cfg.limits, grow::DEFAULT_SPACING)?;
+    gpu::regions::cluster_regions(&g, &warm, cfg.limits, &KConfig::default(), true)?;
     let warm_positions = g.upload("positions", &warm.positions);
     gpu::build::build_resident(
         &g,
@@ -410,6 +423,43 @@ pub fn run(cfg: &Config) -> Result<()> {
             })
             .transpose()?;
         let par = (par_r.meshlets.len(), par_cpu1, par_rayon);
+        pb.set_message(format!("{name} ({t} triangles): kmedoids-regions"));
+        let (reg_r, reg_rayon) = secs(|| cluster(m, cfg.limits, Mode::Regions, &capc));
+        let reg_cpu1 = (t <= cfg.one_thread_max)
+            .then(|| secs(|| one.install(|| cluster(m, cfg.limits, Mode::Regions, &capc))))
+            .map(|(one_r, s)| {
+                if one_r.meshlets != reg_r.meshlets {
+                    bail!("{name}: kmedoids-regions differs on one thread");
+                }
+                Ok(s)
+            })
+            .transpose()?;
+        // Its state takes nine words per triangle in one binding: meshes past the adapter's
+        // binding size are left out (`-`), as the error says.
+        let reg_run = (t <= cfg.kmedoids_gpu_max)
+            .then(|| gpu::regions::cluster_regions(&g, m, cfg.limits, &capc, true));
+        let (reg_gpu, reg_regions) = match reg_run {
+            Some(Ok((r, _))) => {
+                if r.clustering.labels != reg_r.labels || r.clustering.meshlets != reg_r.meshlets
+                {
+                    bail!("{name}: GPU kmedoids-regions differs from the CPU's");
+                }
+                (Some((r.seconds, r.timing, r.host_regions)), r.regions)
+            }
+            Some(Err(gpu::GpuError::TooLarge { what, len, max })) => {
+                say(format!("{name}: kmedoids-regions GPU left out: {what} {len} > {max}"));
+                (None, 0)
+            }
+            Some(Err(e)) => return Err(e.into()),
+            None => (None, 0),
+        };
+        let reg = Reg {
+            meshlets: reg_r.meshlets.len(),
+            regions: reg_regions,
+            cpu1: reg_cpu1,
+            rayon: reg_rayon,
+            gpu: reg_gpu,
+        };
         let mut resident = Vec::new();
         if t <= cfg.kmedoids_gpu_max.min(cfg.flat_gpu_max) {
             pb.set_message(format!("{name} ({t} triangles): builds left on the device"));
@@ -449,6 +499,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             grow,
             cap,
             par,
+            reg,
             resident,
         });
     }
@@ -768,6 +819,13 @@ fn adjacency_table<'a>() -> Table<'a, Row> {
         .csv_only("parallel_meshlets", |r| r.par.0.to_string())
         .csv_only("parallel_cpu1_s", move |r| s4(r.par.1))
         .csv_only("parallel_rayon_s", |r| format!("{:.4}", r.par.2))
+        .csv_only("regions_meshlets", |r| r.reg.meshlets.to_string())
+        .csv_only("regions_cpu1_s", move |r| s4(r.reg.cpu1))
+        .csv_only("regions_rayon_s", |r| format!("{:.4}", r.reg.rayon))
+        .csv_only("regions_gpu_s", move |r| s4(r.reg.gpu.map(|x| x.0)))
+        .csv_only("regions_gpu_kernel_s", move |r| {
+            s4(r.reg.gpu.map(|x| x.1.kernel))
+        })
 }
 
 fn write(
@@ -856,7 +914,7 @@ fn write(
         md,
         "## `kmedoids-parallel` (CPU only), whole run including adjacency\n"
     )?;
-    writeln!(md, "The capacity-aware method on regions of the mesh at once, border clusters merged in matching rounds (src/strategy/kmedoids/parallel.rs). It has no GPU path yet: the per-region growth is host code (`docs/gpu-clustering.md` measures a GPU-portable form of it). One thread checked identical to the pool.\n")?;
+    writeln!(md, "The capacity-aware method on regions of the mesh at once, border clusters merged in matching rounds (src/strategy/kmedoids/parallel.rs). It has no GPU path: the per-region growth is host code; `kmedoids-regions` (next table) is its kernel-shaped counterpart. One thread checked identical to the pool.\n")?;
     writeln!(
         md,
         "| mesh | triangles | meshlets | CPU 1 thread s | CPU rayon s | 1 thread / rayon | rayon / kmedoids rayon |"
@@ -874,6 +932,42 @@ fn write(
             pool,
             opt(one.map(|x| x / pool), &|x| format!("{x:.2}")),
             pool / r.cap.rayon,
+        )?;
+    }
+    writeln!(md)?;
+    writeln!(
+        md,
+        "## `kmedoids-regions`: every step after the regions on the GPU\n"
+    )?;
+    writeln!(md, "The region-parallel k-medoids whose per-region growth is a kernel (src/strategy/kmedoids/regions.rs, wgsl/regions.wgsl): one invocation per region grows, packs, absorbs pockets and merges its clusters; one per cluster finds the medoid; the assembly is `wgsl/assemble.wgsl`. The regions are computed on the host (`regions s`, inside the GPU wall time) and uploaded. The GPU run is checked identical to the CPU's (labels and meshlets); one thread checked identical to the pool. GPU wall time includes the adjacency kernels, uploads and readbacks of labels, distances and meshlets; pipeline compilation is warmed up before. `-`: left out, its state (nine words per triangle in one binding) past the adapter's binding size.\n")?;
+    writeln!(
+        md,
+        "| mesh | triangles | regions | meshlets | CPU 1 thread s | CPU rayon s | GPU s | upload s | kernel s | readback s | regions s (host) | GPU / rayon | meshlets / kmedoids-parallel |"
+    )?;
+    writeln!(
+        md,
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    )?;
+    for r in rows {
+        let g = &r.reg;
+        writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {:.3} | {} | {} | {} | {} | {} | {} | {:.3} |",
+            r.mesh,
+            r.triangles,
+            opt((g.regions > 0).then_some(g.regions as f64), &|x| format!(
+                "{x}"
+            )),
+            g.meshlets,
+            opt(g.cpu1, &|x| format!("{x:.3}")),
+            g.rayon,
+            opt(g.gpu.map(|x| x.0), &|x| format!("{x:.3}")),
+            opt(g.gpu.map(|x| x.1.upload), &|x| format!("{x:.3}")),
+            opt(g.gpu.map(|x| x.1.kernel), &|x| format!("{x:.3}")),
+            opt(g.gpu.map(|x| x.1.readback), &|x| format!("{x:.3}")),
+            opt(g.gpu.map(|x| x.2), &|x| format!("{x:.3}")),
+            opt(g.gpu.map(|x| x.0 / g.rayon), &|x| format!("{x:.2}x")),
+            g.meshlets as f64 / r.par.0 as f64,
         )?;
     }
     writeln!(md)?;
@@ -1039,6 +1133,18 @@ fn write(
             Series {
                 label: "kmedoids-parallel CPU rayon".into(),
                 points: pts(&|r| Some(r.par.2)),
+            },
+            Series {
+                label: "kmedoids-regions CPU 1 thread".into(),
+                points: pts(&|r| r.reg.cpu1),
+            },
+            Series {
+                label: "kmedoids-regions CPU rayon".into(),
+                points: pts(&|r| Some(r.reg.rayon)),
+            },
+            Series {
+                label: format!("kmedoids-regions GPU ({})", g.info.name),
+                points: pts(&|r| r.reg.gpu.map(|x| x.0)),
             },
             Series {
                 label: "adjacency CPU".into(),

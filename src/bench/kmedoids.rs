@@ -127,6 +127,8 @@ enum Method {
     Paper,
     /// `kmedoids-parallel`.
     Parallel,
+    /// `kmedoids-regions`.
+    Regions,
 }
 
 impl Method {
@@ -137,6 +139,7 @@ impl Method {
             Method::Flat => "kmedoids-flat",
             Method::Paper => "kmedoids-paper",
             Method::Parallel => "kmedoids-parallel",
+            Method::Regions => "kmedoids-regions",
         }
     }
 
@@ -146,6 +149,7 @@ impl Method {
             Method::Flat => Mode::Flat,
             Method::Paper => Mode::Paper,
             Method::Parallel => Mode::Parallel,
+            Method::Regions => Mode::Regions,
         }
     }
 
@@ -348,9 +352,10 @@ fn verdict_table<'a>() -> Table<'a, Verdict> {
 /// Region sizes of the parallel method's sweep.
 const REGION_SWEEP: [u32; 7] = [1024, 2048, 4096, 8192, 16384, 32768, 65536];
 
-/// One mesh's verdict on the `kmedoids-parallel` targets.
+/// One mesh's verdict on the `kmedoids-parallel` targets (held to `kmedoids-regions` too).
 struct ParallelVerdict {
     mesh: String,
+    method: &'static str,
     triangles: usize,
     /// Held to meshoptimizer's count: not a neuron (a tree of thin tubes) nor a stress mesh.
     surface: bool,
@@ -363,9 +368,9 @@ struct ParallelVerdict {
     connected: f64,
 }
 
-fn parallel_verdicts(runs: &[Run]) -> Vec<ParallelVerdict> {
+fn parallel_verdicts(runs: &[Run], method: Method) -> Vec<ParallelVerdict> {
     runs.iter()
-        .filter(|r| r.mode == Method::Parallel)
+        .filter(|r| r.mode == method)
         .filter_map(|r| {
             let seq = runs
                 .iter()
@@ -373,6 +378,7 @@ fn parallel_verdicts(runs: &[Run]) -> Vec<ParallelVerdict> {
             let stress = mesh::generate::STRESS_NAMES.contains(&r.mesh.as_str());
             Some(ParallelVerdict {
                 mesh: r.mesh.clone(),
+                method: method.name(),
                 triangles: r.triangles,
                 surface: !stress && !r.mesh.contains("neuron"),
                 count_meshopt: r.c.meshlets.len() as f64 / r.meshopt.meshlets as f64,
@@ -391,6 +397,7 @@ fn parallel_table<'a>() -> Table<'a, ParallelVerdict> {
     let mark = |ok: bool| if ok { "met" } else { "missed" };
     Table::new(Style::Padded)
         .col("mesh", Left, |v: &ParallelVerdict| v.mesh.clone())
+        .col("method", Left, |v| v.method.to_string())
         .col("triangles", Right, |v| v.triangles.to_string())
         .col(
             "meshlets / meshopt (<= 1.05 on surfaces)",
@@ -550,6 +557,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     let mut modes = vec![
         Method::Default,
         Method::Parallel,
+        Method::Regions,
         Method::Hops,
         Method::Flat,
     ];
@@ -707,16 +715,18 @@ pub fn run(cfg: &Config) -> Result<()> {
             });
         }
     }
-    // The parallel method's knob: region size, from many small regions to one per piece.
-    for region in REGION_SWEEP {
+    // The region methods' knob: region size, from many small regions to one per piece.
+    for (method, region) in [Method::Parallel, Method::Regions]
+        .into_iter()
+        .flat_map(|m| REGION_SWEEP.map(|r| (m, r)))
+    {
         let kc = KConfig {
             region_triangles: region,
-            ..Method::Parallel.config()
+            ..method.config()
         };
-        let (seconds, c, metrics) =
-            run_one(sm, cfg.limits, Method::Parallel, kc, cfg.sweep_mesh())?;
+        let (seconds, c, metrics) = run_one(sm, cfg.limits, method, kc, cfg.sweep_mesh())?;
         sweep.push(SweepRow {
-            mode: Method::Parallel,
+            mode: method,
             threshold: 0.0,
             max_iterations: kc.max_iterations,
             region: Some(region),
@@ -747,18 +757,21 @@ pub fn run(cfg: &Config) -> Result<()> {
                     .collect(),
             })
             .collect();
-        out.push(plot::Series {
-            label: format!(
-                "kmedoids-parallel (region triangles {}..{})",
-                REGION_SWEEP[0],
-                REGION_SWEEP[REGION_SWEEP.len() - 1]
-            ),
-            points: sweep
-                .iter()
-                .filter(|r| r.mode == Method::Parallel)
-                .map(|r| (r.seconds, y(r)))
-                .collect(),
-        });
+        for m in [Method::Parallel, Method::Regions] {
+            out.push(plot::Series {
+                label: format!(
+                    "{} (region triangles {}..{})",
+                    m.name(),
+                    REGION_SWEEP[0],
+                    REGION_SWEEP[REGION_SWEEP.len() - 1]
+                ),
+                points: sweep
+                    .iter()
+                    .filter(|r| r.mode == m)
+                    .map(|r| (r.seconds, y(r)))
+                    .collect(),
+            });
+        }
         out.extend(thresholds.iter().map(|&th| {
             plot::Series {
                 label: format!("kmedoids-flat, shift threshold {th}"),
@@ -862,7 +875,10 @@ pub fn run(cfg: &Config) -> Result<()> {
          method's cost objective by construction.\n"
     );
     let _ = writeln!(s, "{}\n", verdict_table().markdown(&verdicts(&runs)));
-    let _ = writeln!(s, "## Targets, `kmedoids-parallel` per mesh\n");
+    let _ = writeln!(
+        s,
+        "## Targets, `kmedoids-parallel` and `kmedoids-regions` per mesh\n"
+    );
     let _ = writeln!(
         s,
         "Ratios within the run above, against meshoptimizer and the sequential `kmedoids`. Count: <= 1.05x \
@@ -875,7 +891,12 @@ pub fn run(cfg: &Config) -> Result<()> {
     let _ = writeln!(
         s,
         "{}\n",
-        parallel_table().markdown(&parallel_verdicts(&runs))
+        parallel_table().markdown(
+            &[Method::Parallel, Method::Regions]
+                .into_iter()
+                .flat_map(|m| parallel_verdicts(&runs, m))
+                .collect::<Vec<_>>()
+        )
     );
     let _ = writeln!(s, "## The paper's k-medoids times (their machine)\n");
     let _ = writeln!(
