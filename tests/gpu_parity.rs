@@ -313,7 +313,7 @@ fn an_engines_own_device_runs_the_kernels_and_a_short_one_is_refused() {
     let mesh = generate::knot_tube(90, 10, 5);
     let limits = Limits::new(64, 126).unwrap();
     let opts = meshletlab::strategy::Options::default();
-    for name in ["kmedoids-flat", "bsphere-parallel"] {
+    for name in ["kmedoids-flat", "bsphere-parallel", "kmedoids-regions"] {
         let cpu = meshletlab::strategy::by_name(name, &opts)
             .unwrap()
             .build(&mesh, limits);
