@@ -30,7 +30,8 @@ struct Params { t: u32, regions: u32, max_v: u32, max_t: u32, k: u32, pad: u32 }
 @group(0) @binding(10) var<storage, read> items: array<u32>;
 // Per triangle, six sections of T: region, lc cluster, frontier cluster, hops, aux, piece.
 @group(0) @binding(11) var<storage, read_write> tri: array<u32>;
-// Per corner: the canonical corner.
+// [0, 3T) per corner: the canonical corner; [3T, 4T) per triangle: its centroid, 10 bits per
+// axis, from the host (packed_centres).
 @group(0) @binding(12) var<storage, read_write> canon: array<u32>;
 // Per canonical corner, three sections of 3T: mark, first, wmark.
 @group(0) @binding(13) var<storage, read_write> cstate: array<u32>;
@@ -137,11 +138,26 @@ fn free_neighbours(x: u32) -> u32 {
     return f;
 }
 
-// Strict order of the growth key (added vertices, free neighbours, hops, triangle id).
-fn key_less(a: vec4<u32>, b: vec4<u32>) -> bool {
+fn centre(x: u32) -> u32 { return canon[3u * p.t + x]; }
+
+fn distance2(a: u32, b: u32) -> u32 {
+    var d = 0u;
+    for (var j = 0u; j < 3u; j++) {
+        let u = (a >> (10u * j)) & 1023u;
+        let v = (b >> (10u * j)) & 1023u;
+        let e = max(u, v) - min(u, v);
+        d += e * e;
+    }
+    return d;
+}
+
+// Strict order of the growth key (added vertices, free neighbours, squared distance to the
+// centre, hops, triangle id).
+fn key_less(a: vec4<u32>, ah: u32, b: vec4<u32>, bh: u32) -> bool {
     if (a.x != b.x) { return a.x < b.x; }
     if (a.y != b.y) { return a.y < b.y; }
     if (a.z != b.z) { return a.z < b.z; }
+    if (ah != bh) { return ah < bh; }
     return a.w < b.w;
 }
 
@@ -344,6 +360,10 @@ fn grow(@builtin(workgroup_id) wid: vec3<u32>) {
     var nv = 0u;
     var glen = 0u;
     var written = 0u;
+    // Sums of the grown triangles' quantised centroids, per axis.
+    var sx = 0u;
+    var sy = 0u;
+    var sz = 0u;
     loop {
         while (cursor < n && lab(arena[O + cursor]) != NONE) { cursor += 1u; }
         if (cursor == n) {
@@ -355,6 +375,9 @@ fn grow(@builtin(workgroup_id) wid: vec3<u32>) {
             nv = 0u;
             open = true;
             glen = 0u;
+            sx = 0u;
+            sy = 0u;
+            sz = 0u;
         }
         if (glen >= p.max_t || nv + added(seed) > p.max_v) {
             written = close(glen, written);
@@ -366,15 +389,19 @@ fn grow(@builtin(workgroup_id) wid: vec3<u32>) {
         tri[2u * p.t + seed] = C;
         tri[3u * p.t + seed] = 0u;
         while (glen < p.max_t) {
+            var cen = centre(seed);
+            if (glen > 0u) { cen = sx / glen | (sy / glen) << 10u | (sz / glen) << 20u; }
             var bi = NONE;
             var best = vec4<u32>(0u);
+            var best_hop = 0u;
             for (var fi = 0u; fi < flen; fi++) {
                 let x = arena[F + fi];
                 let a = added(x);
                 if (nv + a > p.max_v) { continue; }
-                let key = vec4<u32>(a, free_neighbours(x), hop(x), x);
-                if (bi == NONE || key_less(key, best)) {
+                let key = vec4<u32>(a, free_neighbours(x), distance2(centre(x), cen), x);
+                if (bi == NONE || key_less(key, hop(x), best, best_hop)) {
                     best = key;
+                    best_hop = hop(x);
                     bi = fi;
                 }
             }
@@ -396,6 +423,10 @@ fn grow(@builtin(workgroup_id) wid: vec3<u32>) {
             arena[G + glen] = x;
             arena[VC + glen] = nv;
             glen += 1u;
+            let cx = centre(x);
+            sx += cx & 1023u;
+            sy += (cx >> 10u) & 1023u;
+            sz += (cx >> 20u) & 1023u;
             for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
                 let y = nb(e);
                 if (in_region(y) && lab(y) == NONE && inq(y) != C) {

@@ -440,14 +440,15 @@ pub fn run(cfg: &Config) -> Result<()> {
             .then(|| gpu::regions::cluster_regions(&g, m, cfg.limits, &capc, true));
         let (reg_gpu, reg_regions) = match reg_run {
             Some(Ok((r, _))) => {
-                if r.clustering.labels != reg_r.labels || r.clustering.meshlets != reg_r.meshlets
-                {
+                if r.clustering.labels != reg_r.labels || r.clustering.meshlets != reg_r.meshlets {
                     bail!("{name}: GPU kmedoids-regions differs from the CPU's");
                 }
                 (Some((r.seconds, r.timing, r.host_regions)), r.regions)
             }
             Some(Err(gpu::GpuError::TooLarge { what, len, max })) => {
-                say(format!("{name}: kmedoids-regions GPU left out: {what} {len} > {max}"));
+                say(format!(
+                    "{name}: kmedoids-regions GPU left out: {what} {len} > {max}"
+                ));
                 (None, 0)
             }
             Some(Err(e)) => return Err(e.into()),

@@ -16,7 +16,7 @@ use super::{
 use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
-use crate::strategy::kmedoids::{self, members, parallel, Clustering, Config};
+use crate::strategy::kmedoids::{self, members, parallel, regions, Clustering, Config};
 use std::time::Instant;
 
 param_block! {
@@ -62,7 +62,7 @@ binding_set! {
         items: Read,
         /// Per-triangle state (seven sections).
         tri: ReadWrite,
-        /// Canonical corners.
+        /// Canonical corners, then the triangles' quantised centroids.
         canon: ReadWrite,
         /// Per-corner state (three sections).
         cstate: ReadWrite,
@@ -113,6 +113,7 @@ pub fn cluster_regions(
     for (what, len) in [
         ("regions' triangle state", 7 * t),
         ("regions' corner state", 9 * t),
+        ("regions' canonical corners and centres", 4 * t),
         ("regions' lists", arena_len),
     ] {
         if len > PART {
@@ -143,11 +144,17 @@ pub fn cluster_regions(
         let tri = gpu.zeros("region triangle state", 7 * t);
         gpu.queue
             .write_buffer(&tri, 0, bytemuck::cast_slice(&region));
+        let canon = gpu.zeros("canonical corners and centres", 4 * t);
+        gpu.queue.write_buffer(
+            &canon,
+            4 * 3 * t as u64,
+            bytemuck::cast_slice(&regions::packed_centres(mesh)),
+        );
         (
             info,
             gpu.upload("region members", &rows.items),
             tri,
-            gpu.zeros("canonical corners", 3 * t),
+            canon,
             gpu.zeros("corner state", 9 * t),
             gpu.zeros("region lists", arena_len),
             gpu.zeros("labels", t),

@@ -11,8 +11,11 @@
 //!    - pieces of the region's dual graph, each in reversed BFS order from its lowest triangle,
 //!      so seeds come deepest first (a piece's far end, where a grower would strand leftovers);
 //!    - a cluster grows from the first free triangle in that order by the frontier triangle of
-//!      least (vertices added, free neighbours, hops from the seed, triangle id): the first key
-//!      fills the vertex limit, the second closes pockets, the third keeps the cluster round;
+//!      least (vertices added, free neighbours, squared distance to the cluster's centre, hops
+//!      from the seed, triangle id): the first key fills the vertex limit, the second closes
+//!      pockets, the third keeps the cluster round. Distances are between triangle centroids
+//!      quantised once on the host to 10 bits per axis ([`packed_centres`]), and the centre is
+//!      their integer mean, so the key is the same integer on every device;
 //!    - a cluster whose piece ran out while it still has room continues at the next seed (small
 //!      pieces packed together instead of one part-filled meshlet each);
 //!    - when a cluster stops, free pockets next to it of at most half the triangle limit are
@@ -27,8 +30,7 @@
 //! Where it differs from the paper (section 3): k comes out of the growth, nothing is split, and
 //! no medoid iteration runs (the growth keys, not nearest-medoid assignment, shape the clusters);
 //! where it differs from `kmedoids-parallel`: merges only inside a region (none across region
-//! borders), no packing of whole pieces by distance, no re-assignment rounds, and an integer hop key in place of the
-//! distance to the running centroid. Every cluster is edge-connected except where small whole
+//! borders), no packing of whole pieces by distance, no re-assignment rounds, and the running centroid in quantised integers. Every cluster is edge-connected except where small whole
 //! pieces are packed together. Determinism: regions share no state and every choice is a strict
 //! minimum over integer keys, so the result is the same for any thread count and on the GPU.
 //!
@@ -65,12 +67,14 @@ pub fn cluster(
     let rows = members(&region, k_regions);
     let local = local_index(&rows, t);
     let canon = canonical_corners(mesh, vt, &region);
+    let centres = packed_centres(mesh);
     let input = RegionInput {
         mesh,
         dual,
         region: &region,
         local: &local,
         canon: &canon,
+        centres: &centres,
         limits,
     };
     let runs: Vec<(Vec<u32>, u32)> = (0..k_regions)
@@ -141,6 +145,35 @@ pub fn canonical_corners(mesh: &Mesh, vt: &Csr, region: &[u32]) -> Vec<u32> {
         .collect()
 }
 
+/// Squared distance between two packed 10-bit centres.
+fn distance2(a: u32, b: u32) -> u32 {
+    (0..3)
+        .map(|j| {
+            let d = ((a >> (10 * j)) & 1023).abs_diff((b >> (10 * j)) & 1023);
+            d * d
+        })
+        .sum()
+}
+
+/// Each triangle's centroid in the mesh's box, 10 bits per axis (the same scale on every axis),
+/// packed `x | y << 10 | z << 20`: the growth's geometric key, computed once on the host.
+pub fn packed_centres(mesh: &Mesh) -> Vec<u32> {
+    let (lo, hi) = mesh.bounding_box();
+    let extent = (hi - lo).max_element();
+    let scale = if extent > 0.0 { 1023.0 / extent } else { 0.0 };
+    (0..mesh.triangle_count())
+        .map(|t| {
+            let [a, b, c] = mesh
+                .triangle(t)
+                .map(|v| glam::Vec3::from(mesh.positions[v as usize]));
+            let q = (((a + b + c) / 3.0 - lo) * scale)
+                .round()
+                .clamp(glam::Vec3::ZERO, glam::Vec3::splat(1023.0));
+            q.x as u32 | (q.y as u32) << 10 | (q.z as u32) << 20
+        })
+        .collect()
+}
+
 /// What every region's growth reads.
 pub struct RegionInput<'a> {
     /// The mesh.
@@ -153,6 +186,8 @@ pub struct RegionInput<'a> {
     pub local: &'a [u32],
     /// [`canonical_corners`].
     pub canon: &'a [u32],
+    /// [`packed_centres`].
+    pub centres: &'a [u32],
     /// Meshlet limits.
     pub limits: Limits,
 }
@@ -256,6 +291,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
     let (mut cursor, mut c, mut open) = (0usize, 0u32, false);
     let mut nv = 0usize;
     let mut serial = 0u32;
+    let mut sum = [0u32; 3];
     loop {
         while cursor < n && s.label[order[cursor]] != NONE {
             cursor += 1;
@@ -269,6 +305,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         let seed = order[cursor];
         if !open {
             (nv, open) = (0, true);
+            sum = [0; 3];
             grown.clear();
             vcount.clear();
         }
@@ -283,14 +320,22 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         s.inq[seed] = c;
         s.hop[seed] = 0;
         while grown.len() < mt {
-            let mut best: Option<((usize, usize, u32, usize), usize)> = None;
+            // The cluster's centre so far (integer division: exact on every device).
+            let centre = if grown.is_empty() {
+                input.centres[tris[seed] as usize]
+            } else {
+                let g = grown.len() as u32;
+                sum[0] / g | (sum[1] / g) << 10 | (sum[2] / g) << 20
+            };
+            let mut best: Option<((usize, usize, u32, u32, usize), usize)> = None;
             for (fi, &i) in front.iter().enumerate() {
                 let a = added(&s, i, c);
                 if nv + a > mv {
                     continue;
                 }
                 let free = nbrs(i).filter(|&j| s.label[j] == NONE).count();
-                let key = (a, free, s.hop[i], i);
+                let d2 = distance2(input.centres[tris[i] as usize], centre);
+                let key = (a, free, d2, s.hop[i], i);
                 if best.is_none_or(|(b, _)| key < b) {
                     best = Some((key, fi));
                 }
@@ -308,6 +353,9 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
                 }
             }
             grown.push(i);
+            for (j, x) in sum.iter_mut().enumerate() {
+                *x += (input.centres[tris[i] as usize] >> (10 * j)) & 1023;
+            }
             vcount.push(nv as u32);
             for j in nbrs(i) {
                 if s.label[j] == NONE && s.inq[j] != c {
