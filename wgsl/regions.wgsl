@@ -110,6 +110,8 @@ var<private> N: u32;
 var<private> R: u32;
 var<private> RS: u32;
 var<private> C: u32;
+// Set in a piece's free count when the piece is part of a mesh piece cut by the region's border.
+const CUT: u32 = 0x80000000u;
 // A pocket stamp whose free component is too large to absorb.
 const BIG: u32 = 0x80000000u;
 // Pocket evaluations so far (the wmark stamp).
@@ -217,7 +219,8 @@ fn absorb(len: u32) -> vec2<u32> {
     let H = s_hist(R);
     var ntaken = 0u;
     var taken_size = 0u;
-    var taken_touch = NONE;
+    // The latest of the taken pockets' earliest touches: a prefix must reach every pocket.
+    var taken_touch = 0u;
     var keep = len;
     // Largest first, ties in discovery order.
     for (var sz = cap; sz >= 1u; sz--) {
@@ -225,14 +228,15 @@ fn absorb(len: u32) -> vec2<u32> {
             let pw = arena[P + pk];
             if ((pw & 255u) != sz) { continue; }
             let size = taken_size + sz;
-            var touch = taken_touch;
+            var tp = NONE;
             for (var i = pw >> 8u; i < (pw >> 8u) + sz; i++) {
                 let x = arena[Q + i];
                 for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
                     let j = nb(e);
-                    if (in_region(j) && lab(j) == C) { touch = min(touch, aux(j)); }
+                    if (in_region(j) && lab(j) == C) { tp = min(tp, aux(j)); }
                 }
             }
+            let touch = max(taken_touch, tp);
             SERIAL += 1u;
             for (var h = 0u; h < len; h++) { arena[H + h] = 0u; }
             var outside = 0u;
@@ -330,11 +334,13 @@ fn grow(@builtin(workgroup_id) wid: vec3<u32>) {
         arena[O + olen] = root;
         olen += 1u;
         var head = start;
+        var cut = 0u;
         while (head < olen) {
             let u = arena[O + head];
             head += 1u;
             for (var e = dual_off[u]; e < dual_off[u + 1u]; e++) {
                 let x = nb(e);
+                if (!in_region(x)) { cut = CUT; }
                 if (in_region(x) && piece(x) == NONE) {
                     tri[5u * p.t + x] = np;
                     arena[O + olen] = x;
@@ -342,7 +348,7 @@ fn grow(@builtin(workgroup_id) wid: vec3<u32>) {
                 }
             }
         }
-        arena[L + np] = olen - start;
+        arena[L + np] = (olen - start) | cut;
         var a = start;
         var b = olen - 1u;
         while (a < b) {
@@ -379,7 +385,8 @@ fn grow(@builtin(workgroup_id) wid: vec3<u32>) {
             sy = 0u;
             sz = 0u;
         }
-        if (glen >= p.max_t || nv + added(seed) > p.max_v) {
+        if (glen >= p.max_t || nv + added(seed) > p.max_v
+            || (glen > 0u && (arena[L + piece(seed)] & CUT) != 0u)) {
             written = close(glen, written);
             open = false;
             continue;
@@ -437,7 +444,7 @@ fn grow(@builtin(workgroup_id) wid: vec3<u32>) {
                 }
             }
         }
-        let exhausted = flen == 0u && arena[L + piece(seed)] == 0u;
+        let exhausted = flen == 0u && (arena[L + piece(seed)] & ~CUT) == 0u;
         if (exhausted && glen < p.max_t && nv < p.max_v) { continue; }
         let absorbed = absorb(glen);
         if (absorbed.x != NONE) {

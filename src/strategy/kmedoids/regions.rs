@@ -17,7 +17,9 @@
 //!      quantised once on the host to 10 bits per axis ([`packed_centres`]), and the centre is
 //!      their integer mean, so the key is the same integer on every device;
 //!    - a cluster whose piece ran out while it still has room continues at the next seed (small
-//!      pieces packed together instead of one part-filled meshlet each);
+//!      pieces packed together instead of one part-filled meshlet each), if that seed's piece is
+//!      a whole piece of the mesh (one the region's border cuts could put the cluster in two
+//!      parts of one mesh piece);
 //!    - when a cluster stops, free pockets next to it of at most half the triangle limit are
 //!      absorbed, largest first, if giving back its last-grown triangles (at most half of them)
 //!      makes room: the pocket would otherwise become a meshlet of its own;
@@ -253,6 +255,8 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
     // Pieces in reversed BFS order, the seed order.
     let mut order = Vec::with_capacity(n);
     let mut left = Vec::new();
+    // Whether a piece is a whole piece of the mesh (no edge leaves the region).
+    let mut closed: Vec<bool> = Vec::new();
     for root in 0..n {
         if s.piece[root] != NONE {
             continue;
@@ -261,9 +265,12 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         s.piece[root] = p;
         order.push(root);
         let mut head = start;
+        let mut whole = true;
         while head < order.len() {
             let u = order[head];
             head += 1;
+            let row = input.dual.row(tris[u] as usize);
+            whole &= row.iter().all(|&x| input.region[x as usize] == r);
             for j in nbrs(u) {
                 if s.piece[j] == NONE {
                     s.piece[j] = p;
@@ -272,6 +279,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
             }
         }
         left.push((order.len() - start) as u32);
+        closed.push(whole);
         order[start..].reverse();
     }
     for (o, &i) in order.iter().enumerate() {
@@ -309,8 +317,13 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
             grown.clear();
             vcount.clear();
         }
-        if grown.len() >= mt || nv + added(&s, seed, c) > mv {
-            // A packing cluster the next piece does not fit: it closes as it is.
+        // A packing cluster closes as it is when the next piece does not fit, or is part of a
+        // mesh piece cut by the region's border (which another of its parts may already be in:
+        // the cluster would then be in two parts of one piece).
+        if grown.len() >= mt
+            || nv + added(&s, seed, c) > mv
+            || (!grown.is_empty() && !closed[s.piece[seed] as usize])
+        {
             c += 1;
             open = false;
             continue;
@@ -567,7 +580,8 @@ where
     };
     let mut taken: Vec<usize> = Vec::new();
     let mut taken_size = 0usize;
-    let mut taken_touch = usize::MAX;
+    // The latest of the taken pockets' earliest touches: a prefix must reach every pocket.
+    let mut taken_touch = 0;
     let mut keep = len;
     let mut hist = vec![0u32; len];
     let mut done = vec![false; pockets.len()];
@@ -579,7 +593,7 @@ where
             .expect("one left");
         done[p] = true;
         let size = taken_size + pockets[p].1;
-        let touch = taken_touch.min(touch(s, pockets[p]));
+        let touch = taken_touch.max(touch(s, pockets[p]));
         // Vertices of the taken pockets and this one, by the first grown position using them.
         *serial += 1;
         hist.fill(0);
@@ -659,7 +673,7 @@ pub fn medoids_and_distances(dual: &Csr, labels: &[u32], k: usize) -> (Vec<u32>,
 mod tests {
     use super::super::{cluster as run, Mode};
     use super::*;
-    use crate::adjacency::vertex_triangles;
+    use crate::adjacency::{cluster_pieces, dual_graph, vertex_triangles};
     use crate::mesh::generate;
     use crate::meshlet::validate;
 
@@ -681,6 +695,26 @@ mod tests {
             validate(&m, &a.meshlets, limits).unwrap();
             // Growth respects both limits: packing never had to chunk a cluster.
             assert_eq!(a.meshlets.len(), a.medoids.len());
+        }
+    }
+
+    #[test]
+    fn clusters_are_connected_wherever_the_mesh_is() {
+        // Pieces cut by region borders, small whole pieces to pack, tiny limits and small regions.
+        for g in generate::stress_set(3) {
+            let dual = dual_graph(&g.mesh, &vertex_triangles(&g.mesh));
+            for limits in [Limits::DEFAULT, Limits::new(8, 6).unwrap()] {
+                let cfg = Config {
+                    region_triangles: 700,
+                    ..Config::default()
+                };
+                let out = run(&g.mesh, limits, Mode::Regions, &cfg);
+                validate(&g.mesh, &out.meshlets, limits).unwrap();
+                let k = out.medoids.len();
+                for (c, (own, mesh)) in cluster_pieces(&dual, &out.labels, k).iter().enumerate() {
+                    assert_eq!(own, mesh, "{} at {limits}: cluster {c}", g.name);
+                }
+            }
         }
     }
 
