@@ -176,6 +176,10 @@ pub fn packed_centres(mesh: &Mesh) -> Vec<u32> {
         .collect()
 }
 
+/// The growth key: (vertices added, free neighbours, squared distance to the centre, hops,
+/// local triangle); the least grows next.
+type GrowKey = (usize, usize, u32, u32, usize);
+
 /// What every region's growth reads.
 pub struct RegionInput<'a> {
     /// The mesh.
@@ -240,9 +244,8 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
             .dual
             .row(tris[i] as usize)
             .iter()
-            .filter_map(move |&x| {
-                (input.region[x as usize] == r).then(|| input.local[x as usize] as usize)
-            })
+            .filter(move |&&x| input.region[x as usize] == r)
+            .map(|&x| input.local[x as usize] as usize)
     };
     // Local canonical corners of local triangle `i`.
     let corners = |i: usize| {
@@ -338,9 +341,9 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
                 input.centres[tris[seed] as usize]
             } else {
                 let g = grown.len() as u32;
-                sum[0] / g | (sum[1] / g) << 10 | (sum[2] / g) << 20
+                (sum[0] / g) | ((sum[1] / g) << 10) | ((sum[2] / g) << 20)
             };
-            let mut best: Option<((usize, usize, u32, u32, usize), usize)> = None;
+            let mut best: Option<(GrowKey, usize)> = None;
             for (fi, &i) in front.iter().enumerate() {
                 let a = added(&s, i, c);
                 if nv + a > mv {
@@ -526,8 +529,8 @@ where
     // Pockets: triangles in `q`, each (start, size); larger free components are dropped.
     let mut q: Vec<usize> = Vec::new();
     let mut pockets: Vec<(usize, usize)> = Vec::new();
-    for gi in 0..grown.len() {
-        for f in nbrs(grown[gi]) {
+    for &g in grown.iter() {
+        for f in nbrs(g) {
             if s.label[f] != NONE || s.aux[f] == stamp || s.aux[f] == stamp | BIG {
                 continue;
             }
