@@ -163,7 +163,7 @@ fn demo_compares_strategies_on_generated_meshes() {
     assert!(out.contains("All outputs validated"));
     assert!(!out.contains("INVALID"));
     // The GPU part on lavapipe: the parity verdict, culling statistics and the files it names.
-    assert!(out.contains("Parity: all 7 GPU kernels identical"), "{out}");
+    assert!(out.contains("Parity: all 8 GPU kernels identical"), "{out}");
     assert!(out.contains("by their normal cones"), "{out}");
     for f in ["noisy-sphere_meshopt.png", "noisy-sphere_meshopt.glb"] {
         assert!(out.contains(f) && dir.join(f).is_file(), "{f}:\n{out}");
@@ -385,6 +385,7 @@ fn parity_and_render_print_json() {
             "adjacency",
             "k-medoids",
             "k-medoids (capacity-aware, the default)",
+            "kmedoids-regions",
             "capacity-aware assignment",
             "bounds",
             "parallel grower",

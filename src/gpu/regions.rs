@@ -16,7 +16,7 @@ use super::{
 use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
-use crate::strategy::kmedoids::{self, members, parallel, regions, Clustering, Config};
+use crate::strategy::kmedoids::{members, parallel, regions, Clustering, Config};
 use std::time::Instant;
 
 param_block! {
@@ -247,19 +247,13 @@ pub fn cluster_regions(
     } else {
         Default::default()
     };
-    let clustering = Clustering {
-        initial_mean_distance: kmedoids::mean(&distances),
+    let clustering = regions::clustering(
         medoids,
         labels,
         distances,
-        iterations: 0,
-        splits: 0,
-        budget_exhausted: false,
-        initial_iterations: 0,
-        initial_seconds: start.elapsed().as_secs_f64(),
-        skipped_updates: 0,
         meshlets,
-    };
+        start.elapsed().as_secs_f64(),
+    );
     Ok((
         GpuRegions {
             clustering,

@@ -47,7 +47,7 @@ use super::parallel::regions;
 use super::{mean, pack, Clustering, Config};
 use crate::common::Csr;
 use crate::mesh::Mesh;
-use crate::meshlet::Limits;
+use crate::meshlet::{Limits, Meshlets};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -95,6 +95,24 @@ pub fn cluster(
     // Step 4.
     let (medoids, distances) = medoids_and_distances(dual, &labels, k as usize);
     let meshlets = pack(mesh, &labels, &distances, k as usize, limits);
+    clustering(
+        medoids,
+        labels,
+        distances,
+        meshlets,
+        t0.elapsed().as_secs_f64(),
+    )
+}
+
+/// A run's result (CPU or GPU): no iterations and no splits, so the objective is that of the
+/// grown clusters; `seconds` is its wall time.
+pub fn clustering(
+    medoids: Vec<u32>,
+    labels: Vec<u32>,
+    distances: Vec<u32>,
+    meshlets: Meshlets,
+    seconds: f64,
+) -> Clustering {
     Clustering {
         initial_mean_distance: mean(&distances),
         medoids,
@@ -104,7 +122,7 @@ pub fn cluster(
         splits: 0,
         budget_exhausted: false,
         initial_iterations: 0,
-        initial_seconds: t0.elapsed().as_secs_f64(),
+        initial_seconds: seconds,
         skipped_updates: 0,
         meshlets,
     }
