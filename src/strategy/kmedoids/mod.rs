@@ -220,6 +220,12 @@ impl Clustering {
     /// time. It has no initial clustering and no splits: its objective is that of the result.
     pub fn from_grown(mesh: &Mesh, limits: Limits, g: capacity::Grown, seconds: f64) -> Self {
         let meshlets = pack(mesh, &g.labels, &g.distances, g.medoids.len(), limits);
+        Self::grown(g, meshlets, seconds)
+    }
+
+    /// Grown clusters (capacity-aware or `kmedoids-regions`, CPU or GPU) and their meshlets:
+    /// no initial clustering and no splits, so the objective is that of the result.
+    pub fn grown(g: capacity::Grown, meshlets: Meshlets, seconds: f64) -> Self {
         Clustering {
             initial_mean_distance: mean(&g.distances),
             medoids: g.medoids,

@@ -42,9 +42,9 @@
 //! same word (which a kernel needs: regions run concurrently).
 
 use super::assign::{members, UNREACHED};
-use super::capacity::medoid_of;
+use super::capacity::{medoid_of, Grown};
 use super::parallel::regions;
-use super::{mean, pack, Clustering, Config};
+use super::{pack, Clustering, Config};
 use crate::common::Csr;
 use crate::mesh::Mesh;
 use crate::meshlet::{Limits, Meshlets};
@@ -104,8 +104,8 @@ pub fn cluster(
     )
 }
 
-/// A run's result (CPU or GPU): no iterations and no splits, so the objective is that of the
-/// grown clusters; `seconds` is its wall time.
+/// A run's result (CPU or GPU): the grown clusters (no medoid iteration) and their meshlets;
+/// `seconds` is its wall time.
 pub fn clustering(
     medoids: Vec<u32>,
     labels: Vec<u32>,
@@ -113,19 +113,13 @@ pub fn clustering(
     meshlets: Meshlets,
     seconds: f64,
 ) -> Clustering {
-    Clustering {
-        initial_mean_distance: mean(&distances),
+    let grown = Grown {
         medoids,
         labels,
         distances,
         iterations: 0,
-        splits: 0,
-        budget_exhausted: false,
-        initial_iterations: 0,
-        initial_seconds: seconds,
-        skipped_updates: 0,
-        meshlets,
-    }
+    };
+    Clustering::grown(grown, meshlets, seconds)
 }
 
 /// Each triangle's position in its region's (ascending) member list.
