@@ -756,9 +756,9 @@ mod tests {
     }
 
     #[test]
-    fn a_pocket_next_to_a_full_cluster_is_absorbed() {
-        // A strip of quads: with 8 triangles per cluster the growth would leave a 2-triangle end
-        // piece; every cluster is edge-connected and no meshlet is a lone pocket.
+    fn a_small_grid_is_covered_within_two_meshlets_of_the_triangle_bound() {
+        // A 9 x 9 grid of quads at 8 triangles per meshlet: growth, pockets and merges together
+        // leave at most two meshlets beyond the fewest any partition can have.
         let m = generate::terrain(10, 1);
         let limits = Limits::new(64, 8).unwrap();
         let cfg = Config::default();
