@@ -2,7 +2,8 @@
 // (driver: src/gpu/regions.rs):
 //   init      canonical_corners, and the State words of grow_region set to their start values
 //             (per triangle)
-//   grow      grow_region with absorb_pockets and merge_neighbours: one invocation per region,
+//   grow      grow_region with absorb_pockets and merge_neighbours: one invocation per region
+//             (one per workgroup, or eight per workgroup in grow_rows),
 //             the same sequential steps over the same integer keys (regions share no word, so
 //             they run at once)
 //   relabel   step 3: cluster c of region r becomes base[r] + c (per triangle)
@@ -311,7 +312,16 @@ fn close(len: u32, written: u32) -> u32 {
 
 @compute @workgroup_size(1)
 fn grow(@builtin(workgroup_id) wid: vec3<u32>) {
-    let r = group(wid);
+    grow_one(group(wid));
+}
+
+// The same, eight regions per workgroup (the driver's choice on a CPU adapter: one SIMD row).
+@compute @workgroup_size(8)
+fn grow_rows(@builtin(global_invocation_id) gid: vec3<u32>) {
+    grow_one(gid.x);
+}
+
+fn grow_one(r: u32) {
     if (r >= p.regions) { return; }
     R = r;
     RS = info[r];

@@ -134,7 +134,7 @@ pub fn cluster_regions(
         gpu,
         "regions",
         wgsl!("regions.wgsl"),
-        &["init", "grow", "relabel", "medoid"],
+        &["init", "grow", "grow_rows", "relabel", "medoid"],
     );
     let info_len = 3 * k_regions + 2 + t;
     let (bufs, upload) = timed(|| {
@@ -198,7 +198,19 @@ pub fn cluster_regions(
     // Step 2, and the cluster count of every region back in the same round trip.
     let mut b = Batch::new(gpu);
     b.threads(&kernels, "init", &bind, params(0), t);
-    b.groups(&kernels, "grow", &bind, params(0), k_regions as u32);
+    if gpu.is_cpu() {
+        // Eight regions per workgroup: a CPU adapter runs them as one SIMD row, where one per
+        // workgroup leaves seven lanes of each row idle.
+        b.groups(
+            &kernels,
+            "grow_rows",
+            &bind,
+            params(0),
+            (k_regions as u32).div_ceil(8),
+        );
+    } else {
+        b.groups(&kernels, "grow", &bind, params(0), k_regions as u32);
+    }
     let (kernel, mut out) = b.run_read(&[(&info, k_regions + 1, k_regions)])?;
     timing.kernel += kernel;
     let counts = out.remove(0);
