@@ -168,6 +168,29 @@ fn non_manifold_degenerate_and_disconnected_input() {
 }
 
 #[test]
+fn a_second_build_on_one_device_builds_no_pipeline() {
+    let gpu = gpu();
+    let m = generate::terrain(30, 2);
+    let limits = Limits::DEFAULT;
+    let opts = meshletlab::strategy::Options::default();
+    let mut families = Vec::new();
+    for name in ["kmedoids-regions", "kmedoids-flat", "bsphere-parallel"] {
+        let first = meshletlab::gpu::build::build(&gpu, name, &m, limits, &opts).unwrap();
+        let n = gpu.kernel_families();
+        let again = meshletlab::gpu::build::build(&gpu, name, &m, limits, &opts).unwrap();
+        assert_eq!(
+            gpu.kernel_families(),
+            n,
+            "{name}: the second build made pipelines"
+        );
+        assert_eq!(first.meshlets, again.meshlets, "{name}");
+        families.push(n);
+    }
+    // Each strategy added families of its own; none was built twice.
+    assert!(families.windows(2).all(|w| w[0] < w[1]), "{families:?}");
+}
+
+#[test]
 fn same_output_on_every_run() {
     let gpu = gpu();
     let m = generate::knot_tube(160, 12, 5);

@@ -47,7 +47,8 @@ mod scan;
 pub mod select;
 
 use bytemuck::Pod;
-use std::collections::BTreeMap;
+use std::any::{Any, TypeId};
+use std::collections::{BTreeMap, HashMap};
 use std::sync::Mutex;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
@@ -123,7 +124,15 @@ pub struct Gpu {
     profile: Mutex<Profile>,
     /// Whether every dispatch gets its own timestamps (see [`Gpu::time_each_kernel`]).
     per_kernel: std::sync::atomic::AtomicBool,
+    /// Kernel families already built on this device (see [`Kernels::with_constants`]).
+    kernel_cache: Mutex<HashMap<KernelKey, Box<dyn Any + Send + Sync>>>,
+    /// Kernel families built so far (see [`Gpu::kernel_families`]).
+    families_built: std::sync::atomic::AtomicUsize,
 }
+
+/// What makes two kernel families the same: the module's source, its parameter block and binding
+/// set types, the entry points, and the `override` values (as bits).
+type KernelKey = (usize, TypeId, usize, Vec<&'static str>, Vec<(String, u64)>);
 
 /// Where GPU time went: host-side counts of submissions, dispatches and round trips, and, when
 /// [`Gpu::time_each_kernel`] is on, GPU time per kernel entry point.
@@ -274,7 +283,16 @@ impl Gpu {
             per_kernel: std::sync::atomic::AtomicBool::new(
                 std::env::var_os("MESHLETLAB_GPU_PROFILE").is_some(),
             ),
+            kernel_cache: Mutex::new(HashMap::new()),
+            families_built: std::sync::atomic::AtomicUsize::new(0),
         })
+    }
+
+    /// Kernel families (a module's pipelines) built on this device so far; a family is built
+    /// once, so a build that needs only these adds none.
+    pub fn kernel_families(&self) -> usize {
+        self.families_built
+            .load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// Times every dispatch on its own (one compute pass each, same submissions), so the
@@ -579,11 +597,13 @@ const PARAM_STRIDE: u64 = 256;
 /// One WGSL module, its pipelines and its fixed bind-group layout: binding 0 is the `P` uniform
 /// (dynamic offset), bindings 1..=n the storage buffers of one [`BindingSet`], read-only where it
 /// says so. Every entry point sees the same layout, so one bind group serves the whole module.
+/// A clone shares the pipelines.
+#[derive(Clone)]
 pub struct Kernels<P: ParamBlock> {
     layout: wgpu::BindGroupLayout,
     bindings: &'static [(&'static str, Access)],
     pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
-    _params: std::marker::PhantomData<P>,
+    _params: std::marker::PhantomData<fn() -> P>,
 }
 
 impl<P: ParamBlock> Kernels<P> {
@@ -599,6 +619,45 @@ impl<P: ParamBlock> Kernels<P> {
 
     /// [`Kernels::new`] with values for the module's `override` constants.
     pub fn with_constants<'b, B: BindingSet<'b>>(
+        gpu: &Gpu,
+        label: &str,
+        source: &str,
+        entries: &[&'static str],
+        constants: &[(&str, f64)],
+    ) -> Self {
+        // Built once per device: a driver runs the same families build after build, and
+        // re-creating them (parsing, validation, the driver's translation) is setup, not run time.
+        let key: KernelKey = (
+            source.as_ptr() as usize ^ source.len() << 48,
+            TypeId::of::<P>(),
+            B::LAYOUT.as_ptr() as usize,
+            entries.to_vec(),
+            constants
+                .iter()
+                .map(|&(n, v)| (n.to_string(), v.to_bits()))
+                .collect(),
+        );
+        let found = gpu
+            .kernel_cache
+            .lock()
+            .expect("kernel cache lock")
+            .get(&key)
+            .and_then(|k| k.downcast_ref::<Self>())
+            .cloned();
+        if let Some(k) = found {
+            return k;
+        }
+        let built = Self::build::<B>(gpu, label, source, entries, constants);
+        gpu.families_built
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        gpu.kernel_cache
+            .lock()
+            .expect("kernel cache lock")
+            .insert(key, Box::new(built.clone()));
+        built
+    }
+
+    fn build<'b, B: BindingSet<'b>>(
         gpu: &Gpu,
         label: &str,
         source: &str,
