@@ -2,8 +2,8 @@
 //! [`crate::strategy::kmedoids::regions`], and labels, distances, medoids and meshlets are
 //! identical.
 //!
-//! The regions (a Morton-seeded BFS at a coarse scale) are still computed on the host and
-//! uploaded; everything after them runs in two submissions: the per-triangle setup and one
+//! The regions (a Morton-seeded BFS at a coarse scale) are still computed on the host, over the
+//! dual graph the adjacency kernels built (read back once), and uploaded; everything after them runs in two submissions: the per-triangle setup and one
 //! invocation per region growing its clusters, then (after the host reads the cluster count of
 //! each region and writes their prefix sums) the global labels, one invocation per cluster for
 //! its medoid and distances, and the assembly (`wgsl/assemble.wgsl`).
@@ -13,7 +13,6 @@ use super::assemble::{Assembly, DeviceMeshlets, Groups};
 use super::{
     binding_set, param_block, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan, PART,
 };
-use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
 use crate::strategy::kmedoids::{members, parallel, regions, Clustering, Config};
@@ -81,12 +80,25 @@ pub struct GpuRegions {
     pub clustering: Clustering,
     /// Upload, kernel and readback time, the adjacency's included.
     pub timing: Timing,
-    /// Host time for the regions (the dual graph and the region BFS on the CPU).
+    /// Host time for the regions (the Morton order and the region BFS on the CPU, over the
+    /// device's dual graph read back; that readback is in `timing`).
     pub host_regions: f64,
     /// Regions.
     pub regions: usize,
     /// Wall time of the whole run in seconds.
     pub seconds: f64,
+}
+
+/// `len` words in one binding, or the error naming `what`.
+fn fits(what: &'static str, len: usize) -> Result<(), GpuError> {
+    if len > PART {
+        return Err(GpuError::TooLarge {
+            what,
+            len,
+            max: PART,
+        });
+    }
+    Ok(())
 }
 
 /// Runs `kmedoids-regions` on `gpu`; with `read_back` the labels, distances and meshlets come
@@ -101,35 +113,23 @@ pub fn cluster_regions(
 ) -> Result<(GpuRegions, DeviceMeshlets), GpuError> {
     let start = Instant::now();
     let t = mesh.triangle_count();
-    // Step 1 on the host.
-    let ((region, k_regions), host_regions) = timed(|| {
-        let vt = vertex_triangles(mesh);
-        let dual = dual_graph(mesh, &vt);
-        parallel::regions(mesh, &dual, cfg.region_triangles as usize)
-    });
+    fits("regions' triangle state", 7 * t)?;
+    fits("regions' corner state", 9 * t)?;
+    fits("regions' canonical corners and centres", 4 * t)?;
+    let (adj, adj_timing) = AdjacencyKernels::new(gpu).build(gpu, mesh)?;
+    // Step 1 on the host, over the device's dual graph read back (the same rows as the CPU's).
+    let (dual, dual_read) = timed(|| adj.read_dual(gpu));
+    let dual = dual?;
+    let ((region, k_regions), host_regions) =
+        timed(|| parallel::regions(mesh, &dual, cfg.region_triangles as usize));
     let rows = members(&region, k_regions);
-    let mt = limits.max_triangles as usize;
-    let arena_len = 7 * t + 3 * k_regions * mt;
-    for (what, len) in [
-        ("regions' triangle state", 7 * t),
-        ("regions' corner state", 9 * t),
-        ("regions' canonical corners and centres", 4 * t),
-        ("regions' lists", arena_len),
-    ] {
-        if len > PART {
-            return Err(GpuError::TooLarge {
-                what,
-                len,
-                max: PART,
-            });
-        }
-    }
+    let arena_len = 7 * t + 3 * k_regions * limits.max_triangles as usize;
+    fits("regions' lists", arena_len)?;
     if rows.offsets.windows(2).any(|w| w[1] - w[0] >= 1 << 24) {
         return Err(GpuError::Unsupported(
             "a region of 2^24 triangles or more (pockets are packed as 24-bit offsets)",
         ));
     }
-    let (adj, adj_timing) = AdjacencyKernels::new(gpu).build(gpu, mesh)?;
     let kernels = Kernels::new::<Buffers>(
         gpu,
         "regions",
@@ -164,6 +164,7 @@ pub fn cluster_regions(
     let (info, items, tri, canon, cstate, arena, labels, dist) = bufs;
     let mut timing = Timing {
         upload: adj_timing.upload + upload,
+        readback: adj_timing.readback + dual_read,
         ..adj_timing
     };
     let bind = kernels.bind(
