@@ -79,7 +79,7 @@ pub enum GpuError {
         what: &'static str,
         /// Its length.
         len: usize,
-        /// The most the split buffers hold.
+        /// The most the buffers hold.
         max: usize,
     },
     /// The GPU path does not offer this.
@@ -286,6 +286,14 @@ impl Gpu {
             kernel_cache: Mutex::new(HashMap::new()),
             families_built: std::sync::atomic::AtomicUsize::new(0),
         })
+    }
+
+    /// The most u32 one storage binding of this device holds (its binding and buffer size limits;
+    /// 2^25, [`PART`], on lavapipe). Arrays that are not split over two bindings are checked
+    /// against it, so a GPU with larger bindings runs larger meshes.
+    pub fn binding_words(&self) -> usize {
+        let l = self.device.limits();
+        (l.max_storage_buffer_binding_size.min(l.max_buffer_size) / 4) as usize
     }
 
     /// Kernel families (a module's pipelines) built on this device so far; a family is built

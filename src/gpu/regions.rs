@@ -11,7 +11,7 @@
 use super::adjacency::{AdjacencyKernels, Timing};
 use super::assemble::{Assembly, DeviceMeshlets, Groups};
 use super::{
-    binding_set, param_block, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan, PART,
+    binding_set, param_block, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan,
 };
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
@@ -89,14 +89,11 @@ pub struct GpuRegions {
     pub seconds: f64,
 }
 
-/// `len` words in one binding, or the error naming `what`.
-fn fits(what: &'static str, len: usize) -> Result<(), GpuError> {
-    if len > PART {
-        return Err(GpuError::TooLarge {
-            what,
-            len,
-            max: PART,
-        });
+/// `len` words in one binding of `gpu`, or the error naming `what`.
+fn fits(gpu: &Gpu, what: &'static str, len: usize) -> Result<(), GpuError> {
+    let max = gpu.binding_words();
+    if len > max {
+        return Err(GpuError::TooLarge { what, len, max });
     }
     Ok(())
 }
@@ -113,9 +110,9 @@ pub fn cluster_regions(
 ) -> Result<(GpuRegions, DeviceMeshlets), GpuError> {
     let start = Instant::now();
     let t = mesh.triangle_count();
-    fits("regions' triangle state", 7 * t)?;
-    fits("regions' corner state", 9 * t)?;
-    fits("regions' canonical corners and centres", 4 * t)?;
+    fits(gpu, "regions' triangle state", 7 * t)?;
+    fits(gpu, "regions' corner state", 9 * t)?;
+    fits(gpu, "regions' canonical corners and centres", 4 * t)?;
     let (adj, adj_timing) = AdjacencyKernels::new(gpu).build(gpu, mesh)?;
     // Step 1 on the host, over the device's dual graph read back (the same rows as the CPU's).
     let (dual, dual_read) = timed(|| adj.read_dual(gpu));
@@ -124,7 +121,7 @@ pub fn cluster_regions(
         timed(|| parallel::regions(mesh, &dual, cfg.region_triangles as usize));
     let rows = members(&region, k_regions);
     let arena_len = 7 * t + 3 * k_regions * limits.max_triangles as usize;
-    fits("regions' lists", arena_len)?;
+    fits(gpu, "regions' lists", arena_len)?;
     if rows.offsets.windows(2).any(|w| w[1] - w[0] >= 1 << 24) {
         return Err(GpuError::Unsupported(
             "a region of 2^24 triangles or more (pockets are packed as 24-bit offsets)",
