@@ -4,7 +4,8 @@
 //   scan(toff)                 group -> first triangle slot (exclusive)
 //   place                      triangle ids into their group's slots (any order within a group)
 //   sort_count                 per group: members sorted by (key, id) (each one's rank among
-//                              them), distinct vertices counted
+//                              them, through a histogram of keys below 256), distinct vertices
+//                              counted
 //   scan(voff), scan(mindex)   group -> first vertex; non-empty group -> meshlet index
 //   write                      per group: meshlet record, vertices in first-use order, local corners
 //
@@ -54,6 +55,15 @@ var<workgroup> first: array<u32, CORNERS>;
 // Per corner: distinct vertices among the corners before it (the local index of a first use).
 var<workgroup> rank: array<u32, CORNERS>;
 var<workgroup> wn: u32;
+// sort_count's histogram of keys below KEYS (hop distances are far below): per key its members,
+// its first place, and the members bucketed so far; `bucket` lists slots by key.
+const KEYS: u32 = 256u;
+var<workgroup> kcount: array<atomic<u32>, KEYS>;
+var<workgroup> kfill: array<atomic<u32>, KEYS>;
+var<workgroup> kbase: array<u32, KEYS>;
+var<workgroup> bucket: array<u32, SLOTS>;
+var<workgroup> kmax: atomic<u32>;
+var<workgroup> wk: u32;
 // First-use table: 1024 slots (2^10, hence the shift in the hash) for at most 768 corners.
 const TABLE: u32 = 1024u;
 var<workgroup> table_vertex: array<atomic<u32>, TABLE>;
@@ -138,19 +148,56 @@ fn sort_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_i
         return;
     }
     let s = atomicLoad(&toff[g]);
+    for (var h = lid; h < KEYS; h += 64u) {
+        atomicStore(&kcount[h], 0u);
+        atomicStore(&kfill[h], 0u);
+    }
+    if (lid == 0u) { atomicStore(&kmax, 0u); }
     for (var i = lid; i < n; i += 64u) {
         st[i] = members[s + i];
         sk[i] = key[st[i]];
     }
     workgroupBarrier();
     // Each member's place is the number of members before it in (key, id) order: the pairs are
-    // distinct, so the places are too.
+    // distinct, so the places are too. Keys below KEYS count through a histogram: the members of
+    // smaller key, then those of the same key with a lower id (a bucket, not all n members).
     for (var i = lid; i < n; i += 64u) {
-        var r = 0u;
-        for (var j = 0u; j < n; j++) {
-            r += u32(sk[j] < sk[i] || (sk[j] == sk[i] && st[j] < st[i]));
+        atomicMax(&kmax, sk[i]);
+        atomicAdd(&kcount[min(sk[i], KEYS - 1u)], 1u);
+    }
+    workgroupBarrier();
+    if (lid == 0u) {
+        wk = atomicLoad(&kmax);
+        if (wk < KEYS) {
+            var acc = 0u;
+            for (var h = 0u; h <= wk; h++) {
+                kbase[h] = acc;
+                acc += atomicLoad(&kcount[h]);
+            }
         }
-        members[s + r] = st[i];
+    }
+    if (workgroupUniformLoad(&wk) < KEYS) {
+        for (var i = lid; i < n; i += 64u) {
+            let k = sk[i];
+            bucket[kbase[k] + atomicAdd(&kfill[k], 1u)] = i;
+        }
+        workgroupBarrier();
+        for (var i = lid; i < n; i += 64u) {
+            let b = kbase[sk[i]];
+            var r = b;
+            for (var x = b; x < b + atomicLoad(&kcount[sk[i]]); x++) {
+                r += u32(st[bucket[x]] < st[i]);
+            }
+            members[s + r] = st[i];
+        }
+    } else {
+        for (var i = lid; i < n; i += 64u) {
+            var r = 0u;
+            for (var j = 0u; j < n; j++) {
+                r += u32(sk[j] < sk[i] || (sk[j] == sk[i] && st[j] < st[i]));
+            }
+            members[s + r] = st[i];
+        }
     }
     storageBarrier();
     workgroupBarrier();

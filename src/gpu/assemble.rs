@@ -225,3 +225,45 @@ impl Assembly {
         ))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+    use crate::strategy::kmedoids::{cluster, Mode};
+
+    /// Members are ordered by (key, id) as on the CPU through both ranks of `sort_count`: the key
+    /// histogram (every key of a group below 256) and the all-pairs count (some key above), in
+    /// one run, with ties among the keys.
+    #[test]
+    fn small_and_large_keys_order_members_as_on_the_cpu() {
+        let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
+        let mesh = generate::terrain(40, 2);
+        for limits in [Limits::DEFAULT, Limits::new(8, 6).unwrap()] {
+            let c = cluster(&mesh, limits, Mode::Regions, &Default::default());
+            let k = c.medoids.len();
+            let keys: Vec<u32> = (0..mesh.triangle_count() as u32)
+                .map(|t| {
+                    let tie = (t.wrapping_mul(7919) >> 3) % 5;
+                    if c.labels[t as usize].is_multiple_of(2) {
+                        tie
+                    } else {
+                        1000 * tie + (t % 3) * 256
+                    }
+                })
+                .collect();
+            let cpu = crate::meshlet::assemble::assemble(&mesh, &c.labels, &keys, k, limits);
+            let indices = Split::upload(&gpu, "indices", &mesh.indices).unwrap();
+            let (owner, key) = (gpu.upload("owner", &c.labels), gpu.upload("key", &keys));
+            let groups = Groups {
+                owner: &owner,
+                key: &key,
+                count: k,
+            };
+            let (device, _) = Assembly::new(&gpu)
+                .run(&gpu, &Scan::new(&gpu), &indices, groups, limits)
+                .unwrap();
+            assert_eq!(device.read(&gpu).unwrap(), cpu, "{limits}");
+        }
+    }
+}
