@@ -139,10 +139,11 @@ fn deep_assignment_spans_several_submissions() {
 #[test]
 fn non_manifold_degenerate_and_disconnected_input() {
     let gpu = gpu();
-    // A fan of `n` triangles on one edge, a degenerate triangle, an isolated triangle, and an
-    // unused vertex. Five fan triangles have 4 in-cluster neighbours each, the most the GPU's
-    // reach-set medoid keeps; seven send their cluster to its one-BFS-per-member path.
-    for n in [5u32, 7] {
+    // A fan of `n` triangles on one edge with a strip off it, a degenerate triangle, an isolated
+    // triangle, and an unused vertex. With four, the first fan triangle has 4 in-cluster
+    // neighbours (3 in the fan, 1 in the strip), the most the GPU's reach-set medoid keeps; five
+    // or seven send the cluster to its one-BFS-per-member path.
+    for n in [4u32, 5, 7] {
         let mut m = Mesh {
             positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],
             indices: Vec::new(),
@@ -152,6 +153,29 @@ fn non_manifold_degenerate_and_disconnected_input() {
             m.positions.push([0.5, a.cos(), a.sin()]);
             m.indices.extend([0, 1, 2 + k]);
         }
+        // A strip off the first fan triangle's free edge (1, 2): distance sums differ, so the
+        // medoid is not a tie among the fan's triangles.
+        let s0 = m.positions.len() as u32;
+        m.positions.extend([
+            [1.5, 1.0, 0.0],
+            [2.0, 0.5, 0.0],
+            [2.5, 1.0, 0.0],
+            [3.0, 0.5, 0.0],
+        ]);
+        m.indices.extend([
+            1,
+            2,
+            s0,
+            1,
+            s0,
+            s0 + 1,
+            s0 + 1,
+            s0,
+            s0 + 2,
+            s0 + 1,
+            s0 + 2,
+            s0 + 3,
+        ]);
         m.indices.extend([2, 2, 3]);
         let v = m.positions.len() as u32;
         m.positions.extend([

@@ -55,7 +55,8 @@ var<workgroup> first: array<u32, CORNERS>;
 // Per corner: distinct vertices among the corners before it (the local index of a first use).
 var<workgroup> rank: array<u32, CORNERS>;
 var<workgroup> wn: u32;
-// sort_count's histogram of keys below KEYS (hop distances are far below): per key its members,
+// sort_count's histogram of keys below KEYS (the strategies' keys, hop distances and growth
+// orders inside a group, are below its triangle limit): per key its members,
 // its first place, and the members bucketed so far; `bucket` lists slots by key.
 const KEYS: u32 = 256u;
 var<workgroup> kcount: array<atomic<u32>, KEYS>;

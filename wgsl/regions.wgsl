@@ -30,12 +30,14 @@ struct Params { t: u32, regions: u32, max_v: u32, max_t: u32, k: u32, pad: u32 }
 @group(0) @binding(9) var<storage, read_write> info: array<u32>;
 // Members of each region, ascending.
 @group(0) @binding(10) var<storage, read> items: array<u32>;
-// Per triangle, six sections of T: region, lc cluster, frontier cluster, hops, aux, piece.
+// Per triangle, seven sections of T: region, lc cluster, frontier cluster, hops, aux, piece,
+// position in the seed order.
 @group(0) @binding(11) var<storage, read_write> tri: array<u32>;
 // [0, 3T) per corner: the canonical corner; [3T, 4T) per triangle: its centroid, 10 bits per
 // axis, from the host (packed_centres).
 @group(0) @binding(12) var<storage, read_write> canon: array<u32>;
-// Per canonical corner, three sections of 3T: mark, first, wmark.
+// Per canonical corner, three sections of 3T: mark, first, wmark. Once `grow` is done, the
+// medoid kernel's scratch (9 words per member at 9x the cluster's member offset).
 @group(0) @binding(13) var<storage, read_write> cstate: array<u32>;
 // Per region at its member offset, sections of T: order, front, pockets' triangles, pockets,
 // pieces left, members by cluster (seq), cluster starts; then per region `max_t` words each:
@@ -315,10 +317,11 @@ fn grow(@builtin(workgroup_id) wid: vec3<u32>) {
     grow_one(group(wid));
 }
 
-// The same, eight regions per workgroup (the driver's choice on a CPU adapter: one SIMD row).
+// The same, eight regions per workgroup (the driver's choice on a CPU adapter, which runs a
+// workgroup's invocations side by side in SIMD rows).
 @compute @workgroup_size(8)
-fn grow_rows(@builtin(global_invocation_id) gid: vec3<u32>) {
-    grow_one(gid.x);
+fn grow_rows(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
+    grow_one(group(wid) * 8u + lid);
 }
 
 fn grow_one(r: u32) {

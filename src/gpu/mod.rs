@@ -130,9 +130,17 @@ pub struct Gpu {
     families_built: std::sync::atomic::AtomicUsize,
 }
 
-/// What makes two kernel families the same: the module's source, its parameter block and binding
-/// set types, the entry points, and the `override` values (as bits).
-type KernelKey = (usize, TypeId, usize, Vec<&'static str>, Vec<(String, u64)>);
+/// What makes two kernel families the same: the module's source (a static text, by address and
+/// length), its parameter block and binding set types, the entry points, and the `override`
+/// values (as bits).
+type KernelKey = (
+    usize,
+    usize,
+    TypeId,
+    &'static str,
+    Vec<&'static str>,
+    Vec<(String, u64)>,
+);
 
 /// Where GPU time went: host-side counts of submissions, dispatches and round trips, and, when
 /// [`Gpu::time_each_kernel`] is on, GPU time per kernel entry point.
@@ -288,8 +296,8 @@ impl Gpu {
         })
     }
 
-    /// The most u32 one storage binding of this device holds (its binding and buffer size limits;
-    /// 2^25, [`PART`], on lavapipe). Arrays that are not split over two bindings are checked
+    /// The most u32 one storage binding of this device holds (its binding and buffer size
+    /// limits, at least [`PART`]). Arrays that are not split over two bindings are checked
     /// against it, so a GPU with larger bindings runs larger meshes.
     pub fn binding_words(&self) -> usize {
         let l = self.device.limits();
@@ -619,7 +627,7 @@ impl<P: ParamBlock> Kernels<P> {
     pub fn new<'b, B: BindingSet<'b>>(
         gpu: &Gpu,
         label: &str,
-        source: &str,
+        source: &'static str,
         entries: &[&'static str],
     ) -> Self {
         Self::with_constants::<B>(gpu, label, source, entries, &[])
@@ -629,16 +637,17 @@ impl<P: ParamBlock> Kernels<P> {
     pub fn with_constants<'b, B: BindingSet<'b>>(
         gpu: &Gpu,
         label: &str,
-        source: &str,
+        source: &'static str,
         entries: &[&'static str],
         constants: &[(&str, f64)],
     ) -> Self {
         // Built once per device: a driver runs the same families build after build, and
         // re-creating them (parsing, validation, the driver's translation) is setup, not run time.
         let key: KernelKey = (
-            source.as_ptr() as usize ^ source.len() << 48,
+            source.as_ptr() as usize,
+            source.len(),
             TypeId::of::<P>(),
-            B::LAYOUT.as_ptr() as usize,
+            std::any::type_name::<B>(),
             entries.to_vec(),
             constants
                 .iter()
@@ -656,13 +665,21 @@ impl<P: ParamBlock> Kernels<P> {
             return k;
         }
         let built = Self::build::<B>(gpu, label, source, entries, constants);
-        gpu.families_built
-            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        gpu.kernel_cache
-            .lock()
-            .expect("kernel cache lock")
-            .insert(key, Box::new(built.clone()));
-        built
+        // Another thread may have built the same family meanwhile: the first one stored is kept.
+        let mut cache = gpu.kernel_cache.lock().expect("kernel cache lock");
+        match cache.entry(key) {
+            std::collections::hash_map::Entry::Occupied(e) => e
+                .get()
+                .downcast_ref::<Self>()
+                .cloned()
+                .expect("same key, same type"),
+            std::collections::hash_map::Entry::Vacant(e) => {
+                e.insert(Box::new(built.clone()));
+                gpu.families_built
+                    .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                built
+            }
+        }
     }
 
     fn build<'b, B: BindingSet<'b>>(

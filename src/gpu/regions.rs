@@ -3,8 +3,9 @@
 //! identical.
 //!
 //! The regions (a Morton-seeded BFS at a coarse scale) are still computed on the host, over the
-//! dual graph the adjacency kernels built (read back once), and uploaded; everything after them runs in two submissions: the per-triangle setup and one
-//! invocation per region growing its clusters, then (after the host reads the cluster count of
+//! dual graph the adjacency kernels built (read back once), and uploaded; everything after them
+//! runs in two submissions: the per-triangle setup and one invocation per region growing its
+//! clusters, then (after the host reads the cluster count of
 //! each region and writes their prefix sums) the global labels, one invocation per cluster for
 //! its medoid and distances, and the assembly (`wgsl/assemble.wgsl`).
 
@@ -197,9 +198,10 @@ pub fn cluster_regions(
     let mut b = Batch::new(gpu);
     b.threads(&kernels, "init", &bind, params(0), t);
     if gpu.is_cpu() && k_regions > 1 {
-        // Eight regions per workgroup: a CPU adapter runs them as one SIMD row, where one per
-        // workgroup leaves seven lanes of each row idle (a single region is the same either way,
-        // and takes `grow`, so the tests run both entry points on lavapipe).
+        // Several regions per workgroup: a CPU adapter runs a workgroup's invocations side by
+        // side in SIMD rows, where one region per workgroup leaves the rest of its row idle (a
+        // single region is the same either way, and takes `grow`, so the tests run both entry
+        // points on lavapipe).
         b.groups(
             &kernels,
             "grow_rows",
