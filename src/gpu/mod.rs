@@ -304,8 +304,8 @@ impl Gpu {
         (l.max_storage_buffer_binding_size.min(l.max_buffer_size) / 4) as usize
     }
 
-    /// Kernel families (a module's pipelines) built on this device so far; a family is built
-    /// once, so a build that needs only these adds none.
+    /// Kernel families (a module's pipelines) built on this device so far, every time one was
+    /// created: a build that finds its families in the cache adds none.
     pub fn kernel_families(&self) -> usize {
         self.families_built
             .load(std::sync::atomic::Ordering::Relaxed)
@@ -665,6 +665,8 @@ impl<P: ParamBlock> Kernels<P> {
             return k;
         }
         let built = Self::build::<B>(gpu, label, source, entries, constants);
+        gpu.families_built
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         // Another thread may have built the same family meanwhile: the first one stored is kept.
         let mut cache = gpu.kernel_cache.lock().expect("kernel cache lock");
         match cache.entry(key) {
@@ -675,8 +677,6 @@ impl<P: ParamBlock> Kernels<P> {
                 .expect("same key, same type"),
             std::collections::hash_map::Entry::Vacant(e) => {
                 e.insert(Box::new(built.clone()));
-                gpu.families_built
-                    .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 built
             }
         }

@@ -5,9 +5,9 @@
 //! The regions (a Morton-seeded BFS at a coarse scale) are still computed on the host, over the
 //! dual graph the adjacency kernels built (read back once), and uploaded; everything after them
 //! runs in two submissions: the per-triangle setup and one invocation per region growing its
-//! clusters, then (after the host reads the cluster count of
-//! each region and writes their prefix sums) the global labels, one invocation per cluster for
-//! its medoid and distances, and the assembly (`wgsl/assemble.wgsl`).
+//! clusters, then (after the host reads the cluster count of each region and writes their prefix
+//! sums) the global labels, one invocation per cluster for its medoid and distances, and the
+//! assembly (`wgsl/assemble.wgsl`).
 
 use super::adjacency::{AdjacencyKernels, Timing};
 use super::assemble::{Assembly, DeviceMeshlets, Groups};
