@@ -1,10 +1,10 @@
 //! Meshlets built on the GPU and drawn from the buffers the build left there, with no readback in
 //! between, on a device the application owns (as an engine would hold it).
 //!
-//! `kmedoids-flat` builds from the application's vertex and index buffers
+//! `kmedoids-regions` and `kmedoids-flat` build from the application's vertex and index buffers
 //! (`gpu::build::build_on_device`: nothing of the mesh is read on the host), `bsphere-parallel`
-//! and `kmedoids-regions` from the host mesh (`gpu::build::build_resident`: their setup, the
-//! seed grid and the regions, runs on the host); all three leave the
+//! from the host mesh (`gpu::build::build_resident`: its setup, the seed grid, runs on the
+//! host); all three leave the
 //! meshlet records, vertex lists, packed local triangles and culling bounds (sphere and normal
 //! cone, the mesh-shader pass's split layout) in device buffers.
 //! A vertex shader pulls each meshlet's corners from them (one instance per meshlet) and skips
@@ -128,13 +128,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         triangles: mesh.triangle_count(),
     };
     let opts = Options::default();
-    for name in ["kmedoids-flat", "bsphere-parallel", "kmedoids-regions"] {
-        let built = if name == "kmedoids-flat" {
-            build_on_device(&gpu, name, on_device, limits, &opts)?
-        } else {
-            // Their setup (bsphere-parallel's quantised positions and seed grid,
-            // kmedoids-regions' regions) runs on the host, from `mesh`.
+    for name in ["kmedoids-regions", "kmedoids-flat", "bsphere-parallel"] {
+        let built = if name == "bsphere-parallel" {
+            // Its setup (quantised positions and the seed grid) runs on the host, from `mesh`.
             build_resident(&gpu, name, &mesh, &positions, limits, &opts)?
+        } else {
+            build_on_device(&gpu, name, on_device, limits, &opts)?
         };
         let image = draw(&device, &queue, &view, &positions, &indices, Some(&built));
         let same = image.depth == reference.depth;

@@ -468,9 +468,10 @@ fn device_cones_are_conservative_and_cull() {
     }
 }
 
-/// An engine's vertex and index buffers build `kmedoids-flat` meshlets on the device with nothing
-/// of the mesh read on the host, equal to the CPU's; the meshlets and spheres stay on the device
-/// until read. A strategy whose setup needs the host mesh is refused by name.
+/// An engine's vertex and index buffers build `kmedoids-flat` and `kmedoids-regions` meshlets on
+/// the device with nothing of the mesh read on the host, equal to the CPU's; the meshlets and
+/// spheres stay on the device until read. A strategy whose setup needs the host mesh is refused
+/// by name.
 #[test]
 fn a_mesh_already_on_the_device_builds_the_cpu_meshlets() {
     use meshletlab::gpu::build::{build_on_device, build_resident};
@@ -490,6 +491,26 @@ fn a_mesh_already_on_the_device_builds_the_cpu_meshlets() {
             indices: &indices,
             triangles: m.triangle_count(),
         };
+        // Small regions too, so the coarse regions' BFS and sort run (one region takes neither).
+        let small = meshletlab::strategy::Options {
+            kmedoids: meshletlab::strategy::kmedoids::Config {
+                region_triangles: 300,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        for o in [&opts, &small] {
+            let cpu = meshletlab::strategy::by_name("kmedoids-regions", o)
+                .unwrap()
+                .build(&m, limits);
+            let built = build_on_device(&gpu, "kmedoids-regions", on_device, limits, o).unwrap();
+            assert_eq!(
+                built.meshlets.read(&gpu).unwrap(),
+                cpu,
+                "kmedoids-regions at {limits}, {} per region",
+                o.kmedoids.region_triangles
+            );
+        }
         let cpu = meshletlab::strategy::by_name("kmedoids-flat", &opts)
             .unwrap()
             .build(&m, limits);
@@ -532,4 +553,84 @@ fn a_mesh_already_on_the_device_builds_the_cpu_meshlets() {
             .to_string();
         assert!(err.contains("bsphere-parallel"), "{err}");
     }
+}
+
+/// Scattered strips of 1 to 40 quads, and one strip of `long` quads: many pieces of the mesh,
+/// most of which no region seed reaches at small regions, and one long enough to need hooking
+/// rounds over several submissions if no seed lands in it.
+fn islands(count: u32, long: u32, seed: u64) -> Mesh {
+    let mut state = seed;
+    let mut next = |n: u32| {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 33) % n as u64) as u32
+    };
+    let mut m = Mesh::default();
+    for i in 0..=count {
+        let quads = if i == count { long } else { 1 + next(40) };
+        let s = strip(quads);
+        let base = m.positions.len() as u32;
+        let at = [next(1000) as f32, next(1000) as f32, next(1000) as f32];
+        m.positions.extend(
+            s.positions
+                .iter()
+                .map(|p| [p[0] + at[0], p[1] + at[1], p[2] + at[2]]),
+        );
+        m.indices.extend(s.indices.iter().map(|&v| v + base));
+    }
+    m
+}
+
+/// The coarse regions of the region-parallel methods, on the device alone: every triangle's
+/// region, each region's members (ascending) and offsets equal the CPU's, on meshes of one piece
+/// and of many (where the pieces no seed reaches take the hooking step), at region sizes from
+/// one region to a region per few strips.
+#[test]
+fn coarse_regions_equal_the_cpu_regions() {
+    use meshletlab::gpu::adjacency::AdjacencyKernels;
+    use meshletlab::gpu::coarse::DeviceRegions;
+    use meshletlab::gpu::morton::DeviceInput;
+    use meshletlab::gpu::Batch;
+    use meshletlab::strategy::kmedoids::{coarse, members};
+    let gpu = gpu();
+    let mut hooked = 0;
+    let meshes = [
+        ("islands", islands(300, 3000, 7)),
+        ("strut-lattice", generate::stress_set(3).swap_remove(2).mesh),
+        ("knot tube", generate::knot_tube(200, 12, 3)),
+    ];
+    for (name, m) in &meshes {
+        let t = m.triangle_count();
+        let dual =
+            meshletlab::adjacency::dual_graph(m, &meshletlab::adjacency::vertex_triangles(m));
+        for size in [t, 2000, 300, 37] {
+            let (cpu, k) = coarse::regions(m, &dual, size);
+            let rows = members(&cpu, k);
+            let (adj, _) = AdjacencyKernels::new(&gpu).build(&gpu, m).unwrap();
+            let positions = gpu.upload("positions", &m.positions);
+            let (region, offsets) = (gpu.zeros("region", t), gpu.zeros("offsets", k + 1));
+            let input = DeviceInput {
+                positions: &positions,
+                vertices: m.vertex_count(),
+                indices: &adj.indices,
+            };
+            let d = DeviceRegions::new(&gpu, input, &adj, size, [&region, &offsets], None).unwrap();
+            assert_eq!(d.count, k, "{name}, {size} per region");
+            hooked += d.piece_rounds;
+            let mut b = Batch::new(&gpu);
+            d.record(&mut b);
+            let (_, out) = b
+                .run_read(&[(&region, 0, t), (&offsets, 0, k + 1), (d.members(), 0, t)])
+                .unwrap();
+            let what = format!("{name}, {size} per region");
+            same_labels(&out[0], &cpu, &what);
+            assert_eq!(out[1], rows.offsets, "{what}: offsets");
+            same_labels(&out[2], &rows.items, &format!("{what}: members"));
+        }
+    }
+    assert!(
+        hooked > 8,
+        "no mesh took the piece step over two submissions"
+    );
 }

@@ -68,7 +68,7 @@ fn stress_meshes_give_the_same_meshlets_on_any_thread_count() {
 #[test]
 fn kmedoids_parallel_with_many_regions_on_every_stress_mesh() {
     use meshletlab::adjacency::{cluster_pieces, dual_graph, vertex_triangles};
-    use meshletlab::strategy::kmedoids::{cluster, parallel::regions, Config, Mode};
+    use meshletlab::strategy::kmedoids::{cluster, coarse::regions, Config, Mode};
     let cfg = Config {
         region_triangles: 1024,
         ..Config::default()

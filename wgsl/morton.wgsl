@@ -1,7 +1,8 @@
-// The flat k-medoids' seeds on the device, step for step strategy::kmedoids::flat::{morton_order,
-// initial_medoids}:
+// The Morton order on the device, step for step strategy::kmedoids::flat::{morton_order,
+// initial_medoids} (the seeds of kmedoids-flat and of the coarse regions):
 //   bbox                        the positions' box, as order-preserving integers (atomic min/max)
 //   keys                        each triangle's Morton key (MortonFrame::key) and its id
+//   centre_cells                each triangle's packed centroid cell (regions::packed_centres)
 //   (hist, scan, scatter) x 8   a stable radix sort by key, 4 bits a pass: ids in Morton order,
 //                               ties by id (they start in id order and every pass is stable)
 //   pick                        the triangle at each requested rank (the middle of each of k runs)
@@ -9,9 +10,10 @@
 // The frame (three times the low corner, and the factor) is computed on the host from bbox, as
 // the CPU computes it; a key then takes only f32 +, - and x in a fixed order, exact on every
 // device. scatter ranks a block's elements per digit in workgroup memory, in element order, so
-// the sort does not depend on scheduling.
+// the sort does not depend on scheduling. hist_count and scatter alone also sort other (key, id)
+// pairs bound as key_a and id_a (gpu::morton::PairSort).
 
-struct Params { t: u32, n: u32, shift: u32, blocks: u32, lo_x: u32, lo_y: u32, lo_z: u32, factor: u32, k: u32 }
+struct Params { t: u32, n: u32, shift: u32, blocks: u32, lo_x: u32, lo_y: u32, lo_z: u32, factor: u32, k: u32, base: u32 }
 
 @group(0) @binding(0) var<uniform> p: Params;
 // Three f32 per vertex.
@@ -29,6 +31,8 @@ struct Params { t: u32, n: u32, shift: u32, blocks: u32, lo_x: u32, lo_y: u32, l
 @group(0) @binding(9) var<storage, read_write> hist: array<u32>;
 @group(0) @binding(10) var<storage, read> ranks: array<u32>;
 @group(0) @binding(11) var<storage, read_write> medoids: array<u32>;
+// Packed centroid cells (x | y << 10 | z << 20), from word base.
+@group(0) @binding(12) var<storage, read_write> centres: array<u32>;
 
 fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART]; }
 fn pos(v: u32) -> vec3<f32> { return vec3<f32>(positions[3u * v], positions[3u * v + 1u], positions[3u * v + 2u]); }
@@ -63,15 +67,28 @@ fn spread(v: u32) -> u32 {
     return x;
 }
 
+// The triangle's centroid cell, 0..=1023 per axis (MortonFrame::cell).
+fn cell(t: u32) -> vec3<u32> {
+    let lo3 = vec3<f32>(bitcast<f32>(p.lo_x), bitcast<f32>(p.lo_y), bitcast<f32>(p.lo_z));
+    let s = (pos(idx(3u * t)) + pos(idx(3u * t + 1u))) + pos(idx(3u * t + 2u));
+    return vec3<u32>(clamp((s - lo3) * bitcast<f32>(p.factor), vec3<f32>(0.0), vec3<f32>(1023.0)));
+}
+
 @compute @workgroup_size(64)
 fn keys(@builtin(global_invocation_id) gid: vec3<u32>) {
     let t = flat(gid);
     if (t >= p.t) { return; }
-    let lo3 = vec3<f32>(bitcast<f32>(p.lo_x), bitcast<f32>(p.lo_y), bitcast<f32>(p.lo_z));
-    let s = (pos(idx(3u * t)) + pos(idx(3u * t + 1u))) + pos(idx(3u * t + 2u));
-    let q = clamp((s - lo3) * bitcast<f32>(p.factor), vec3<f32>(0.0), vec3<f32>(1023.0));
-    key_a[t] = spread(u32(q.x)) | (spread(u32(q.y)) << 1u) | (spread(u32(q.z)) << 2u);
+    let q = cell(t);
+    key_a[t] = spread(q.x) | (spread(q.y) << 1u) | (spread(q.z) << 2u);
     id_a[t] = t;
+}
+
+@compute @workgroup_size(64)
+fn centre_cells(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let t = flat(gid);
+    if (t >= p.t) { return; }
+    let q = cell(t);
+    centres[p.base + t] = q.x | (q.y << 10u) | (q.z << 20u);
 }
 
 // Pass parity: even passes read a and write b.

@@ -14,6 +14,7 @@ use super::table::{
 };
 use super::{floor, is_lavapipe, machine_note, today, Common, Tag};
 use crate::adjacency::{dual_graph, vertex_triangles};
+use crate::gpu::kmedoids::MeshSource;
 use crate::gpu::{self, timed as secs, Gpu, Profile};
 use crate::mesh::{self, subdivide::subdivide, Mesh};
 use crate::meshlet::{Limits, Meshlets};
@@ -92,8 +93,8 @@ struct Reg {
     regions: usize,
     cpu1: Option<f64>,
     rayon: f64,
-    /// Wall seconds, upload/kernel/readback, host seconds for the regions.
-    gpu: Option<(f64, gpu::adjacency::Timing, f64)>,
+    /// Wall seconds, upload/kernel/readback, host round trips.
+    gpu: Option<(f64, gpu::adjacency::Timing, u64)>,
 }
 
 /// One GPU strategy built three ways through `gpu::build`: meshlets read back, left on the
@@ -261,7 +262,13 @@ pub fn run(cfg: &Config) -> Result<()> {
     gpu::adjacency::adjacency(&g, &warm)?;
     gpu::kmedoids::cluster_flat(&g, &warm, cfg.limits, &KConfig::default())?;
     gpu::grow::grow(&g, &warm, cfg.limits, grow::DEFAULT_SPACING)?;
-    gpu::regions::cluster_regions(&g, &warm, cfg.limits, &KConfig::default(), true)?;
+    gpu::regions::cluster_regions(
+        &g,
+        MeshSource::Host(&warm),
+        cfg.limits,
+        &KConfig::default(),
+        true,
+    )?;
     let warm_positions = g.upload("positions", &warm.positions);
     gpu::build::build_resident(
         &g,
@@ -436,14 +443,17 @@ pub fn run(cfg: &Config) -> Result<()> {
             .transpose()?;
         // Its state takes nine words per triangle in one binding: meshes past the adapter's
         // binding size are left out (`-`), as the error says.
-        let reg_run = (t <= cfg.kmedoids_gpu_max)
-            .then(|| gpu::regions::cluster_regions(&g, m, cfg.limits, &capc, true));
+        let before = g.profile();
+        let reg_run = (t <= cfg.kmedoids_gpu_max).then(|| {
+            gpu::regions::cluster_regions(&g, MeshSource::Host(m), cfg.limits, &capc, true)
+        });
+        let trips = g.profile().since(&before).round_trips;
         let (reg_gpu, reg_regions) = match reg_run {
             Some(Ok((r, _))) => {
                 if r.clustering.labels != reg_r.labels || r.clustering.meshlets != reg_r.meshlets {
                     bail!("{name}: GPU kmedoids-regions differs from the CPU's");
                 }
-                (Some((r.seconds, r.timing, r.host_regions)), r.regions)
+                (Some((r.seconds, r.timing, trips)), r.regions)
             }
             Some(Err(gpu::GpuError::TooLarge { what, len, max })) => {
                 say(format!(
@@ -936,14 +946,11 @@ fn write(
         )?;
     }
     writeln!(md)?;
+    writeln!(md, "## `kmedoids-regions`: every step on the GPU\n")?;
+    writeln!(md, "The region-parallel k-medoids whose per-region growth is a kernel (src/strategy/kmedoids/regions.rs, wgsl/regions.wgsl): one invocation per region grows, packs, absorbs pockets and merges its clusters; one per cluster finds the medoid; the assembly is `wgsl/assemble.wgsl`. The regions are kernels too (wgsl/coarse.wgsl with the Morton sort and the BFS): nothing a kernel reads comes back to the host, only control words (the box, the seeds, frontier sizes, one count per region, one medoid per cluster); `round trips` counts the host's waits on the device in the whole run, the final readbacks included. The GPU run is checked identical to the CPU's (labels and meshlets); one thread checked identical to the pool. GPU wall time includes the adjacency kernels, uploads and readbacks of labels, distances and meshlets; pipeline compilation is warmed up before. `-`: left out, its state (nine words per triangle in one binding) past the adapter's binding size.\n")?;
     writeln!(
         md,
-        "## `kmedoids-regions`: every step after the regions on the GPU\n"
-    )?;
-    writeln!(md, "The region-parallel k-medoids whose per-region growth is a kernel (src/strategy/kmedoids/regions.rs, wgsl/regions.wgsl): one invocation per region grows, packs, absorbs pockets and merges its clusters; one per cluster finds the medoid; the assembly is `wgsl/assemble.wgsl`. The regions are computed on the host (`regions s`, inside the GPU wall time) and uploaded. The GPU run is checked identical to the CPU's (labels and meshlets); one thread checked identical to the pool. GPU wall time includes the adjacency kernels, uploads and readbacks of labels, distances and meshlets; pipeline compilation is warmed up before. `-`: left out, its state (nine words per triangle in one binding) past the adapter's binding size.\n")?;
-    writeln!(
-        md,
-        "| mesh | triangles | regions | meshlets | CPU 1 thread s | CPU rayon s | GPU s | upload s | kernel s | readback s | regions s (host) | GPU / rayon | meshlets / kmedoids-parallel |"
+        "| mesh | triangles | regions | meshlets | CPU 1 thread s | CPU rayon s | GPU s | upload s | kernel s | readback s | round trips | GPU / rayon | meshlets / kmedoids-parallel |"
     )?;
     writeln!(
         md,
@@ -966,7 +973,7 @@ fn write(
             opt(g.gpu.map(|x| x.1.upload), &|x| format!("{x:.3}")),
             opt(g.gpu.map(|x| x.1.kernel), &|x| format!("{x:.3}")),
             opt(g.gpu.map(|x| x.1.readback), &|x| format!("{x:.3}")),
-            opt(g.gpu.map(|x| x.2), &|x| format!("{x:.3}")),
+            opt(g.gpu.map(|x| x.2 as f64), &|x| format!("{x}")),
             opt(g.gpu.map(|x| x.0 / g.rayon), &|x| format!("{x:.2}x")),
             g.meshlets as f64 / r.par.0 as f64,
         )?;
@@ -976,7 +983,7 @@ fn write(
         md,
         "## Meshlets left on the device (the library's GPU builds)\n"
     )?;
-    writeln!(md, "Wall seconds of `gpu::build`'s entry points, each checked equal to the CPU build: `build` reads the meshlets back (the `--device gpu` path; its readback apart), `build_resident` leaves them and their culling bounds (sphere and cone, the split task layout) in device buffers (assembled by `wgsl/assemble.wgsl`), `build_on_device` also takes the mesh from position and index buffers already on the device (the seeds from `wgsl/morton.wgsl`; `kmedoids-flat` only: `bsphere-parallel` quantises on the host, hence `-`). Device creation and pipeline compilation are not in these times (a warm-up build runs first).\n")?;
+    writeln!(md, "Wall seconds of `gpu::build`'s entry points, each checked equal to the CPU build: `build` reads the meshlets back (the `--device gpu` path; its readback apart), `build_resident` leaves them and their culling bounds (sphere and cone, the split task layout) in device buffers (assembled by `wgsl/assemble.wgsl`), `build_on_device` also takes the mesh from position and index buffers already on the device (`kmedoids-flat` and `kmedoids-regions`: seeds and regions from kernels; `bsphere-parallel` quantises on the host, hence `-`). Device creation and pipeline compilation are not in these times (a warm-up build runs first).\n")?;
     writeln!(md, "| mesh | triangles | strategy | build s | of which readback s | build_resident s | build_on_device s |")?;
     writeln!(md, "|---|---:|---|---:|---:|---:|---:|")?;
     for r in rows {

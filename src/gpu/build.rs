@@ -4,9 +4,9 @@
 //!
 //! A strategy qualifies when the GPU runs all of it and the host only orders the work between
 //! kernels: `bsphere-parallel` ([`super::grow`]), `kmedoids-flat` ([`super::kmedoids`]'s flat
-//! driver) and `kmedoids-regions` ([`super::regions`]; its coarse regions are still computed on
-//! the host and uploaded). The default `kmedoids` does not: its seeding growth, merges and packing are sequential
-//! host code, so a GPU run of it would mostly measure the host. The ordering post-passes
+//! driver) and `kmedoids-regions` ([`super::regions`]). The default `kmedoids` does not: its
+//! seeding growth, merges and packing are sequential host code, so a GPU run of it would mostly
+//! measure the host. The ordering post-passes
 //! (`--local-order`, `--meshlet-order`) run on the host after the build, exactly as after a CPU
 //! build.
 
@@ -128,13 +128,13 @@ fn with_bounds(
 
 /// The strategies [`build_on_device`] runs: those whose setup reads no mesh data on the host.
 /// `bsphere-parallel` is not one: its quantised positions and grid are computed on the host.
-pub const DEVICE_INPUT_STRATEGIES: [Kind; 1] = [Kind::KmedoidsFlat];
+pub const DEVICE_INPUT_STRATEGIES: [Kind; 2] = [Kind::KmedoidsFlat, Kind::KmedoidsRegions];
 
 /// [`build_resident`] from a mesh already on the device (an engine's vertex and index buffers):
 /// nothing of the mesh is read on the host, and nothing of the result comes back unless the
 /// caller reads it. The host reads only the control words the kernels' loops need (the box of
-/// the positions, the seeds, counts per round) and, where a piece of the mesh has no seed, the
-/// dual graph and labels to seed it, as [`build`] does. Strategies: [`DEVICE_INPUT_STRATEGIES`];
+/// the positions, the seeds, counts per round and per region) and, for `kmedoids-flat` where a
+/// piece of the mesh has no seed, the dual graph and labels to seed it, as [`build`] does. Strategies: [`DEVICE_INPUT_STRATEGIES`];
 /// the meshlets equal [`build_resident`]'s on the same mesh.
 pub fn build_on_device(
     gpu: &Gpu,
@@ -146,18 +146,20 @@ pub fn build_on_device(
     let kind = gpu_kind(name)?;
     if !DEVICE_INPUT_STRATEGIES.contains(&kind) {
         return Err(GpuError::Unsupported(
-            "only kmedoids-flat builds from a mesh on the device: bsphere-parallel's setup runs on the host (use build_resident)",
+            "only kmedoids-flat and kmedoids-regions build from a mesh on the device: bsphere-parallel's setup runs on the host (use build_resident)",
         ));
     }
     let t0 = Instant::now();
-    let (r, meshlets) = super::kmedoids::cluster_flat_with(
-        gpu,
-        MeshSource::Device(mesh),
-        limits,
-        &opts.kmedoids,
-        false,
-    )?;
-    with_bounds(gpu, mesh.positions, meshlets, r.timing, t0)
+    let source = MeshSource::Device(mesh);
+    let (meshlets, timing) = if kind == Kind::KmedoidsRegions {
+        let (r, d) = super::regions::cluster_regions(gpu, source, limits, &opts.kmedoids, false)?;
+        (d, r.timing)
+    } else {
+        let (r, d) =
+            super::kmedoids::cluster_flat_with(gpu, source, limits, &opts.kmedoids, false)?;
+        (d, r.timing)
+    };
+    with_bounds(gpu, mesh.positions, meshlets, timing, t0)
 }
 
 /// Runs strategy `kind` (one of [`GPU_STRATEGIES`]) with its meshlets assembled on the device and
@@ -185,7 +187,13 @@ fn run_strategy(
             (d, r.timing)
         }
         Kind::KmedoidsRegions => {
-            let (r, d) = super::regions::cluster_regions(gpu, mesh, limits, &opts.kmedoids, false)?;
+            let (r, d) = super::regions::cluster_regions(
+                gpu,
+                MeshSource::Host(mesh),
+                limits,
+                &opts.kmedoids,
+                false,
+            )?;
             (d, r.timing)
         }
         _ => unreachable!("gpu_kind admits only GPU_STRATEGIES"),

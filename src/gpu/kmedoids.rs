@@ -184,12 +184,12 @@ struct Run<'a> {
     family: Family<'a>,
     scan: &'a Scan,
     bind: wgpu::BindGroup,
-    assign_bind: wgpu::BindGroup,
+    /// The assignment, over `labels`, `dist`, `medoids` and its counters (shared with update).
+    bfs: Bfs<'a>,
     split_bind: wgpu::BindGroup,
     labels: wgpu::Buffer,
     dist: wgpu::Buffer,
     medoids: wgpu::Buffer,
-    counters: wgpu::Buffer,
     mem_off: wgpu::Buffer,
     result: wgpu::Buffer,
     scratch: wgpu::Buffer,
@@ -203,15 +203,180 @@ struct Run<'a> {
     /// Scan of the member offsets, for the cluster count it was bound for (changes per split).
     mem_scan: Option<(usize, ScanJob)>,
     large: u32,
+    updates: u64,
+    skipped: u64,
+}
+
+/// The multi-source BFS of `wgsl/assign.wgsl` (CPU reference [`crate::strategy::kmedoids::assign`])
+/// over its caller's label, distance and medoid buffers: many levels per submission, the frontier
+/// sizes read back together, more levels recorded only when the frontier outlasts them.
+pub(crate) struct Bfs<'a> {
+    gpu: &'a Gpu,
+    kernels: &'a Kernels<Params>,
+    bind: wgpu::BindGroup,
+    /// Update counters, then the frontier-size ring.
+    counters: wgpu::Buffer,
+    t: usize,
+    /// BFS levels run in total.
     rounds: std::cell::Cell<u32>,
     /// See [`GpuClustering::deep_submissions`].
     deep: std::cell::Cell<u32>,
-    updates: u64,
-    skipped: u64,
     /// BFS levels to record up front: the last assignment's depth plus two.
     levels: std::cell::Cell<usize>,
-    /// Kernel seconds (added to `timing`, which holds the adjacency's, at the end).
+    /// Kernel seconds of every batch run through [`Bfs::run`].
     kernel: std::cell::Cell<f64>,
+}
+
+impl<'a> Bfs<'a> {
+    /// A BFS over `adj`'s dual graph writing `labels` and `dist` (one word per triangle each)
+    /// from the seeds in `medoids`; `counters` holds [`COUNTERS`] words.
+    pub(crate) fn new(
+        gpu: &'a Gpu,
+        kernels: &'a Kernels<Params>,
+        adj: &DeviceAdjacency,
+        buffers: [&wgpu::Buffer; 3],
+        counters: wgpu::Buffer,
+    ) -> Self {
+        let [labels, dist, medoids] = buffers;
+        let frontier = gpu.zeros("frontier", 2 * adj.triangles);
+        let bind = kernels.bind(
+            gpu,
+            &AssignBuffers {
+                dual_off: &adj.dual_offsets,
+                dual_a: &adj.dual_items.a,
+                dual_b: &adj.dual_items.b,
+                labels,
+                dist,
+                medoids,
+                counters: &counters,
+                frontier: &frontier,
+            },
+        );
+        Self {
+            gpu,
+            kernels,
+            bind,
+            counters,
+            t: adj.triangles,
+            rounds: std::cell::Cell::new(0),
+            deep: std::cell::Cell::new(0),
+            levels: std::cell::Cell::new(16),
+            kernel: std::cell::Cell::new(0.0),
+        }
+    }
+
+    /// The assign kernels (cached per device).
+    pub(crate) fn kernels(gpu: &Gpu) -> Kernels<Params> {
+        Kernels::new::<AssignBuffers>(
+            gpu,
+            "assign",
+            wgsl!("assign.wgsl"),
+            &["clear", "seed", "push"],
+        )
+    }
+
+    /// The counter words to allocate for [`Bfs::new`].
+    pub(crate) const COUNTERS: usize = COUNTERS;
+
+    fn params(&self, k: usize, d: u32) -> Params {
+        Params {
+            t: self.t as u32,
+            k: k as u32,
+            d,
+            slot: 0,
+            max_v: 0,
+            max_t: 0,
+        }
+    }
+
+    /// Records the multi-source BFS from the k medoids: clear, seed and the expected number of
+    /// levels (the host checks the frontier sizes afterwards, [`Bfs::finish`]).
+    fn record<'b>(&'b self, b: &mut Batch<'b>, k: usize) {
+        let p = self.params(k, 0);
+        b.groups(
+            self.kernels,
+            "clear",
+            &self.bind,
+            p,
+            self.gpu.stride_groups(self.t),
+        );
+        b.groups(
+            self.kernels,
+            "seed",
+            &self.bind,
+            p,
+            self.gpu.stride_groups(k),
+        );
+        self.record_levels(b, k, 0, self.levels.get().min(MAX_LEVELS));
+    }
+
+    fn record_levels<'b>(&'b self, b: &mut Batch<'b>, k: usize, from: usize, n: usize) {
+        let groups = self.gpu.stride_groups(self.t);
+        for d in from..from + n {
+            b.groups(
+                self.kernels,
+                "push",
+                &self.bind,
+                self.params(k, d as u32),
+                groups,
+            );
+        }
+    }
+
+    /// The multi-source BFS alone from the first `k` medoids; returns the number of unreached
+    /// triangles.
+    pub(crate) fn assign(&self, k: usize) -> Result<usize, GpuError> {
+        let mut b = Batch::new(self.gpu);
+        self.record(&mut b, k);
+        Ok(self.finish(b, k)?.0)
+    }
+
+    /// Runs `b` (which ends with [`Bfs::record`]) and reads the update counters and the
+    /// frontier sizes in the same round trip; records more levels while the frontier is not
+    /// empty. Returns the unreached triangles and the counters.
+    fn finish(&self, b: Batch<'_>, k: usize) -> Result<(usize, Vec<u32>), GpuError> {
+        let counters = self.run(b, &[(&self.counters, 0, COUNTERS)])?.remove(0);
+        let mut recorded = self.levels.get().min(MAX_LEVELS);
+        let mut sizes = counters.clone();
+        // Level d's frontier size is slot d % RING; level 0's is k.
+        let mut reached = k;
+        let mut d = 1;
+        loop {
+            if d > recorded {
+                // Deeper than recorded: more levels, another round trip.
+                let more = MAX_LEVELS;
+                let mut b = Batch::new(self.gpu);
+                self.record_levels(&mut b, k, recorded, more);
+                sizes = self.run(b, &[(&self.counters, 0, COUNTERS)])?.remove(0);
+                recorded += more;
+                self.deep.set(self.deep.get() + 1);
+            }
+            let n = sizes[SIZES + d % RING] as usize;
+            reached += n;
+            if n == 0 {
+                self.rounds.set(self.rounds.get() + d as u32);
+                self.levels.set(d + 2);
+                return Ok((self.t - reached, counters));
+            }
+            d += 1;
+        }
+    }
+
+    /// Kernel seconds of every batch this BFS ran.
+    pub(crate) fn kernel_seconds(&self) -> f64 {
+        self.kernel.get()
+    }
+
+    /// Runs `b`, adding its kernel time, and returns the `reads`.
+    fn run(
+        &self,
+        b: Batch<'_>,
+        reads: &[(&wgpu::Buffer, usize, usize)],
+    ) -> Result<Vec<Vec<u32>>, GpuError> {
+        let (time, out) = b.run_read(reads)?;
+        self.kernel.set(self.kernel.get() + time);
+        Ok(out)
+    }
 }
 
 /// The update kernels' entry points.
@@ -251,12 +416,7 @@ impl Modules {
                 UPDATE_ENTRIES,
                 &[("UW", uw)],
             ),
-            assign: Kernels::new::<AssignBuffers>(
-                gpu,
-                "assign",
-                wgsl!("assign.wgsl"),
-                &["clear", "seed", "push"],
-            ),
+            assign: Bfs::kernels(gpu),
             split: Kernels::new::<SplitBuffers>(gpu, "split", wgsl!("split.wgsl"), &["stats"]),
             scan: Scan::new(gpu),
         }
@@ -343,7 +503,7 @@ pub fn cluster_capacity(
         timing: Timing {
             readback: run.timing.readback + run.readback.get(),
             kernel: run.timing.kernel
-                + run.kernel.get()
+                + run.bfs.kernel.get()
                 + cap.as_ref().map_or(0.0, |c| c.kernel_seconds),
             ..run.timing
         },
@@ -498,7 +658,7 @@ pub fn cluster_flat_with(
         count: medoids.len(),
     };
     let (device, assembly) = Assembly::new(gpu).run(gpu, scan, &adj.indices, groups, limits)?;
-    run.kernel.set(run.kernel.get() + assembly);
+    run.bfs.kernel.set(run.bfs.kernel.get() + assembly);
     let (labels, distances, meshlets) = if read_back {
         (
             run.read(&run.labels, 0, t)?,
@@ -524,13 +684,13 @@ pub fn cluster_flat_with(
         },
         timing: Timing {
             readback: run.timing.readback + run.readback.get(),
-            kernel: run.timing.kernel + run.kernel.get(),
+            kernel: run.timing.kernel + run.bfs.kernel.get(),
             ..run.timing
         },
         adjacency_kernel: adj_timing.kernel,
         large_updates: run.large,
-        bfs_rounds: run.rounds.get(),
-        deep_submissions: run.deep.get(),
+        bfs_rounds: run.bfs.rounds.get(),
+        deep_submissions: run.bfs.deep.get(),
         updates: run.updates,
         seconds: start.elapsed().as_secs_f64(),
     };
@@ -568,7 +728,6 @@ impl<'a> Run<'a> {
         // No triangle remembers a medoid before the first update, so dirty_mark finds every
         // cluster changed (the flags after T are written before they are read).
         let prev = gpu.upload("previous medoids", &vec![u32::MAX; t + k_cap]);
-        let frontier = gpu.zeros("frontier", 2 * t);
         let bind = family.update.bind(
             gpu,
             &UpdateBuffers {
@@ -603,18 +762,12 @@ impl<'a> Run<'a> {
                 vt_b: &adj.vt_items.b,
             },
         );
-        let assign_bind = family.assign.bind(
+        let bfs = Bfs::new(
             gpu,
-            &AssignBuffers {
-                dual_off: &adj.dual_offsets,
-                dual_a: &adj.dual_items.a,
-                dual_b: &adj.dual_items.b,
-                labels: &labels,
-                dist: &dist,
-                medoids: &medoids,
-                counters: &counters,
-                frontier: &frontier,
-            },
+            family.assign,
+            adj,
+            [&labels, &dist, &medoids],
+            counters,
         );
         let flag_scan = scan.bind(gpu, &flags, t + 1);
         Ok(Self {
@@ -622,12 +775,11 @@ impl<'a> Run<'a> {
             family,
             scan,
             bind,
-            assign_bind,
+            bfs,
             split_bind,
             labels,
             dist,
             medoids,
-            counters,
             mem_off,
             result,
             scratch,
@@ -643,12 +795,8 @@ impl<'a> Run<'a> {
             flag_scan,
             mem_scan: None,
             large: 0,
-            rounds: std::cell::Cell::new(0),
-            deep: std::cell::Cell::new(0),
             updates: 0,
             skipped: 0,
-            levels: std::cell::Cell::new(16),
-            kernel: std::cell::Cell::new(0.0),
         })
     }
 
@@ -686,70 +834,18 @@ impl<'a> Run<'a> {
         Ok(())
     }
 
-    /// Records the multi-source BFS from the k medoids: clear, seed and the expected number of
-    /// levels (the host checks the frontier sizes afterwards, [`Run::finish_assign`]).
-    fn record_assign<'b>(&'b self, b: &mut Batch<'b>, k: usize) {
-        let (kern, bind, t) = (self.family.assign, &self.assign_bind, self.t);
-        let p = self.params(k, 0, 0);
-        b.groups(kern, "clear", bind, p, self.gpu.stride_groups(t));
-        b.groups(kern, "seed", bind, p, self.gpu.stride_groups(k));
-        self.record_levels(b, k, 0, self.levels.get().min(MAX_LEVELS));
-    }
-
-    fn record_levels<'b>(&'b self, b: &mut Batch<'b>, k: usize, from: usize, n: usize) {
-        let groups = self.gpu.stride_groups(self.t);
-        for d in from..from + n {
-            let p = self.params(k, d as u32, 0);
-            b.groups(self.family.assign, "push", &self.assign_bind, p, groups);
-        }
-    }
-
     /// The multi-source BFS alone; returns the number of unreached triangles.
     fn assign(&self, k: usize) -> Result<usize, GpuError> {
-        let mut b = Batch::new(self.gpu);
-        self.record_assign(&mut b, k);
-        Ok(self.finish_assign(b, k)?.0)
+        self.bfs.assign(k)
     }
 
-    /// Runs `b` (which ends with [`Run::record_assign`]) and reads the update counters and the
-    /// frontier sizes in the same round trip; records more levels while the frontier is not
-    /// empty. Returns the unreached triangles and the counters.
-    fn finish_assign(&self, b: Batch<'_>, k: usize) -> Result<(usize, Vec<u32>), GpuError> {
-        let counters = self.run(b, &[(&self.counters, 0, COUNTERS)])?.remove(0);
-        let mut recorded = self.levels.get().min(MAX_LEVELS);
-        let mut sizes = counters.clone();
-        // Level d's frontier size is slot d % RING; level 0's is k.
-        let mut reached = k;
-        let mut d = 1;
-        loop {
-            if d > recorded {
-                // Deeper than recorded: more levels, another round trip.
-                let more = MAX_LEVELS;
-                let mut b = Batch::new(self.gpu);
-                self.record_levels(&mut b, k, recorded, more);
-                sizes = self.run(b, &[(&self.counters, 0, COUNTERS)])?.remove(0);
-                recorded += more;
-                self.deep.set(self.deep.get() + 1);
-            }
-            let n = sizes[SIZES + d % RING] as usize;
-            reached += n;
-            if n == 0 {
-                self.rounds.set(self.rounds.get() + d as u32);
-                self.levels.set(d + 2);
-                return Ok((self.t - reached, counters));
-            }
-            d += 1;
-        }
-    }
     /// Runs `b`, adding its kernel time, and returns the `reads`.
     fn run(
         &self,
         b: Batch<'_>,
         reads: &[(&wgpu::Buffer, usize, usize)],
     ) -> Result<Vec<Vec<u32>>, GpuError> {
-        let (time, out) = b.run_read(reads)?;
-        self.kernel.set(self.kernel.get() + time);
-        Ok(out)
+        self.bfs.run(b, reads)
     }
 
     /// Members CSR of the current labels (recorded into `b`).
@@ -787,8 +883,8 @@ impl<'a> Run<'a> {
         self.scan.record(&mut b, &self.flag_scan);
         b.threads(kern, "place", bind, p, k);
         b.threads(kern, "remember", bind, p, t);
-        self.record_assign(&mut b, k);
-        let (_, c) = self.finish_assign(b, k)?;
+        self.bfs.record(&mut b, k);
+        let (_, c) = self.bfs.finish(b, k)?;
         self.large += c[LARGE];
         self.updates += k as u64;
         self.skipped += c[SKIPPED] as u64;
@@ -844,7 +940,10 @@ impl<'a> Run<'a> {
         b.threads(kern, "dirty_mark", bind, p, t);
         self.record_members(&mut b, k, mem_scan);
         b.groups(kern, "update", bind, p, k as u32);
-        let mut out = self.run(b, &[(&self.result, 0, k), (&self.counters, 0, COUNTERS)])?;
+        let mut out = self.run(
+            b,
+            &[(&self.result, 0, k), (&self.bfs.counters, 0, COUNTERS)],
+        )?;
         self.large += out[1][LARGE];
         self.updates += k as u64;
         Ok(out.swap_remove(0))

@@ -9,7 +9,9 @@
 //! |---|---|---|
 //! | [`adjacency`] | `adjacency.wgsl` | `crate::adjacency` (and `mesh::edges`) |
 //! | [`kmedoids`] (`cluster_flat`, `cluster_capacity`) | `assign.wgsl`, `update.wgsl`, `split.wgsl` | `strategy::kmedoids::{assign, update, split}`, driven as `strategy::kmedoids::flat` |
-//! | [`morton`] | `morton.wgsl` | `strategy::kmedoids::flat::{morton_order, initial_medoids}` (the flat method's seeds) |
+//! | [`morton`] | `morton.wgsl` | `strategy::kmedoids::flat::{morton_order, initial_medoids}` (the flat method's seeds), `strategy::kmedoids::regions::packed_centres` |
+//! | [`coarse`] | `coarse.wgsl` (with `morton.wgsl`, `assign.wgsl`) | `strategy::kmedoids::coarse` (the regions of `kmedoids-parallel` and `kmedoids-regions`) |
+//! | [`regions`] | `regions.wgsl` | `strategy::kmedoids::regions` (`kmedoids-regions`) |
 //! | [`capacity`] | `capacity.wgsl` | `strategy::kmedoids::capacity::assign_capacity` |
 //! | [`grow`] | `grow.wgsl` | `strategy::grow` (`bsphere-parallel`) |
 //! | [`assemble`] | `assemble.wgsl` | `meshlet::assemble` (meshlets from a clustering) |
@@ -37,6 +39,7 @@ pub mod assemble;
 pub mod bounds;
 pub mod build;
 pub mod capacity;
+pub mod coarse;
 pub mod copy;
 pub mod grow;
 pub mod kmedoids;

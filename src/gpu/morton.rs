@@ -1,7 +1,10 @@
-//! The flat k-medoids' seeds on the device (`wgsl/morton.wgsl`): the positions' box, Morton keys of
-//! the triangles, a stable radix sort, and the triangles at the ranks
-//! [`crate::strategy::kmedoids::flat::initial_medoids`] takes. The CPU reference is
-//! [`crate::strategy::kmedoids::flat::morton_order`]; the order and the seeds are identical.
+//! The Morton order on the device (`wgsl/morton.wgsl`): the positions' box, Morton keys of the
+//! triangles, a stable radix sort, and the triangles at the ranks the seeds take
+//! ([`crate::strategy::kmedoids::flat::initial_medoids`], [`crate::strategy::kmedoids::coarse`]);
+//! also each triangle's centroid cell packed as `kmedoids-regions` keys it
+//! ([`crate::strategy::kmedoids::regions::packed_centres`]), and the radix sort alone for other
+//! keys ([`PairSort`]). The CPU reference is [`crate::strategy::kmedoids::flat::morton_order`];
+//! the order, the seeds and the cells are identical.
 //!
 //! Host traffic: the box (six words, from which the host computes the [`MortonFrame`] as the CPU
 //! does), then the seeds (one word each).
@@ -34,6 +37,8 @@ param_block! {
         factor,
         /// Ranks to pick.
         k,
+        /// First word of the packed centroid cells in `centres`.
+        base,
     }
 }
 
@@ -62,6 +67,8 @@ binding_set! {
         ranks: Read,
         /// The picked triangles.
         medoids: ReadWrite,
+        /// Packed centroid cells, from word `base`.
+        centres: ReadWrite,
     }
 }
 
@@ -89,6 +96,129 @@ fn unordered(u: u32) -> f32 {
     })
 }
 
+/// The Morton order on the device ([`order`]).
+pub struct Ordered {
+    /// Triangles in Morton order (ties by id).
+    pub order: wgpu::Buffer,
+    /// The triangle at each requested rank.
+    pub picked: Vec<u32>,
+    /// Upload, kernel and readback time.
+    pub timing: Timing,
+}
+
+/// The Morton order of `mesh`'s triangles, left on the device, and the triangles at `ranks`
+/// (read back); with `centres`, also every triangle's packed centroid cell written to that buffer
+/// from the given word on.
+pub fn order(
+    gpu: &Gpu,
+    mesh: DeviceInput<'_>,
+    ranks: &[u32],
+    centres: Option<(&wgpu::Buffer, usize)>,
+) -> Result<Ordered, GpuError> {
+    let t = mesh.indices.len / 3;
+    let kernels = kernels(gpu);
+    let scan = Scan::new(gpu);
+    let blocks = t.div_ceil(BLOCK).max(1);
+    let mut timing = Timing::default();
+    let (bufs, up) = timed(|| {
+        (
+            gpu.upload("box", &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0]),
+            [0, 1, 2, 3].map(|_| gpu.zeros("sort", t)),
+            gpu.zeros("digit counts", 16 * blocks),
+            gpu.upload("ranks", ranks),
+            gpu.zeros("picked", ranks.len()),
+            centres.is_none().then(|| gpu.zeros("unused", 1)),
+        )
+    });
+    timing.upload += up;
+    let (bbox, [key_a, id_a, key_b, id_b], hist, rank_buf, picked, unused) = bufs;
+    let (centre_buf, base) = match (centres, &unused) {
+        (Some((buf, base)), _) => (buf, base),
+        (None, Some(u)) => (u, 0),
+        (None, None) => unreachable!("allocated when no centres are asked for"),
+    };
+    let bind = kernels.bind(
+        gpu,
+        &Buffers {
+            positions: mesh.positions,
+            idx_a: &mesh.indices.a,
+            idx_b: &mesh.indices.b,
+            bbox: &bbox,
+            key_a: &key_a,
+            id_a: &id_a,
+            key_b: &key_b,
+            id_b: &id_b,
+            hist: &hist,
+            ranks: &rank_buf,
+            medoids: &picked,
+            centres: centre_buf,
+        },
+    );
+    let mut params = Params {
+        t: t as u32,
+        n: mesh.vertices as u32,
+        shift: 0,
+        blocks: blocks as u32,
+        lo_x: 0,
+        lo_y: 0,
+        lo_z: 0,
+        factor: 0,
+        k: ranks.len() as u32,
+        base: base as u32,
+    };
+    let mut b = Batch::new(gpu);
+    b.threads(&kernels, "bbox_reduce", &bind, params, mesh.vertices);
+    let (kernel, r) = b.run_read(&[(&bbox, 0, 6)])?;
+    timing.kernel += kernel;
+    let w = &r[0];
+    let corner = |o: usize| Vec3::new(unordered(w[o]), unordered(w[o + 1]), unordered(w[o + 2]));
+    let frame = MortonFrame::new(corner(0), corner(3));
+    params.lo_x = frame.lo3.x.to_bits();
+    params.lo_y = frame.lo3.y.to_bits();
+    params.lo_z = frame.lo3.z.to_bits();
+    params.factor = frame.factor.to_bits();
+    let hist_scan = scan.bind(gpu, &hist, 16 * blocks);
+    let mut b = Batch::new(gpu);
+    b.threads(&kernels, "keys", &bind, params, t);
+    if centres.is_some() {
+        b.threads(&kernels, "centre_cells", &bind, params, t);
+    }
+    for pass in 0..PASSES {
+        let p = Params {
+            shift: 4 * pass,
+            ..params
+        };
+        b.groups(&kernels, "hist_count", &bind, p, blocks as u32);
+        scan.record(&mut b, &hist_scan);
+        b.groups(&kernels, "scatter", &bind, p, blocks as u32);
+    }
+    b.threads(&kernels, "pick", &bind, params, ranks.len());
+    let (kernel, mut r) = b.run_read(&[(&picked, 0, ranks.len())])?;
+    timing.kernel += kernel;
+    Ok(Ordered {
+        order: id_a,
+        picked: r.remove(0),
+        timing,
+    })
+}
+
+/// The kernels of `morton.wgsl` (cached per device).
+fn kernels(gpu: &Gpu) -> Kernels<Params> {
+    Kernels::new::<Buffers>(
+        gpu,
+        "morton",
+        wgsl!("morton.wgsl"),
+        &[
+            "bbox_reduce",
+            "keys",
+            "centre_cells",
+            "hist_count",
+            "scatter",
+            "pick",
+        ],
+    )
+}
+
 /// What [`pick`] read back.
 pub struct Picked {
     /// The triangle at each requested rank.
@@ -108,89 +238,107 @@ pub fn pick(
     want_order: bool,
 ) -> Result<Picked, GpuError> {
     let t = mesh.indices.len / 3;
-    let kernels = Kernels::new::<Buffers>(
-        gpu,
-        "morton",
-        wgsl!("morton.wgsl"),
-        &["bbox_reduce", "keys", "hist_count", "scatter", "pick"],
-    );
-    let scan = Scan::new(gpu);
-    let blocks = t.div_ceil(BLOCK).max(1);
-    let mut timing = Timing::default();
-    let (bufs, up) = timed(|| {
-        (
-            gpu.upload("box", &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0]),
-            [0, 1, 2, 3].map(|_| gpu.zeros("sort", t)),
-            gpu.zeros("digit counts", 16 * blocks),
-            gpu.upload("ranks", ranks),
-            gpu.zeros("picked", ranks.len()),
-        )
-    });
-    timing.upload += up;
-    let (bbox, [key_a, id_a, key_b, id_b], hist, rank_buf, picked) = bufs;
-    let bind = kernels.bind(
-        gpu,
-        &Buffers {
-            positions: mesh.positions,
-            idx_a: &mesh.indices.a,
-            idx_b: &mesh.indices.b,
-            bbox: &bbox,
-            key_a: &key_a,
-            id_a: &id_a,
-            key_b: &key_b,
-            id_b: &id_b,
-            hist: &hist,
-            ranks: &rank_buf,
-            medoids: &picked,
-        },
-    );
-    let mut params = Params {
-        t: t as u32,
-        n: mesh.vertices as u32,
-        shift: 0,
-        blocks: blocks as u32,
-        lo_x: 0,
-        lo_y: 0,
-        lo_z: 0,
-        factor: 0,
-        k: ranks.len() as u32,
+    let mut o = order(gpu, mesh, ranks, None)?;
+    let order = if want_order {
+        let (r, s) = timed(|| gpu.read(&o.order, 0, t));
+        o.timing.readback += s;
+        Some(r?)
+    } else {
+        None
     };
-    let mut b = Batch::new(gpu);
-    b.threads(&kernels, "bbox_reduce", &bind, params, mesh.vertices);
-    let (kernel, r) = b.run_read(&[(&bbox, 0, 6)])?;
-    timing.kernel += kernel;
-    let w = &r[0];
-    let corner = |o: usize| Vec3::new(unordered(w[o]), unordered(w[o + 1]), unordered(w[o + 2]));
-    let frame = MortonFrame::new(corner(0), corner(3));
-    params.lo_x = frame.lo3.x.to_bits();
-    params.lo_y = frame.lo3.y.to_bits();
-    params.lo_z = frame.lo3.z.to_bits();
-    params.factor = frame.factor.to_bits();
-    let hist_scan = scan.bind(gpu, &hist, 16 * blocks);
-    let mut b = Batch::new(gpu);
-    b.threads(&kernels, "keys", &bind, params, t);
-    for pass in 0..PASSES {
-        let p = Params {
-            shift: 4 * pass,
-            ..params
-        };
-        b.groups(&kernels, "hist_count", &bind, p, blocks as u32);
-        scan.record(&mut b, &hist_scan);
-        b.groups(&kernels, "scatter", &bind, p, blocks as u32);
-    }
-    b.threads(&kernels, "pick", &bind, params, ranks.len());
-    let mut reads = vec![(&picked, 0, ranks.len())];
-    if want_order {
-        reads.push((&id_a, 0, t));
-    }
-    let (kernel, mut r) = b.run_read(&reads)?;
-    timing.kernel += kernel;
-    let order = want_order.then(|| r.remove(1));
     Ok(Picked {
-        triangles: r.remove(0),
+        triangles: o.picked,
         order,
-        timing,
+        timing: o.timing,
     })
+}
+
+/// A stable sort of `t` (key, id) pairs on the device by the keys' low `bits` bits: the radix
+/// passes of `morton.wgsl` over the caller's key and id buffers (`hist_count`, scan, `scatter`,
+/// 4 bits a pass), so equal keys keep their ids' order.
+pub struct PairSort {
+    kernels: Kernels<Params>,
+    scan: Scan,
+    bind: wgpu::BindGroup,
+    hist_scan: super::scan::ScanJob,
+    key_b: wgpu::Buffer,
+    id_b: wgpu::Buffer,
+    t: usize,
+    blocks: usize,
+    passes: u32,
+}
+
+impl PairSort {
+    /// Binds the sort of `t` pairs in `keys` and `ids` by their low `bits` key bits.
+    pub fn new(gpu: &Gpu, keys: &wgpu::Buffer, ids: &wgpu::Buffer, t: usize, bits: u32) -> Self {
+        let kernels = kernels(gpu);
+        let scan = Scan::new(gpu);
+        let blocks = t.div_ceil(BLOCK).max(1);
+        let (key_b, id_b, hist) = (
+            gpu.zeros("sort keys", t),
+            gpu.zeros("sort ids", t),
+            gpu.zeros("digit counts", 16 * blocks),
+        );
+        // The seeding's buffers, unused by the sort passes (distinct, so no two writable
+        // bindings share a buffer).
+        let [read, bbox, picked, centres] = [0; 4].map(|_| gpu.zeros("unused", 1));
+        let bind = kernels.bind(
+            gpu,
+            &Buffers {
+                positions: &read,
+                idx_a: &read,
+                idx_b: &read,
+                bbox: &bbox,
+                key_a: keys,
+                id_a: ids,
+                key_b: &key_b,
+                id_b: &id_b,
+                hist: &hist,
+                ranks: &read,
+                medoids: &picked,
+                centres: &centres,
+            },
+        );
+        let hist_scan = scan.bind(gpu, &hist, 16 * blocks);
+        Self {
+            kernels,
+            scan,
+            bind,
+            hist_scan,
+            key_b,
+            id_b,
+            t,
+            blocks,
+            passes: bits.div_ceil(4),
+        }
+    }
+
+    /// Records the passes into `b`.
+    pub fn record<'b>(&'b self, b: &mut Batch<'b>) {
+        for pass in 0..self.passes {
+            let p = Params {
+                t: self.t as u32,
+                shift: 4 * pass,
+                blocks: self.blocks as u32,
+                ..Params::default()
+            };
+            b.groups(
+                &self.kernels,
+                "hist_count",
+                &self.bind,
+                p,
+                self.blocks as u32,
+            );
+            self.scan.record(b, &self.hist_scan);
+            b.groups(&self.kernels, "scatter", &self.bind, p, self.blocks as u32);
+        }
+    }
+
+    /// Where the sorted keys and ids end: `None` in the caller's buffers (an even number of
+    /// passes), else in the sort's own.
+    pub fn sorted(&self) -> Option<(&wgpu::Buffer, &wgpu::Buffer)> {
+        (self.passes % 2 == 1).then_some((&self.key_b, &self.id_b))
+    }
 }
 
 /// [`crate::strategy::kmedoids::flat::initial_medoids`] on the device: `ceil(T / per_cluster)`

@@ -3,6 +3,7 @@
 //! the tolerance stated where they are compared).
 
 use super::bounds::SphereF32;
+use super::kmedoids::MeshSource;
 use super::select::{Selector, ViewData};
 use super::{timed, Gpu, GpuError};
 use crate::adjacency::{dual_graph, side_flags, vertex_triangles, EdgeTable};
@@ -199,8 +200,9 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
             ..cfg
         };
         let (r_cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, Mode::Regions, &rcfg));
-        let (r_gpu, gpu_s) =
-            timed(|| super::regions::cluster_regions(gpu, mesh, limits, &rcfg, true));
+        let (r_gpu, gpu_s) = timed(|| {
+            super::regions::cluster_regions(gpu, MeshSource::Host(mesh), limits, &rcfg, true)
+        });
         let r_gpu = r_gpu?.0.clustering;
         cpu_total += cpu_s;
         gpu_total += gpu_s;

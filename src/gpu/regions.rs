@@ -2,21 +2,26 @@
 //! [`crate::strategy::kmedoids::regions`], and labels, distances, medoids and meshlets are
 //! identical.
 //!
-//! The regions (a Morton-seeded BFS at a coarse scale) are still computed on the host, over the
-//! dual graph the adjacency kernels built (read back once), and uploaded; everything after them
-//! runs in two submissions: the per-triangle setup and one invocation per region growing its
-//! clusters, then (after the host reads the cluster count of each region and writes their prefix
-//! sums) the global labels, one invocation per cluster for its medoid and distances, and the
-//! assembly (`wgsl/assemble.wgsl`).
+//! Every step is a kernel, from a mesh uploaded from the host or already on the device: the
+//! adjacency, the coarse regions ([`super::coarse`]: Morton order, seeds, BFS, the pieces no seed
+//! reaches, members sorted by region) and the packed centroid cells, then the per-triangle setup
+//! and one invocation per region growing its clusters; after the host reads the cluster count of
+//! each region and writes their prefix sums, the global labels, one invocation per cluster for
+//! its medoid and distances, and the assembly (`wgsl/assemble.wgsl`). The host reads back only
+//! control words: the box, the seeds, the BFS's frontier sizes, hooking-round counts where a
+//! piece has no seed, one count per region, and one medoid per cluster.
 
 use super::adjacency::{AdjacencyKernels, Timing};
 use super::assemble::{Assembly, DeviceMeshlets, Groups};
+use super::coarse::DeviceRegions;
+use super::kmedoids::MeshSource;
+use super::morton::DeviceInput;
 use super::{
-    binding_set, param_block, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan,
+    binding_set, param_block, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan, Split,
 };
-use crate::mesh::Mesh;
 use crate::meshlet::Limits;
-use crate::strategy::kmedoids::{members, parallel, regions, Clustering, Config};
+use crate::strategy::kmedoids::coarse::region_count;
+use crate::strategy::kmedoids::{regions, Clustering, Config};
 use std::time::Instant;
 
 param_block! {
@@ -62,7 +67,7 @@ binding_set! {
         items: Read,
         /// Per-triangle state (seven sections).
         tri: ReadWrite,
-        /// Canonical corners, then the triangles' quantised centroids.
+        /// Canonical corners, then the triangles' packed centroid cells.
         canon: ReadWrite,
         /// Per-corner state (three sections).
         cstate: ReadWrite,
@@ -79,13 +84,12 @@ binding_set! {
 pub struct GpuRegions {
     /// The result, equal to the CPU's (empty labels, distances and meshlets when not read back).
     pub clustering: Clustering,
-    /// Upload, kernel and readback time, the adjacency's included.
+    /// Upload, kernel and readback time, the adjacency's and the regions' included.
     pub timing: Timing,
-    /// Host time for the regions (the Morton order and the region BFS on the CPU, over the
-    /// device's dual graph read back; that readback is in `timing`).
-    pub host_regions: f64,
     /// Regions.
     pub regions: usize,
+    /// Hooking rounds for the pieces no region seed reached (0 where every piece has a seed).
+    pub piece_rounds: u32,
     /// Wall time of the whole run in seconds.
     pub seconds: f64,
 }
@@ -99,35 +103,50 @@ fn fits(gpu: &Gpu, what: &'static str, len: usize) -> Result<(), GpuError> {
     Ok(())
 }
 
-/// Runs `kmedoids-regions` on `gpu`; with `read_back` the labels, distances and meshlets come
-/// back to the host, else only the medoids (one word per cluster) do, and the meshlets stay on
-/// the device.
+/// Runs `kmedoids-regions` on `gpu` over a mesh on the host or already on the device; with
+/// `read_back` the labels, distances and meshlets come back to the host, else only the medoids
+/// (one word per cluster) do, and the meshlets stay on the device.
 pub fn cluster_regions(
     gpu: &Gpu,
-    mesh: &Mesh,
+    source: MeshSource<'_>,
     limits: Limits,
     cfg: &Config,
     read_back: bool,
 ) -> Result<(GpuRegions, DeviceMeshlets), GpuError> {
     let start = Instant::now();
-    let t = mesh.triangle_count();
+    let (t, n) = match source {
+        MeshSource::Host(m) => (m.triangle_count(), m.vertex_count()),
+        MeshSource::Device(d) => (d.triangles, d.vertices),
+    };
     fits(gpu, "regions' triangle state", 7 * t)?;
     fits(gpu, "regions' corner state", 9 * t)?;
     fits(gpu, "regions' canonical corners and centres", 4 * t)?;
-    let (adj, adj_timing) = AdjacencyKernels::new(gpu).build(gpu, mesh)?;
-    // Step 1 on the host, over the device's dual graph read back (the same rows as the CPU's).
-    let (dual, dual_read) = timed(|| adj.read_dual(gpu));
-    let dual = dual?;
-    let ((region, k_regions), host_regions) =
-        timed(|| parallel::regions(mesh, &dual, cfg.region_triangles as usize));
-    let rows = members(&region, k_regions);
+    let k_regions = region_count(t, cfg.region_triangles as usize);
     let arena_len = 7 * t + 3 * k_regions * limits.max_triangles as usize;
     fits(gpu, "regions' lists", arena_len)?;
-    if rows.offsets.windows(2).any(|w| w[1] - w[0] >= 1 << 24) {
+    if t.div_ceil(k_regions) >= 1 << 24 {
+        // Regions hold at most ceil(T / k) plus the small pieces they take in; checked exactly
+        // below, once the regions are known.
         return Err(GpuError::Unsupported(
             "a region of 2^24 triangles or more (pockets are packed as 24-bit offsets)",
         ));
     }
+    let (uploaded, upload) = timed(|| -> Result<_, GpuError> {
+        Ok(match source {
+            MeshSource::Host(m) => (
+                Split::upload(gpu, "indices", &m.indices)?,
+                Some(gpu.upload("positions", &m.positions)),
+            ),
+            MeshSource::Device(d) => (d.split_indices(gpu)?, None),
+        })
+    });
+    let (indices, uploaded_positions) = uploaded?;
+    let positions = match (&uploaded_positions, source) {
+        (Some(p), _) => p,
+        (None, MeshSource::Device(d)) => d.positions,
+        (None, MeshSource::Host(_)) => unreachable!("host meshes upload their positions"),
+    };
+    let (adj, adj_timing) = AdjacencyKernels::new(gpu).build_from(gpu, indices, n)?;
     let kernels = Kernels::new::<Buffers>(
         gpu,
         "regions",
@@ -135,35 +154,36 @@ pub fn cluster_regions(
         &["init", "grow", "grow_rows", "relabel", "medoid"],
     );
     let info_len = 3 * k_regions + 2 + t;
-    let (bufs, upload) = timed(|| {
-        let info = gpu.zeros("region info", info_len);
-        gpu.queue
-            .write_buffer(&info, 0, bytemuck::cast_slice(&rows.offsets));
-        let tri = gpu.zeros("region triangle state", 7 * t);
-        gpu.queue
-            .write_buffer(&tri, 0, bytemuck::cast_slice(&region));
-        let canon = gpu.zeros("canonical corners and centres", 4 * t);
-        gpu.queue.write_buffer(
-            &canon,
-            4 * 3 * t as u64,
-            bytemuck::cast_slice(&regions::packed_centres(mesh)),
-        );
+    let (bufs, up) = timed(|| {
         (
-            info,
-            gpu.upload("region members", &rows.items),
-            tri,
-            canon,
+            gpu.zeros("region info", info_len),
+            gpu.zeros("region triangle state", 7 * t),
+            gpu.zeros("canonical corners and centres", 4 * t),
             gpu.zeros("corner state", 9 * t),
             gpu.zeros("region lists", arena_len),
             gpu.zeros("labels", t),
             gpu.zeros("distances", t),
         )
     });
-    let (info, items, tri, canon, cstate, arena, labels, dist) = bufs;
+    let (info, tri, canon, cstate, arena, labels, dist) = bufs;
+    // Step 1 on the device: regions into `tri`'s first section and `info`'s offsets, the
+    // centroid cells after the canonical corners.
+    let coarse = DeviceRegions::new(
+        gpu,
+        DeviceInput {
+            positions,
+            vertices: n,
+            indices: &adj.indices,
+        },
+        &adj,
+        cfg.region_triangles as usize,
+        [&tri, &info],
+        Some((&canon, 3 * t)),
+    )?;
     let mut timing = Timing {
-        upload: adj_timing.upload + upload,
-        readback: adj_timing.readback + dual_read,
-        ..adj_timing
+        upload: upload + adj_timing.upload + up + coarse.timing.upload,
+        kernel: adj_timing.kernel + coarse.timing.kernel,
+        readback: adj_timing.readback + coarse.timing.readback,
     };
     let bind = kernels.bind(
         gpu,
@@ -177,7 +197,7 @@ pub fn cluster_regions(
             dual_a: &adj.dual_items.a,
             dual_b: &adj.dual_items.b,
             info: &info,
-            items: &items,
+            items: coarse.members(),
             tri: &tri,
             canon: &canon,
             cstate: &cstate,
@@ -194,8 +214,10 @@ pub fn cluster_regions(
         k: k as u32,
         pad: 0,
     };
-    // Step 2, and the cluster count of every region back in the same round trip.
+    // The regions' last step, then step 2, and the member offsets and cluster count of every
+    // region back in the same round trip.
     let mut b = Batch::new(gpu);
+    coarse.record(&mut b);
     b.threads(&kernels, "init", &bind, params(0), t);
     if gpu.is_cpu() && k_regions > 1 {
         // Several regions per workgroup: a CPU adapter runs a workgroup's invocations side by
@@ -212,12 +234,18 @@ pub fn cluster_regions(
     } else {
         b.groups(&kernels, "grow", &bind, params(0), k_regions as u32);
     }
-    let (kernel, mut out) = b.run_read(&[(&info, k_regions + 1, k_regions)])?;
+    let (kernel, mut out) = b.run_read(&[(&info, 0, 2 * k_regions + 1)])?;
     timing.kernel += kernel;
-    let counts = out.remove(0);
+    let words = out.remove(0);
+    let (offsets, counts) = words.split_at(k_regions + 1);
+    if offsets.windows(2).any(|w| w[1] - w[0] >= 1 << 24) {
+        return Err(GpuError::Unsupported(
+            "a region of 2^24 triangles or more (pockets are packed as 24-bit offsets)",
+        ));
+    }
     let mut bases = Vec::with_capacity(k_regions + 1);
     let mut k = 0u32;
-    for &c in &counts {
+    for &c in counts {
         bases.push(k);
         k += c;
     }
@@ -271,8 +299,8 @@ pub fn cluster_regions(
         GpuRegions {
             clustering,
             timing,
-            host_regions,
             regions: k_regions,
+            piece_rounds: coarse.piece_rounds,
             seconds: start.elapsed().as_secs_f64(),
         },
         device,

@@ -135,13 +135,14 @@ fn every_wgsl_file_validates_and_emits_spirv() {
         assert_eq!(spv[0], 0x0723_0203, "{file}: SPIR-V magic");
         n += 1;
     }
-    assert_eq!(n, 13, "the kernel modules in wgsl/");
+    assert_eq!(n, 14, "the kernel modules in wgsl/");
 }
 
 #[test]
 fn every_module_matches_its_rust_interface() {
     use super::{
-        adjacency, assemble, bounds, capacity, copy, grow, kmedoids, morton, regions, scan, select,
+        adjacency, assemble, bounds, capacity, coarse, copy, grow, kmedoids, morton, regions, scan,
+        select,
     };
     let bad: Vec<String> = [
         interface::<adjacency::Params, adjacency::Buffers>("adjacency.wgsl"),
@@ -151,6 +152,7 @@ fn every_module_matches_its_rust_interface() {
         interface::<copy::Params, copy::Buffers>("copy.wgsl"),
         interface::<grow::Params, grow::Buffers>("grow.wgsl"),
         interface::<morton::Params, morton::Buffers>("morton.wgsl"),
+        interface::<coarse::Params, coarse::Buffers>("coarse.wgsl"),
         interface::<regions::Params, regions::Buffers>("regions.wgsl"),
         interface::<kmedoids::Params, kmedoids::UpdateBuffers>("update.wgsl"),
         interface::<kmedoids::Params, kmedoids::AssignBuffers>("assign.wgsl"),

@@ -181,11 +181,17 @@ impl MortonFrame {
         }
     }
 
-    /// Morton key (30 bits) of the triangle with corners `a`, `b`, `c`.
-    pub fn key(&self, a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> u32 {
+    /// The grid cell (0..=1023 per axis) of the centroid of the triangle `a`, `b`, `c`.
+    pub fn cell(&self, a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> [u32; 3] {
         let q = (((a + b) + c - self.lo3) * self.factor)
             .clamp(glam::Vec3::ZERO, glam::Vec3::splat(1023.0));
-        morton3(q.x as u32, q.y as u32, q.z as u32) as u32
+        [q.x as u32, q.y as u32, q.z as u32]
+    }
+
+    /// Morton key (30 bits) of the triangle with corners `a`, `b`, `c`.
+    pub fn key(&self, a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> u32 {
+        let [x, y, z] = self.cell(a, b, c);
+        morton3(x, y, z) as u32
     }
 }
 

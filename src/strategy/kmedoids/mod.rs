@@ -24,6 +24,8 @@
 //! - [`capacity`]: the default's driver and its capacity-aware assignment (CPU reference of
 //!   `wgsl/capacity.wgsl`);
 //! - [`flat`]: the flat and paper drivers;
+//! - [`coarse`]: the coarse regions of the two region-parallel methods (CPU reference of
+//!   `wgsl/coarse.wgsl`);
 //! - [`parallel`]: the region-parallel driver over the capacity-aware one;
 //! - [`regions`]: the region-parallel driver with a kernel-shaped grower (CPU reference of
 //!   `wgsl/regions.wgsl`);
@@ -36,6 +38,7 @@
 
 pub mod assign;
 pub mod capacity;
+pub mod coarse;
 pub mod flat;
 mod local_graph;
 pub mod merge;

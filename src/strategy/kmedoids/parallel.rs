@@ -10,10 +10,10 @@
 //! the vertex limit, and splitting those costs more meshlets than the order saves. So the
 //! parallelism is one level up:
 //!
-//! 1. **Regions** ([`regions`]): the flat method's seeding and assignment ([`super::flat`],
-//!    [`mod@super::assign`]) at a coarse scale, [`Config::region_triangles`] per region: seeds spread
-//!    along the Morton order of centroids, one multi-source BFS. Each BFS cell is edge-connected;
-//!    small pieces no seed reaches join the region nearest in Morton order.
+//! 1. **Regions** ([`super::coarse`]): the flat method's seeding and assignment at a coarse scale,
+//!    [`Config::region_triangles`] per region: seeds spread along the Morton order of centroids,
+//!    one multi-source BFS. Each BFS cell is edge-connected; small pieces no seed reaches join the
+//!    region nearest in Morton order.
 //! 2. **Clusters per region**, all regions at once: the capacity-aware method on the region's
 //!    triangles alone (growth, orphans, merges, re-assignment rounds where they pay). Regions
 //!    share no state, so the result does not depend on which thread runs which region.
@@ -38,12 +38,12 @@
 //! replaces step 2 with a grower a kernel runs (`kmedoids-regions`); `docs/gpu-clustering.md`
 //! says which of this method's steps that grower still lacks.
 
-use super::assign::{assign, members, UNREACHED};
+use super::assign::{members, UNREACHED};
 use super::capacity::{self, medoid_of, Grown};
-use super::flat::morton_order;
+use super::coarse::regions;
 use super::merge::renumber;
 use super::{mean, pack, Clustering, Config};
-use crate::adjacency::{dual_graph, pieces, vertex_triangles};
+use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::common::{sorted, union_len, Csr};
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
@@ -126,48 +126,6 @@ pub fn cluster(
         skipped_updates: 0,
         meshlets,
     }
-}
-
-/// Step 1: the region of every triangle and the region count. The Morton order of centroids is
-/// cut into runs of about `size` triangles; the middle triangle of each run seeds one multi-source
-/// BFS. A dual-graph component no seed reaches (a small piece) joins the region of the run its
-/// first triangle in Morton order falls in, so nearby small pieces share a region and the
-/// per-region method can pack them together (a region per piece would leave one part-filled
-/// cluster per piece).
-pub fn regions(mesh: &Mesh, dual: &Csr, size: usize) -> (Vec<u32>, usize) {
-    let t = mesh.triangle_count();
-    if t == 0 {
-        return (Vec::new(), 0);
-    }
-    let k = t.div_ceil(size.max(1)).max(1);
-    if k == 1 {
-        // One region: no BFS (its levels are many tiny parallel steps on a long thin mesh).
-        return (vec![0; t], 1);
-    }
-    let order = morton_order(mesh);
-    let seeds: Vec<u32> = (0..k).map(|j| order[(j * t + t / 2) / k]).collect();
-    let sorted_seeds = sorted(seeds.clone());
-    let (mut labels, _) = assign(dual, &sorted_seeds);
-    // Run j's region is the label its seed took (seeds are distinct triangles).
-    let region_of_run: Vec<u32> = seeds.iter().map(|&s| labels[s as usize]).collect();
-    if labels.contains(&UNREACHED) {
-        // Pieces no seed reached, each to the run of its first triangle in Morton order (the
-        // order visits a piece's first-ranked triangle before the rest of it).
-        let piece = pieces(dual);
-        let mut region_of_piece = vec![UNREACHED; t];
-        for (i, &x) in order.iter().enumerate() {
-            let p = piece[x as usize] as usize;
-            if labels[x as usize] == UNREACHED && region_of_piece[p] == UNREACHED {
-                region_of_piece[p] = region_of_run[i * k / t];
-            }
-        }
-        for (l, &p) in labels.iter_mut().zip(&piece) {
-            if *l == UNREACHED {
-                *l = region_of_piece[p as usize];
-            }
-        }
-    }
-    (labels, k)
 }
 
 /// Step 2 for one region (`tris`, ascending): its triangles as a mesh of their own, clustered by

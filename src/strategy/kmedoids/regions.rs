@@ -6,16 +6,16 @@
 //! This method keeps the regions and replaces the per-region step with a grower made of integer
 //! keys, linear scans and fixed arrays, which a kernel runs line for line:
 //!
-//! 1. **Regions**: [`super::parallel::regions`] (the Morton-seeded multi-source BFS).
+//! 1. **Regions**: [`super::coarse`] (the Morton-seeded multi-source BFS).
 //! 2. **Growth per region**, one invocation each ([`grow_region`]):
 //!    - pieces of the region's dual graph, each in reversed BFS order from its lowest triangle,
 //!      so seeds come deepest first (a piece's far end, where a grower would strand leftovers);
 //!    - a cluster grows from the first free triangle in that order by the frontier triangle of
 //!      least (vertices added, free neighbours, squared distance to the cluster's centre, hops
 //!      from the seed, triangle id): the first key fills the vertex limit, the second closes
-//!      pockets, the third keeps the cluster round. Distances are between triangle centroids
-//!      quantised once on the host to 10 bits per axis ([`packed_centres`]), and the centre is
-//!      their integer mean, so the key is the same integer on every device;
+//!      pockets, the third keeps the cluster round. Distances are between the triangles'
+//!      centroid cells of the Morton order (10 bits per axis, [`packed_centres`]), and the
+//!      centre is their integer mean, so the key is the same integer on every device;
 //!    - a cluster whose piece ran out while it still has room continues at the next seed (small
 //!      pieces packed together instead of one part-filled meshlet each), if that seed's piece is
 //!      a whole piece of the mesh (one the region's border cuts could put the cluster in two
@@ -43,7 +43,8 @@
 
 use super::assign::{members, UNREACHED};
 use super::capacity::{medoid_of, Grown};
-use super::parallel::regions;
+use super::coarse::regions;
+use super::flat::MortonFrame;
 use super::{pack, Clustering, Config};
 use crate::common::Csr;
 use crate::mesh::Mesh;
@@ -169,21 +170,17 @@ fn distance2(a: u32, b: u32) -> u32 {
         .sum()
 }
 
-/// Each triangle's centroid in the mesh's box, 10 bits per axis (the same scale on every axis),
-/// packed `x | y << 10 | z << 20`: the growth's geometric key, computed once on the host.
+/// Each triangle's centroid cell in the Morton frame ([`MortonFrame::cell`]: 10 bits per axis
+/// along the box's longest side), packed `x | y << 10 | z << 20`: the growth's geometric key.
+/// Only `+`, `-` and `x` touch a triangle, so `wgsl/morton.wgsl` computes the same words.
 pub fn packed_centres(mesh: &Mesh) -> Vec<u32> {
     let (lo, hi) = mesh.bounding_box();
-    let extent = (hi - lo).max_element();
-    let scale = if extent > 0.0 { 1023.0 / extent } else { 0.0 };
+    let frame = MortonFrame::new(lo, hi);
     (0..mesh.triangle_count())
         .map(|t| {
-            let [a, b, c] = mesh
-                .triangle(t)
-                .map(|v| glam::Vec3::from(mesh.positions[v as usize]));
-            let q = (((a + b + c) / 3.0 - lo) * scale)
-                .round()
-                .clamp(glam::Vec3::ZERO, glam::Vec3::splat(1023.0));
-            q.x as u32 | (q.y as u32) << 10 | (q.z as u32) << 20
+            let [a, b, c] = mesh.triangle(t).map(|v| mesh.position(v));
+            let [x, y, z] = frame.cell(a, b, c);
+            x | y << 10 | z << 20
         })
         .collect()
 }
