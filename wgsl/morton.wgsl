@@ -37,8 +37,11 @@ struct Params { t: u32, n: u32, shift: u32, blocks: u32, lo_x: u32, lo_y: u32, l
 fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART]; }
 fn pos(v: u32) -> vec3<f32> { return vec3<f32>(positions[3u * v], positions[3u * v + 1u], positions[3u * v + 2u]); }
 
-// Elements per block of the sort: 64 threads, 4 consecutive elements each.
-const BLOCK: u32 = 256u;
+// Elements per block of the sort: 64 threads, PER consecutive elements each (large blocks: on a
+// CPU adapter every workgroup start costs more than its elements).
+const BLOCK: u32 = 4096u;
+// Consecutive elements per thread.
+const PER: u32 = BLOCK / 64u;
 
 // An f32 as a u32 in the same order (negative values flipped, positive ones above them).
 fn ordered(x: f32) -> u32 {
@@ -46,14 +49,37 @@ fn ordered(x: f32) -> u32 {
     return select(u | 0x80000000u, ~u, (u & 0x80000000u) != 0u);
 }
 
+var<workgroup> wbox: array<atomic<u32>, 6>;
+
+// A grid-stride loop: each thread keeps its own box, a workgroup merges them in workgroup memory,
+// and only that reaches the six global words (every vertex's six atomics on the same words were
+// the kernel's cost).
 @compute @workgroup_size(64)
-fn bbox_reduce(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let v = flat(gid);
-    if (v >= p.n) { return; }
-    let q = pos(v);
+fn bbox_reduce(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+    @builtin(num_workgroups) nwg: vec3<u32>,
+) {
+    if (lid < 6u) { atomicStore(&wbox[lid], select(0u, NONE, lid < 3u)); }
+    workgroupBarrier();
+    var lo = vec3<u32>(NONE);
+    var hi = vec3<u32>(0u);
+    for (var v = flat(gid); v < p.n; v += stride(nwg)) {
+        let q = pos(v);
+        for (var a = 0u; a < 3u; a++) {
+            lo[a] = min(lo[a], ordered(q[a]));
+            hi[a] = max(hi[a], ordered(q[a]));
+        }
+    }
     for (var a = 0u; a < 3u; a++) {
-        atomicMin(&bbox[a], ordered(q[a]));
-        atomicMax(&bbox[3u + a], ordered(q[a]));
+        atomicMin(&wbox[a], lo[a]);
+        atomicMax(&wbox[3u + a], hi[a]);
+    }
+    workgroupBarrier();
+    if (lid < 3u) {
+        atomicMin(&bbox[lid], atomicLoad(&wbox[lid]));
+    } else if (lid < 6u) {
+        atomicMax(&bbox[lid], atomicLoad(&wbox[lid]));
     }
 }
 
@@ -106,8 +132,8 @@ fn hist_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_i
     let b = group(wid);
     if (lid < 16u) { atomicStore(&counts[lid], 0u); }
     workgroupBarrier();
-    for (var e = 0u; e < 4u; e++) {
-        let i = b * BLOCK + 4u * lid + e;
+    for (var e = 0u; e < PER; e++) {
+        let i = b * BLOCK + PER * lid + e;
         if (i < p.t) { atomicAdd(&counts[digit(src_key(i))], 1u); }
     }
     workgroupBarrier();
@@ -118,8 +144,8 @@ fn hist_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_i
 fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let b = group(wid);
     for (var d = 0u; d < 16u; d++) { slots[d * 64u + lid] = 0u; }
-    for (var e = 0u; e < 4u; e++) {
-        let i = b * BLOCK + 4u * lid + e;
+    for (var e = 0u; e < PER; e++) {
+        let i = b * BLOCK + PER * lid + e;
         if (i < p.t) { slots[digit(src_key(i)) * 64u + lid] += 1u; }
     }
     workgroupBarrier();
@@ -132,8 +158,8 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
         }
     }
     workgroupBarrier();
-    for (var e = 0u; e < 4u; e++) {
-        let i = b * BLOCK + 4u * lid + e;
+    for (var e = 0u; e < PER; e++) {
+        let i = b * BLOCK + PER * lid + e;
         if (i < p.t) {
             let key = src_key(i);
             let d = digit(key);

@@ -150,16 +150,27 @@ pub fn build_on_device(
         ));
     }
     let t0 = Instant::now();
-    let source = MeshSource::Device(mesh);
-    let (meshlets, timing) = if kind == Kind::KmedoidsRegions {
-        let (r, d) = super::regions::cluster_regions(gpu, source, limits, &opts.kmedoids, false)?;
+    let (meshlets, timing) = run_kmedoids(gpu, kind, MeshSource::Device(mesh), limits, opts)?;
+    with_bounds(gpu, mesh.positions, meshlets, timing, t0)
+}
+
+/// Runs `kmedoids-regions` or `kmedoids-flat` (`kind`) from `source`, its meshlets left on the
+/// device.
+fn run_kmedoids(
+    gpu: &Gpu,
+    kind: Kind,
+    source: MeshSource<'_>,
+    limits: Limits,
+    opts: &Options,
+) -> Result<(DeviceMeshlets, Timing), GpuError> {
+    let cfg = &opts.kmedoids;
+    Ok(if kind == Kind::KmedoidsRegions {
+        let (r, d) = super::regions::cluster_regions(gpu, source, limits, cfg, false)?;
         (d, r.timing)
     } else {
-        let (r, d) =
-            super::kmedoids::cluster_flat_with(gpu, source, limits, &opts.kmedoids, false)?;
+        let (r, d) = super::kmedoids::cluster_flat_with(gpu, source, limits, cfg, false)?;
         (d, r.timing)
-    };
-    with_bounds(gpu, mesh.positions, meshlets, timing, t0)
+    })
 }
 
 /// Runs strategy `kind` (one of [`GPU_STRATEGIES`]) with its meshlets assembled on the device and
@@ -172,28 +183,11 @@ fn run_strategy(
     opts: &Options,
 ) -> Result<(DeviceMeshlets, Timing), GpuError> {
     Ok(match kind {
-        Kind::KmedoidsFlat => {
-            let (r, d) = super::kmedoids::cluster_flat_with(
-                gpu,
-                MeshSource::Host(mesh),
-                limits,
-                &opts.kmedoids,
-                false,
-            )?;
-            (d, r.timing)
+        Kind::KmedoidsFlat | Kind::KmedoidsRegions => {
+            run_kmedoids(gpu, kind, MeshSource::Host(mesh), limits, opts)?
         }
         Kind::BsphereParallel => {
             let (r, d) = super::grow::grow_with(gpu, mesh, limits, grow::DEFAULT_SPACING, false)?;
-            (d, r.timing)
-        }
-        Kind::KmedoidsRegions => {
-            let (r, d) = super::regions::cluster_regions(
-                gpu,
-                MeshSource::Host(mesh),
-                limits,
-                &opts.kmedoids,
-                false,
-            )?;
             (d, r.timing)
         }
         _ => unreachable!("gpu_kind admits only GPU_STRATEGIES"),

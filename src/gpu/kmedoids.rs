@@ -553,6 +553,64 @@ pub enum MeshSource<'a> {
     Device(DeviceMesh<'a>),
 }
 
+/// A [`MeshSource`] on the device ([`MeshSource::place`]).
+pub(crate) struct Placed<'a> {
+    /// The index buffer.
+    pub indices: Split,
+    /// The positions, three f32 per vertex.
+    pub positions: Positions<'a>,
+    /// Seconds spent uploading.
+    pub upload: f64,
+}
+
+/// Positions uploaded by this run, or the caller's.
+pub(crate) enum Positions<'a> {
+    /// Uploaded from a host mesh.
+    Owned(wgpu::Buffer),
+    /// The caller's buffer.
+    Borrowed(&'a wgpu::Buffer),
+}
+
+impl std::ops::Deref for Positions<'_> {
+    type Target = wgpu::Buffer;
+    fn deref(&self) -> &wgpu::Buffer {
+        match self {
+            Positions::Owned(b) => b,
+            Positions::Borrowed(b) => b,
+        }
+    }
+}
+
+impl<'a> MeshSource<'a> {
+    /// Triangles and vertices.
+    pub fn counts(&self) -> (usize, usize) {
+        match self {
+            MeshSource::Host(m) => (m.triangle_count(), m.vertex_count()),
+            MeshSource::Device(d) => (d.triangles, d.vertices),
+        }
+    }
+
+    /// The mesh on the device: a host mesh's index buffer and positions uploaded, or the
+    /// caller's buffers.
+    pub(crate) fn place(self, gpu: &Gpu) -> Result<Placed<'a>, GpuError> {
+        let (placed, upload) = timed(|| -> Result<_, GpuError> {
+            Ok(match self {
+                MeshSource::Host(m) => (
+                    Split::upload(gpu, "indices", &m.indices)?,
+                    Positions::Owned(gpu.upload("positions", &m.positions)),
+                ),
+                MeshSource::Device(d) => (d.split_indices(gpu)?, Positions::Borrowed(d.positions)),
+            })
+        });
+        let (indices, positions) = placed?;
+        Ok(Placed {
+            indices,
+            positions,
+            upload,
+        })
+    }
+}
+
 /// [`cluster_flat`] that also returns the meshlets on the device (`wgsl/assemble.wgsl`); with
 /// `read_back` false the labels, distances and meshlets are not read (left empty).
 pub fn cluster_flat_with(
@@ -563,33 +621,21 @@ pub fn cluster_flat_with(
     read_back: bool,
 ) -> Result<(GpuClustering, DeviceMeshlets), GpuError> {
     let start = Instant::now();
-    let (t, n) = match source {
-        MeshSource::Host(m) => (m.triangle_count(), m.vertex_count()),
-        MeshSource::Device(d) => (d.triangles, d.vertices),
-    };
+    let (t, n) = source.counts();
     check_triangles(t)?;
-    let (uploaded, upload) = timed(|| -> Result<_, GpuError> {
-        Ok(match source {
-            MeshSource::Host(m) => (
-                Split::upload(gpu, "indices", &m.indices)?,
-                Some(gpu.upload("positions", &m.positions)),
-            ),
-            MeshSource::Device(d) => (d.split_indices(gpu)?, None),
-        })
-    });
-    let (indices, uploaded_positions) = uploaded?;
-    let positions = match (&uploaded_positions, source) {
-        (Some(p), _) => p,
-        (None, MeshSource::Device(d)) => d.positions,
-        (None, MeshSource::Host(_)) => unreachable!("host meshes upload their positions"),
-    };
+    let Placed {
+        indices,
+        positions,
+        upload,
+        ..
+    } = source.place(gpu)?;
     let (adj, mut adj_timing) = AdjacencyKernels::new(gpu).build_from(gpu, indices, n)?;
     adj_timing.upload += upload;
     // The seeds on the device, identical to `flat::initial_medoids`.
     let (mut medoids, seed_timing) = morton::initial_medoids(
         gpu,
         DeviceInput {
-            positions,
+            positions: &positions,
             vertices: n,
             indices: &adj.indices,
         },

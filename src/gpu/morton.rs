@@ -73,7 +73,7 @@ binding_set! {
 }
 
 /// Elements per sort block (`BLOCK` in the WGSL).
-const BLOCK: usize = 256;
+pub(crate) const BLOCK: usize = 4096;
 /// Radix passes of 4 bits over the 30-bit keys.
 const PASSES: u32 = 8;
 
@@ -167,7 +167,8 @@ pub fn order(
         base: base as u32,
     };
     let mut b = Batch::new(gpu);
-    b.threads(&kernels, "bbox_reduce", &bind, params, mesh.vertices);
+    let groups = gpu.stride_groups(mesh.vertices);
+    b.groups(&kernels, "bbox_reduce", &bind, params, groups);
     let (kernel, r) = b.run_read(&[(&bbox, 0, 6)])?;
     timing.kernel += kernel;
     let w = &r[0];

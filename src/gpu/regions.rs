@@ -14,10 +14,10 @@
 use super::adjacency::{AdjacencyKernels, Timing};
 use super::assemble::{Assembly, DeviceMeshlets, Groups};
 use super::coarse::DeviceRegions;
-use super::kmedoids::MeshSource;
+use super::kmedoids::{MeshSource, Placed};
 use super::morton::DeviceInput;
 use super::{
-    binding_set, param_block, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan, Split,
+    binding_set, param_block, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan,
 };
 use crate::meshlet::Limits;
 use crate::strategy::kmedoids::coarse::region_count;
@@ -114,10 +114,7 @@ pub fn cluster_regions(
     read_back: bool,
 ) -> Result<(GpuRegions, DeviceMeshlets), GpuError> {
     let start = Instant::now();
-    let (t, n) = match source {
-        MeshSource::Host(m) => (m.triangle_count(), m.vertex_count()),
-        MeshSource::Device(d) => (d.triangles, d.vertices),
-    };
+    let (t, n) = source.counts();
     fits(gpu, "regions' triangle state", 7 * t)?;
     fits(gpu, "regions' corner state", 9 * t)?;
     fits(gpu, "regions' canonical corners and centres", 4 * t)?;
@@ -131,21 +128,12 @@ pub fn cluster_regions(
             "a region of 2^24 triangles or more (pockets are packed as 24-bit offsets)",
         ));
     }
-    let (uploaded, upload) = timed(|| -> Result<_, GpuError> {
-        Ok(match source {
-            MeshSource::Host(m) => (
-                Split::upload(gpu, "indices", &m.indices)?,
-                Some(gpu.upload("positions", &m.positions)),
-            ),
-            MeshSource::Device(d) => (d.split_indices(gpu)?, None),
-        })
-    });
-    let (indices, uploaded_positions) = uploaded?;
-    let positions = match (&uploaded_positions, source) {
-        (Some(p), _) => p,
-        (None, MeshSource::Device(d)) => d.positions,
-        (None, MeshSource::Host(_)) => unreachable!("host meshes upload their positions"),
-    };
+    let Placed {
+        indices,
+        positions,
+        upload,
+        ..
+    } = source.place(gpu)?;
     let (adj, adj_timing) = AdjacencyKernels::new(gpu).build_from(gpu, indices, n)?;
     let kernels = Kernels::new::<Buffers>(
         gpu,
@@ -171,7 +159,7 @@ pub fn cluster_regions(
     let coarse = DeviceRegions::new(
         gpu,
         DeviceInput {
-            positions,
+            positions: &positions,
             vertices: n,
             indices: &adj.indices,
         },

@@ -191,6 +191,14 @@ fn capacity_layout_constants_are_the_drivers() {
 }
 
 #[test]
+fn the_sort_block_is_the_drivers() {
+    assert_eq!(
+        constant("morton.wgsl", "BLOCK") as usize,
+        super::morton::BLOCK
+    );
+}
+
+#[test]
 fn the_interface_check_catches_a_mismatch() {
     // A binding set with kmedoids' names against assign.wgsl must fail, as must a wrong Params.
     use super::kmedoids;
