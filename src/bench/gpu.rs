@@ -472,6 +472,16 @@ pub fn run(cfg: &Config) -> Result<()> {
             gpu: reg_gpu,
         };
         let mut resident = Vec::new();
+        if reg.gpu.is_some() {
+            pb.set_message(format!("{name} ({t} triangles): builds left on the device"));
+            resident.push(resident_builds(
+                &g,
+                "kmedoids-regions",
+                m,
+                cfg.limits,
+                &reg_r.meshlets,
+            )?);
+        }
         if t <= cfg.kmedoids_gpu_max.min(cfg.flat_gpu_max) {
             pb.set_message(format!("{name} ({t} triangles): builds left on the device"));
             resident.push(resident_builds(

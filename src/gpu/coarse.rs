@@ -98,8 +98,18 @@ impl DeviceRegions {
         let k = region_count(t, size);
         // Step 1: the Morton order (left on the device) and the seeds (k words back).
         let seed_ranks: Vec<u32> = (0..k).map(|j| seed_rank(j, t, k) as u32).collect();
-        let ordered = morton::order(gpu, mesh, &seed_ranks, centres)?;
-        let mut timing = ordered.timing;
+        // One region needs no order: every triangle is in it (only the cells, where asked for).
+        let (ordered, mut timing) = if k > 1 {
+            let o = morton::order(gpu, mesh, &seed_ranks, centres)?;
+            let timing = o.timing;
+            (Some(o), timing)
+        } else {
+            let timing = match centres {
+                Some(c) => morton::cells(gpu, mesh, c)?,
+                None => Timing::default(),
+            };
+            (None, timing)
+        };
         // First rank of run j: the least i with i * k >= j * t.
         let runs: Vec<u32> = (0..k)
             .map(|j| (j as u64 * t as u64).div_ceil(k as u64) as u32)
@@ -127,7 +137,8 @@ impl DeviceRegions {
         let mut unreached = 0;
         if k > 1 {
             let assign = Bfs::kernels(gpu);
-            let (medoids, up) = timed(|| gpu.upload("seeds", &sorted(ordered.picked.clone())));
+            let picked = ordered.as_ref().map_or(Vec::new(), |o| o.picked.clone());
+            let (medoids, up) = timed(|| gpu.upload("seeds", &sorted(picked)));
             timing.upload += up;
             let bfs = Bfs::new(
                 gpu,
@@ -143,13 +154,14 @@ impl DeviceRegions {
         let sort = PairSort::new(gpu, &keys, &ids, t, bits);
         let unused = gpu.zeros("unused", 1);
         let sorted_keys = sort.sorted().map_or(&unused, |(k, _)| k);
+        let order = ordered.as_ref().map_or(&unused, |o| &o.order);
         let bind = kernels.bind(
             gpu,
             &Buffers {
                 dual_off: &adj.dual_offsets,
                 dual_a: &adj.dual_items.a,
                 dual_b: &adj.dual_items.b,
-                order: &ordered.order,
+                order,
                 runs: &runs,
                 bfs: &bfs_labels,
                 least: &least,

@@ -115,6 +115,28 @@ pub fn order(
     ranks: &[u32],
     centres: Option<(&wgpu::Buffer, usize)>,
 ) -> Result<Ordered, GpuError> {
+    run(gpu, mesh, ranks, centres, true)
+}
+
+/// Only every triangle's packed centroid cell, written to `centres` from the given word on: the
+/// box and the cells without the sort, for a caller that needs no order (one region).
+pub fn cells(
+    gpu: &Gpu,
+    mesh: DeviceInput<'_>,
+    centres: (&wgpu::Buffer, usize),
+) -> Result<Timing, GpuError> {
+    Ok(run(gpu, mesh, &[0], Some(centres), false)?.timing)
+}
+
+/// [`order`], or with `sort` false only the box and the centroid cells (`order` and `picked`
+/// then mean nothing).
+fn run(
+    gpu: &Gpu,
+    mesh: DeviceInput<'_>,
+    ranks: &[u32],
+    centres: Option<(&wgpu::Buffer, usize)>,
+    sort: bool,
+) -> Result<Ordered, GpuError> {
     let t = mesh.indices.len / 3;
     let kernels = kernels(gpu);
     let scan = Scan::new(gpu);
@@ -123,8 +145,8 @@ pub fn order(
     let (bufs, up) = timed(|| {
         (
             gpu.upload("box", &[u32::MAX, u32::MAX, u32::MAX, 0, 0, 0]),
-            [0, 1, 2, 3].map(|_| gpu.zeros("sort", t)),
-            gpu.zeros("digit counts", 16 * blocks),
+            [0, 1, 2, 3].map(|_| gpu.zeros("sort", if sort { t } else { 1 })),
+            gpu.zeros("digit counts", if sort { 16 * blocks } else { 1 }),
             gpu.upload("ranks", ranks),
             gpu.zeros("picked", ranks.len()),
             centres.is_none().then(|| gpu.zeros("unused", 1)),
@@ -180,10 +202,18 @@ pub fn order(
     params.factor = frame.factor.to_bits();
     let hist_scan = scan.bind(gpu, &hist, 16 * blocks);
     let mut b = Batch::new(gpu);
-    b.threads(&kernels, "keys", &bind, params, t);
     if centres.is_some() {
         b.threads(&kernels, "centre_cells", &bind, params, t);
     }
+    if !sort {
+        timing.kernel += b.run()?;
+        return Ok(Ordered {
+            order: id_a,
+            picked: Vec::new(),
+            timing,
+        });
+    }
+    b.threads(&kernels, "keys", &bind, params, t);
     for pass in 0..PASSES {
         let p = Params {
             shift: 4 * pass,
