@@ -50,10 +50,20 @@ pub struct EdgeTable {
 /// `(other vertex, side)` pairs sorted ascending (side = 3 * triangle + corner; collapsed sides
 /// skipped). Runs of equal other vertex are the sides on one edge. Shared by the edge table and the
 /// dual graph so both see edges in the same deterministic order.
-pub(crate) fn for_each_vertex_sides(mesh: &Mesh, vt: &Csr, mut f: impl FnMut(u32, &[(u32, u32)])) {
+pub(crate) fn for_each_vertex_sides(mesh: &Mesh, vt: &Csr, f: impl FnMut(u32, &[(u32, u32)])) {
+    for_each_vertex_sides_in(mesh, vt, 0..mesh.vertex_count() as u32, f);
+}
+
+/// [`for_each_vertex_sides`] over the vertices in `range` only.
+pub(crate) fn for_each_vertex_sides_in(
+    mesh: &Mesh,
+    vt: &Csr,
+    range: std::ops::Range<u32>,
+    mut f: impl FnMut(u32, &[(u32, u32)]),
+) {
     let idx = &mesh.indices;
     let mut local: Vec<(u32, u32)> = Vec::new();
-    for a in 0..mesh.vertex_count() as u32 {
+    for a in range {
         local.clear();
         for &t in vt.row(a as usize) {
             for s in 0..3 {

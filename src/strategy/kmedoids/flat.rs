@@ -30,6 +30,7 @@ use super::{mean, pack, Clustering, Config, Mode};
 use crate::common::{morton3, sorted, Csr};
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
+use rayon::prelude::*;
 use std::time::Instant;
 
 /// Triangles per initial cluster.
@@ -149,14 +150,16 @@ pub fn initial_medoids(mesh: &Mesh, per_cluster: usize) -> Vec<u32> {
 pub fn morton_order(mesh: &Mesh) -> Vec<u32> {
     let (lo, hi) = mesh.bounding_box();
     let frame = MortonFrame::new(lo, hi);
+    // (key, id) pairs are distinct, so the parallel unstable sort has one result.
     let mut keyed: Vec<(u32, u32)> = (0..mesh.triangle_count())
+        .into_par_iter()
         .map(|i| {
             let [a, b, c] = mesh.triangle(i).map(|v| mesh.position(v));
             (frame.key(a, b, c), i as u32)
         })
         .collect();
-    keyed.sort_unstable();
-    keyed.into_iter().map(|(_, i)| i).collect()
+    keyed.par_sort_unstable();
+    keyed.into_par_iter().map(|(_, i)| i).collect()
 }
 
 /// The frame of the Morton keys, from the mesh's bounding box: a triangle's corner sum minus
