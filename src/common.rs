@@ -68,6 +68,19 @@ pub fn sorted(mut v: Vec<u32>) -> Vec<u32> {
     v
 }
 
+/// Makes `v[start..]` a set as [`sorted`] does, in place: a CSR row appended to its items.
+pub fn sort_dedup_tail(v: &mut Vec<u32>, start: usize) {
+    v[start..].sort_unstable();
+    let mut w = start;
+    for r in start..v.len() {
+        if r == start || v[r] != v[w - 1] {
+            v[w] = v[r];
+            w += 1;
+        }
+    }
+    v.truncate(w);
+}
+
 /// Size of the union of two sorted sets (as [`sorted`] makes them).
 pub fn union_len(a: &[u32], b: &[u32]) -> usize {
     let (mut i, mut j, mut n) = (0, 0, 0);

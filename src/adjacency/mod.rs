@@ -6,7 +6,7 @@
 //! whatever the thread count. The GPU adjacency kernels mirror these arrays exactly.
 
 pub use crate::common::Csr;
-use crate::common::NONE;
+use crate::common::{sort_dedup_tail, NONE};
 use crate::mesh::edges::for_each_vertex_sides_in;
 pub use crate::mesh::edges::{vertex_triangles, EdgeTable, NO_EDGE};
 use crate::mesh::Mesh;
@@ -62,16 +62,8 @@ pub fn dual_graph(mesh: &Mesh, vt: &Csr) -> Csr {
                         .filter(|&n| n != NONE),
                 );
                 items.extend_from_slice(extra.row(t));
-                items[start..].sort_unstable();
-                let mut w = start;
-                for r in start..items.len() {
-                    if r == start || items[r] != items[w - 1] {
-                        items[w] = items[r];
-                        w += 1;
-                    }
-                }
-                items.truncate(w);
-                lens.push((w - start) as u32);
+                sort_dedup_tail(&mut items, start);
+                lens.push((items.len() - start) as u32);
             }
             (lens, items)
         })
@@ -241,25 +233,11 @@ mod tests {
         assert!(d.row(3).is_empty());
         let vt = vertex_triangles(&m);
         assert_eq!(vt.row(0), &[0, 1, 2]);
-        // Same as pairing up the triangles of every edge in the edge table.
-        let et = EdgeTable::new(&m);
-        let mut pairs = Vec::new();
-        for e in 0..et.edges.len() {
-            for &a in et.faces.row(e) {
-                for &b in et.faces.row(e) {
-                    if a != b {
-                        pairs.push((a, b));
-                    }
-                }
-            }
-        }
-        pairs.sort_unstable();
-        pairs.dedup();
-        assert_eq!(d, Csr::from_pairs(m.triangle_count(), pairs.into_iter()));
+        assert_eq!(d, dual_by_edges(&m));
         assert_eq!(vt.row(5), &[3]);
     }
 
-    /// Edge-table pairing: the dual graph by another route.
+    /// The triangles of every edge in the edge table paired up: the dual graph by another route.
     fn dual_by_edges(m: &Mesh) -> Csr {
         let et = EdgeTable::new(m);
         let mut pairs = Vec::new();

@@ -50,15 +50,7 @@ fn graph(vertices: usize, clusters: &[Cluster]) -> (Vec<u32>, Vec<u32>) {
             let (a, b) = (count[v as usize] as usize, count[v as usize + 1] as usize);
             adj.extend(items[a..b].iter().copied().filter(|&o| o as usize != m));
         }
-        adj[start..].sort_unstable();
-        let mut w = start;
-        for r in start..adj.len() {
-            if r == start || adj[r] != adj[w - 1] {
-                adj[w] = adj[r];
-                w += 1;
-            }
-        }
-        adj.truncate(w);
+        crate::common::sort_dedup_tail(&mut adj, start);
         offsets.push(adj.len() as u32);
     }
     (offsets, adj)
