@@ -49,19 +49,19 @@ fn loader_and_topology_match_sources_md() {
     }
 }
 
-/// The largest shared meshes, each group validated by its own test so that the test threads share
-/// the work (one test over all ten meshes was the longest of the suite); the third test takes every
-/// mesh not named here, so none is left out.
+// The largest shared meshes, each group validated by its own test so that the test threads share
+// the work (one test over all ten meshes was the longest of the suite); the third test takes every
+// mesh not named here, so none is left out.
 const DRAGON: &[&str] = &["stanford_dragon_vrip"];
 const MOTORBIKE_AND_CORTEX: &[&str] = &["openfoam_motorbike", "pycortex_S1_pia_lh"];
 
 #[test]
-fn every_strategy_validates_on_the_dragon_at_every_preset() {
+fn every_strategy_validates_on_the_dragon() {
     every_strategy_validates(|s| DRAGON.contains(&s), 1);
 }
 
 #[test]
-fn every_strategy_validates_on_the_motorbike_and_the_cortex_at_every_preset() {
+fn every_strategy_validates_on_the_motorbike_and_the_cortex() {
     every_strategy_validates(|s| MOTORBIKE_AND_CORTEX.contains(&s), 2);
 }
 

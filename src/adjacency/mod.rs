@@ -257,8 +257,8 @@ mod tests {
 
     #[test]
     fn the_parallel_blocks_give_one_dual_graph_on_any_thread_count() {
-        // Several vertex and triangle blocks, with fins on a third of the edges of one row (a
-        // non-manifold edge in every block boundary's neighbourhood) and a degenerate triangle.
+        // Several vertex and triangle blocks, a fin on one edge of every third triangle (non-manifold
+        // edges in every block, block boundaries included) and a degenerate triangle.
         let mut m = crate::mesh::generate::terrain(160, 3);
         let n = m.vertex_count() as u32;
         let extra: Vec<u32> = (0..m.triangle_count() as u32)

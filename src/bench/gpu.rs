@@ -472,8 +472,8 @@ pub fn run(cfg: &Config) -> Result<()> {
             gpu: reg_gpu,
         };
         let mut resident = Vec::new();
+        pb.set_message(format!("{name} ({t} triangles): builds left on the device"));
         if reg.gpu.is_some() {
-            pb.set_message(format!("{name} ({t} triangles): builds left on the device"));
             resident.push(resident_builds(
                 &g,
                 "kmedoids-regions",
@@ -483,7 +483,6 @@ pub fn run(cfg: &Config) -> Result<()> {
             )?);
         }
         if t <= cfg.kmedoids_gpu_max.min(cfg.flat_gpu_max) {
-            pb.set_message(format!("{name} ({t} triangles): builds left on the device"));
             resident.push(resident_builds(
                 &g,
                 "kmedoids-flat",

@@ -99,7 +99,7 @@ impl DeviceRegions {
         // Step 1: the Morton order (left on the device) and the seeds (k words back).
         let seed_ranks: Vec<u32> = (0..k).map(|j| seed_rank(j, t, k) as u32).collect();
         // One region needs no order: every triangle is in it (only the cells, where asked for).
-        let (ordered, mut timing) = if k > 1 {
+        let (mut ordered, mut timing) = if k > 1 {
             let o = morton::order(gpu, mesh, &seed_ranks, centres)?;
             let timing = o.timing;
             (Some(o), timing)
@@ -137,8 +137,8 @@ impl DeviceRegions {
         let mut unreached = 0;
         if k > 1 {
             let assign = Bfs::kernels(gpu);
-            let picked = ordered.as_ref().map_or(Vec::new(), |o| o.picked.clone());
-            let (medoids, up) = timed(|| gpu.upload("seeds", &sorted(picked)));
+            let picked = ordered.as_mut().map(|o| std::mem::take(&mut o.picked));
+            let (medoids, up) = timed(|| gpu.upload("seeds", &sorted(picked.unwrap_or_default())));
             timing.upload += up;
             let bfs = Bfs::new(
                 gpu,

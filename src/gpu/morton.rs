@@ -200,7 +200,6 @@ fn run(
     params.lo_y = frame.lo3.y.to_bits();
     params.lo_z = frame.lo3.z.to_bits();
     params.factor = frame.factor.to_bits();
-    let hist_scan = scan.bind(gpu, &hist, 16 * blocks);
     let mut b = Batch::new(gpu);
     if centres.is_some() {
         b.threads(&kernels, "centre_cells", &bind, params, t);
@@ -213,6 +212,7 @@ fn run(
             timing,
         });
     }
+    let hist_scan = scan.bind(gpu, &hist, 16 * blocks);
     b.threads(&kernels, "keys", &bind, params, t);
     for pass in 0..PASSES {
         let p = Params {
