@@ -3,6 +3,11 @@ CARGO ?= cargo
 
 .PHONY: setup demo test lint bench build bench-robustness
 
+# A CI build starts clean: incremental caches there only cost time to write.
+ifdef CI
+export CARGO_INCREMENTAL := 0
+endif
+
 # Idempotent: installs only what is missing (Debian 12, as root); silent when all is present.
 # Set SKIP_SETUP=1 on systems you provision by hand (see README, "Other systems").
 setup:
