@@ -399,6 +399,43 @@ fn parity_and_render_print_json() {
             "{c}"
         );
     }
+    // The family names of the JSON, in order; `--skip` leaves exactly the named ones out.
+    let names = |v: &serde_json::Value| -> Vec<String> {
+        v["checks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c["family"].as_str().unwrap().to_string())
+            .collect()
+    };
+    assert_eq!(
+        names(&v),
+        [
+            "adjacency",
+            "flat",
+            "capacity",
+            "regions",
+            "assignment",
+            "bounds",
+            "grower",
+            "lod"
+        ]
+    );
+    let skipped: serde_json::Value =
+        serde_json::from_str(&ok(&["parity", "-q", m, "--json", "--skip", "flat,grower"])).unwrap();
+    assert_eq!(
+        names(&skipped),
+        [
+            "adjacency",
+            "capacity",
+            "regions",
+            "assignment",
+            "bounds",
+            "lod"
+        ]
+    );
+    assert_eq!(skipped["skipped"], serde_json::json!(["flat", "grower"]));
+    assert_eq!(skipped["identical"], true);
     let png = dir.join("f.png");
     let v: serde_json::Value = serde_json::from_str(&ok(&[
         "render",

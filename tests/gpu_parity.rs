@@ -5,6 +5,7 @@
 mod common;
 
 use meshletlab::bench::stability;
+use meshletlab::gpu::parity::Family;
 use meshletlab::gpu::{bounds, parity, Gpu};
 use meshletlab::mesh::{generate, Mesh};
 use meshletlab::meshlet::bounds::{check_cones, compute_bounds};
@@ -73,13 +74,41 @@ fn assert_parity(gpu: &Gpu, name: &str, mesh: &Mesh, limits: Limits) {
     }
 }
 
+/// Above this many triangles (the dragon, the motorbike, the cortex) the flat k-medoids and the
+/// grower are left out: they took about two thirds of this test's time there, and both are
+/// compared on the seven smaller shared meshes, the stress meshes and the generated ones.
+const LARGE: usize = 300_000;
+const SLOW_ON_LARGE: &[Family] = &[Family::Flat, Family::Grower];
+
 #[test]
 fn every_shared_mesh_gives_identical_results() {
     let gpu = gpu();
+    let (mut large, mut families) = (0, 0);
     for f in common::mesh_files() {
         let m = meshletlab::mesh::load(&f).unwrap();
-        assert_parity(&gpu, &f.display().to_string(), &m, Limits::DEFAULT);
+        let skip = if m.triangle_count() > LARGE {
+            large += 1;
+            SLOW_ON_LARGE
+        } else {
+            &[]
+        };
+        let checks = parity::run_except(&gpu, &m, Limits::DEFAULT, skip)
+            .unwrap()
+            .checks;
+        for c in &checks {
+            assert!(
+                c.mismatch.is_none(),
+                "{}: {}: {:?}",
+                f.display(),
+                c.name,
+                c.mismatch
+            );
+        }
+        families += checks.len();
     }
+    // Ten meshes, three of them large: a skipped family must be a choice, not an accident.
+    assert_eq!(large, 3, "shared meshes above {LARGE} triangles");
+    assert_eq!(families, 10 * Family::ALL.len() - 3 * SLOW_ON_LARGE.len());
 }
 
 #[test]

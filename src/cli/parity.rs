@@ -1,7 +1,7 @@
 //! `meshletlab parity`: every GPU kernel beside its CPU reference on one mesh.
 
 use super::{load, spinner};
-use crate::gpu::parity::Check;
+use crate::gpu::parity::{Check, Family};
 use crate::meshlet::Limits;
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -15,6 +15,10 @@ pub struct ParityArgs {
     /// Meshlet limits for k-medoids.
     #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
     limits: Limits,
+    /// Kernel families to leave out (comma-separated), e.g. `--skip flat,grower` on a large mesh
+    /// where those two take most of the time.
+    #[arg(long, value_delimiter = ',', value_enum)]
+    skip: Vec<Family>,
     /// Print JSON (mesh, device, one object per kernel with times and the verdict) instead of text.
     #[arg(long)]
     json: bool,
@@ -64,7 +68,7 @@ pub(super) fn run(a: ParityArgs, quiet: bool) -> Result<()> {
         );
     }
     let pb = spinner(quiet, "running every kernel on the GPU and the CPU".into());
-    let checks = crate::gpu::parity::run(&gpu, &m, a.limits)
+    let checks = crate::gpu::parity::run_except(&gpu, &m, a.limits, &a.skip)
         .with_context(|| format!("{}: GPU run failed", a.mesh.display()))?
         .checks;
     pb.finish_and_clear();
@@ -74,6 +78,7 @@ pub(super) fn run(a: ParityArgs, quiet: bool) -> Result<()> {
             "triangles": m.triangle_count(),
             "limits": a.limits.to_string(),
             "device": gpu.describe(),
+            "skipped": a.skip,
             "identical": checks.iter().all(|c| c.mismatch.is_none()),
             "checks": checks,
         });

@@ -15,6 +15,8 @@ use crate::strategy::kmedoids::{self, Config, Mode};
 /// One comparison.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Check {
+    /// The kernel family.
+    pub family: Family,
     /// What was compared.
     pub name: &'static str,
     /// `None` when identical (or within tolerance), else what differs.
@@ -44,12 +46,14 @@ fn first_difference<T: PartialEq + std::fmt::Debug>(
 }
 
 fn check(
+    family: Family,
     name: &'static str,
     cpu_seconds: f64,
     gpu_seconds: f64,
     diffs: Vec<Option<String>>,
 ) -> Check {
     Check {
+        family,
         name,
         mismatch: diffs.into_iter().flatten().next(),
         cpu_seconds,
@@ -75,11 +79,49 @@ fn meshlet_differences(
     ]
 }
 
+/// The kernel families one parity run compares, in the order it runs them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[cfg_attr(feature = "tool", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum Family {
+    /// Vertex -> triangles, the dual graph and the side flags.
+    Adjacency,
+    /// The flat k-medoids (`kmedoids-flat`).
+    Flat,
+    /// The capacity-aware k-medoids (host growth, GPU adjacency and medoid updates).
+    Capacity,
+    /// `kmedoids-regions`, at the default region size and at 1024-triangle regions.
+    Regions,
+    /// The capacity-aware assignment alone, from the capacity-aware run's medoids.
+    Assignment,
+    /// Bounding spheres of k-medoids meshlets.
+    Bounds,
+    /// The parallel grower (`bsphere-parallel`).
+    Grower,
+    /// LOD selection over a meshoptimizer-built DAG.
+    Lod,
+}
+
+impl Family {
+    /// Every family, in run order.
+    pub const ALL: [Family; 8] = [
+        Family::Adjacency,
+        Family::Flat,
+        Family::Capacity,
+        Family::Regions,
+        Family::Assignment,
+        Family::Bounds,
+        Family::Grower,
+        Family::Lod,
+    ];
+}
+
 /// Everything one parity run compared, kept for callers that check more (the stability suite).
 pub struct Parity {
-    /// One entry per kernel family.
+    /// One entry per kernel family run.
     pub checks: Vec<Check>,
-    /// The CPU k-medoids meshlets (equal to the GPU's when the k-medoids check passed).
+    /// The CPU k-medoids meshlets whose spheres were compared: the flat method's, or when it was
+    /// skipped `kmedoids-regions`' (empty when the bounds were skipped).
     pub meshlets: Meshlets,
     /// Their spheres from the GPU kernel.
     pub gpu_spheres: Vec<SphereF32>,
@@ -89,8 +131,21 @@ pub struct Parity {
 
 /// Runs every kernel family on `mesh` on both sides and compares.
 pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
+    run_except(gpu, mesh, limits, &[])
+}
+
+/// [`run`] without the families in `skip` (a check a family needs from another, such as the
+/// medoids the assignment starts from, is then computed on the CPU alone).
+pub fn run_except(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    limits: Limits,
+    skip: &[Family],
+) -> Result<Parity, GpuError> {
+    let runs = |f: Family| !skip.contains(&f);
     let mut out = Vec::new();
-    // Adjacency.
+    let cfg = Config::default();
+    // Adjacency (its CPU dual graph feeds the assignment and the grower).
     let ((vt, dual, flags), cpu_s) = timed(|| {
         let vt = vertex_triangles(mesh);
         let dual = dual_graph(mesh, &vt);
@@ -98,33 +153,106 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
         let f = side_flags(mesh, &et);
         (vt, dual, f)
     });
-    let (gpu_adj, gpu_s) = timed(|| super::adjacency::adjacency(gpu, mesh));
-    let (host, _) = gpu_adj?;
-    out.push(check(
-        "adjacency: vertex -> triangles, dual graph, side flags",
-        cpu_s,
-        gpu_s,
-        vec![
-            first_difference(
-                "vertex-triangle offsets",
-                &host.vertex_triangles.offsets,
-                &vt.offsets,
-            ),
-            first_difference(
-                "vertex-triangle items",
-                &host.vertex_triangles.items,
-                &vt.items,
-            ),
-            first_difference("dual offsets", &host.dual.offsets, &dual.offsets),
-            first_difference("dual items", &host.dual.items, &dual.items),
-            first_difference("side flags", &host.side_flags, &flags),
-        ],
-    ));
-    // The flat k-medoids.
-    let cfg = Config::default();
-    let (km, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, Mode::Flat, &cfg));
-    let cpu = &km;
-    let (g, gpu_s) = timed(|| super::kmedoids::cluster_flat(gpu, mesh, limits, &cfg));
+    if runs(Family::Adjacency) {
+        let (gpu_adj, gpu_s) = timed(|| super::adjacency::adjacency(gpu, mesh));
+        let (host, _) = gpu_adj?;
+        out.push(check(
+            Family::Adjacency,
+            "adjacency: vertex -> triangles, dual graph, side flags",
+            cpu_s,
+            gpu_s,
+            vec![
+                first_difference(
+                    "vertex-triangle offsets",
+                    &host.vertex_triangles.offsets,
+                    &vt.offsets,
+                ),
+                first_difference(
+                    "vertex-triangle items",
+                    &host.vertex_triangles.items,
+                    &vt.items,
+                ),
+                first_difference("dual offsets", &host.dual.offsets, &dual.offsets),
+                first_difference("dual items", &host.dual.items, &dual.items),
+                first_difference("side flags", &host.side_flags, &flags),
+            ],
+        ));
+    }
+    let flat = if runs(Family::Flat) {
+        let (cpu, check) = check_flat(gpu, mesh, limits, &cfg)?;
+        out.push(check);
+        Some(cpu)
+    } else {
+        None
+    };
+    let capacity_medoids = if runs(Family::Capacity) {
+        let (medoids, check) = check_capacity(gpu, mesh, limits, &cfg)?;
+        out.push(check);
+        Some(medoids)
+    } else {
+        None
+    };
+    let regions = if runs(Family::Regions) {
+        let (cpu, check) = check_regions(gpu, mesh, limits, &cfg)?;
+        out.push(check);
+        Some(cpu)
+    } else {
+        None
+    };
+    if runs(Family::Assignment) {
+        // The capacity-aware assignment alone, from the final medoids: a run runs it only in the
+        // rounds it tries (none on most surfaces) and keeps its result only when a round is
+        // accepted, so the whole-run check above can miss a difference here.
+        let medoids = capacity_medoids
+            .unwrap_or_else(|| kmedoids::cluster(mesh, limits, Mode::Capacity, &cfg).medoids);
+        let (a_cpu, cpu_s) = timed(|| {
+            let mut l = vec![crate::common::NONE; mesh.triangle_count()];
+            kmedoids::capacity::assign_capacity(mesh, &dual, limits, &medoids, &mut l);
+            l
+        });
+        let (a_gpu, gpu_s) = timed(|| super::capacity::assign(gpu, mesh, limits, &medoids));
+        let (a_gpu, _) = a_gpu?;
+        out.push(check(
+            Family::Assignment,
+            "capacity-aware assignment: labels from the final medoids",
+            cpu_s,
+            gpu_s,
+            vec![first_difference("labels", &a_gpu, &a_cpu)],
+        ));
+    }
+    let (mut meshlets, mut gpu_spheres, mut cpu_spheres) = Default::default();
+    if runs(Family::Bounds) {
+        let ml = flat
+            .or(regions)
+            .unwrap_or_else(|| kmedoids::cluster(mesh, limits, Mode::Regions, &cfg).meshlets);
+        let (spheres, check) = check_bounds(gpu, mesh, &ml)?;
+        out.push(check);
+        (meshlets, gpu_spheres, cpu_spheres) = (ml, spheres.0, spheres.1);
+    }
+    if runs(Family::Grower) {
+        out.push(check_grower(gpu, mesh, &dual, limits)?);
+    }
+    if runs(Family::Lod) {
+        // Over a DAG built on the k-medoids strategy's peer (meshopt, the LOD default).
+        out.push(lod_selection(gpu, mesh, limits, LOD_VIEWS, 0x10d)?);
+    }
+    Ok(Parity {
+        checks: out,
+        meshlets,
+        gpu_spheres,
+        cpu_spheres,
+    })
+}
+
+/// The flat k-medoids on both sides; returns the CPU's meshlets.
+fn check_flat(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    limits: Limits,
+    cfg: &Config,
+) -> Result<(Meshlets, Check), GpuError> {
+    let (cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, Mode::Flat, cfg));
+    let (g, gpu_s) = timed(|| super::kmedoids::cluster_flat(gpu, mesh, limits, cfg));
     let g = g?.clustering;
     let counts = |c: &kmedoids::Clustering| {
         [
@@ -134,7 +262,8 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
             c.skipped_updates,
         ]
     };
-    out.push(check(
+    let check = check(
+        Family::Flat,
         "k-medoids: medoids, labels, distances, counts, objective, meshlets",
         cpu_s,
         gpu_s,
@@ -145,7 +274,7 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
             first_difference(
                 "iterations/splits/initial iterations/skipped updates",
                 &counts(&g),
-                &counts(cpu),
+                &counts(&cpu),
             ),
             (g.initial_mean_distance != cpu.initial_mean_distance).then(|| {
                 format!(
@@ -162,12 +291,23 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
             &cpu.meshlets,
         ))
         .collect(),
-    ));
-    // Capacity-aware k-medoids (the default): host growth, GPU adjacency and medoid updates.
-    let (c_cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, Mode::Capacity, &cfg));
-    let (c_gpu, gpu_s) = timed(|| super::kmedoids::cluster_capacity(gpu, mesh, limits, &cfg));
+    );
+    Ok((cpu.meshlets, check))
+}
+
+/// The capacity-aware k-medoids (the default): host growth, GPU adjacency and medoid updates;
+/// returns the CPU's medoids.
+fn check_capacity(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    limits: Limits,
+    cfg: &Config,
+) -> Result<(Vec<u32>, Check), GpuError> {
+    let (c_cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, Mode::Capacity, cfg));
+    let (c_gpu, gpu_s) = timed(|| super::kmedoids::cluster_capacity(gpu, mesh, limits, cfg));
     let c_gpu = c_gpu?.clustering;
-    out.push(check(
+    let check = check(
+        Family::Capacity,
         "k-medoids (capacity-aware, the default): medoids, labels, distances, iterations, meshlets",
         cpu_s,
         gpu_s,
@@ -190,14 +330,25 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
             &c_cpu.meshlets,
         ))
         .collect(),
-    ));
-    // kmedoids-regions, at the default region size and at small regions (many per mesh, so the
-    // per-region invocations and the bases between them are exercised): one check.
+    );
+    Ok((c_cpu.medoids, check))
+}
+
+/// kmedoids-regions, at the default region size and at small regions (many per mesh, so the
+/// per-region invocations and the bases between them are exercised): one check; returns the CPU's
+/// meshlets at the default size.
+fn check_regions(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    limits: Limits,
+    cfg: &Config,
+) -> Result<(Meshlets, Check), GpuError> {
     let (mut diffs, mut cpu_total, mut gpu_total) = (Vec::new(), 0.0, 0.0);
+    let mut first = None;
     for region_triangles in [cfg.region_triangles, 1024] {
         let rcfg = Config {
             region_triangles,
-            ..cfg
+            ..*cfg
         };
         let (r_cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, Mode::Regions, &rcfg));
         let (r_gpu, gpu_s) = timed(|| {
@@ -223,31 +374,25 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
             &r_gpu.meshlets,
             &r_cpu.meshlets,
         ));
+        first.get_or_insert(r_cpu.meshlets);
     }
-    out.push(check(
+    let check = check(
+            Family::Regions,
         "kmedoids-regions: medoids, labels, distances, objective, meshlets (default and 1024-triangle regions)",
         cpu_total,
         gpu_total,
         diffs,
-    ));
-    // The capacity-aware assignment alone, from the final medoids: a run runs it only in the
-    // rounds it tries (none on most surfaces) and keeps its result only when a round is accepted,
-    // so the whole-run check above can miss a difference here.
-    let (a_cpu, cpu_s) = timed(|| {
-        let mut l = vec![crate::common::NONE; mesh.triangle_count()];
-        kmedoids::capacity::assign_capacity(mesh, &dual, limits, &c_cpu.medoids, &mut l);
-        l
-    });
-    let (a_gpu, gpu_s) = timed(|| super::capacity::assign(gpu, mesh, limits, &c_cpu.medoids));
-    let (a_gpu, _) = a_gpu?;
-    out.push(check(
-        "capacity-aware assignment: labels from the final medoids",
-        cpu_s,
-        gpu_s,
-        vec![first_difference("labels", &a_gpu, &a_cpu)],
-    ));
-    // Bounding spheres of the k-medoids meshlets.
-    let ml = &cpu.meshlets;
+    );
+    Ok((first.expect("two region sizes ran"), check))
+}
+
+/// Bounding spheres of `ml` on both sides; returns (GPU, CPU) spheres.
+#[allow(clippy::type_complexity)]
+fn check_bounds(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    ml: &Meshlets,
+) -> Result<((Vec<SphereF32>, Vec<SphereF32>), Check), GpuError> {
     let (cpu_spheres, cpu_s) = timed(|| {
         (0..ml.len())
             .map(|i| super::bounds::sphere_f32(mesh, ml, i))
@@ -256,7 +401,8 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
     let (gs, gpu_s) = timed(|| super::bounds::spheres(gpu, mesh, ml));
     let (gs, _) = gs?;
     let outside = super::bounds::outside(mesh, ml, &gs);
-    out.push(check(
+    let check = check(
+            Family::Bounds,
         "bounds: meshlet spheres (centre within 2 ulps, radius within 2^-16 + 2 ulps of the centre), conservative",
         cpu_s,
         gpu_s,
@@ -266,13 +412,23 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
             (super::bounds::outside(mesh, ml, &cpu_spheres) > 0)
                 .then(|| "vertices outside their CPU sphere".to_string()),
         ],
-    ));
-    // The parallel grower (bsphere scoring per meshlet, atomic claims).
+    );
+    Ok(((gs, cpu_spheres), check))
+}
+
+/// The parallel grower (bsphere scoring per meshlet, atomic claims) on both sides.
+fn check_grower(
+    gpu: &Gpu,
+    mesh: &Mesh,
+    dual: &crate::adjacency::Csr,
+    limits: Limits,
+) -> Result<Check, GpuError> {
     let spacing = crate::strategy::grow::DEFAULT_SPACING;
-    let (cpu, cpu_s) = timed(|| crate::strategy::grow::grow(mesh, &dual, limits, spacing));
+    let (cpu, cpu_s) = timed(|| crate::strategy::grow::grow(mesh, dual, limits, spacing));
     let (g, gpu_s) = timed(|| super::grow::grow(gpu, mesh, limits, spacing));
     let g = g?;
-    out.push(check(
+    Ok(check(
+        Family::Grower,
         "parallel grower: claims, orders, waves, rounds, meshlets",
         cpu_s,
         gpu_s,
@@ -293,15 +449,7 @@ pub fn run(gpu: &Gpu, mesh: &Mesh, limits: Limits) -> Result<Parity, GpuError> {
             &cpu.meshlets,
         ))
         .collect(),
-    ));
-    // LOD selection over a DAG built on the k-medoids strategy's peer (meshopt, the LOD default).
-    out.push(lod_selection(gpu, mesh, limits, LOD_VIEWS, 0x10d)?);
-    Ok(Parity {
-        checks: out,
-        meshlets: km.meshlets,
-        gpu_spheres: gs,
-        cpu_spheres,
-    })
+    ))
 }
 
 /// Views per mesh in the LOD selection check.
@@ -359,6 +507,7 @@ pub fn lod_selection(
     let diff = (0..queries.len())
         .find_map(|v| first_difference(&format!("view {v}: drawn meshlets"), &g[v], &cpu[v]));
     Ok(check(
+        Family::Lod,
         "LOD selection: drawn meshlets (streamed LOD rule, frustum, cone) identical",
         cpu_s,
         gpu_s,
