@@ -113,6 +113,13 @@ impl MeshletBuilder {
         self.open_triangles = 0;
     }
 
+    /// Flushes and returns the collection built so far, leaving the builder empty and reusable
+    /// (its vertex-indexed scratch is kept, so a task can pack many blocks with one builder).
+    pub fn take(&mut self) -> Meshlets {
+        self.flush();
+        std::mem::take(&mut self.out)
+    }
+
     /// Flushes and returns the collection.
     pub fn finish(mut self) -> Meshlets {
         self.flush();

@@ -51,6 +51,26 @@ pub struct Meshlets {
 }
 
 impl Meshlets {
+    /// The meshlets of `parts` one after another (offsets moved to the joined arrays).
+    pub fn concat(parts: Vec<Meshlets>) -> Meshlets {
+        let mut out = Meshlets {
+            meshlets: Vec::with_capacity(parts.iter().map(Meshlets::len).sum()),
+            vertices: Vec::with_capacity(parts.iter().map(|p| p.vertices.len()).sum()),
+            triangles: Vec::with_capacity(parts.iter().map(|p| p.triangles.len()).sum()),
+        };
+        for p in parts {
+            let (v, t) = (out.vertices.len() as u32, out.triangles.len() as u32);
+            out.meshlets.extend(p.meshlets.iter().map(|m| Meshlet {
+                vertex_offset: m.vertex_offset + v,
+                triangle_offset: m.triangle_offset + t,
+                ..*m
+            }));
+            out.vertices.extend_from_slice(&p.vertices);
+            out.triangles.extend_from_slice(&p.triangles);
+        }
+        out
+    }
+
     /// Number of meshlets.
     pub fn len(&self) -> usize {
         self.meshlets.len()
