@@ -2,7 +2,7 @@
 // initial_medoids} (the seeds of kmedoids-flat and of the coarse regions):
 //   bbox                        the positions' box, as order-preserving integers (atomic min/max)
 //   keys                        each triangle's Morton key (MortonFrame::key) and its id
-//   centre_cells                each triangle's packed centroid cell (regions::packed_centres)
+//   centre_cells                each triangle's packed fine centroid cell (regions::packed_centres)
 //   (hist, scan, scatter) x 8   a stable radix sort by key, 4 bits a pass: ids in Morton order,
 //                               ties by id (they start in id order and every pass is stable)
 //   pick                        the triangle at each requested rank (the middle of each of k runs)
@@ -13,7 +13,7 @@
 // the sort does not depend on scheduling. hist_count and scatter alone also sort other (key, id)
 // pairs bound as key_a and id_a (gpu::morton::PairSort).
 
-struct Params { t: u32, n: u32, shift: u32, blocks: u32, lo_x: u32, lo_y: u32, lo_z: u32, factor: u32, k: u32, base: u32 }
+struct Params { t: u32, n: u32, shift: u32, blocks: u32, lo_x: u32, lo_y: u32, lo_z: u32, factor: u32, k: u32, base: u32, fine: u32 }
 
 @group(0) @binding(0) var<uniform> p: Params;
 // Three f32 per vertex.
@@ -31,7 +31,7 @@ struct Params { t: u32, n: u32, shift: u32, blocks: u32, lo_x: u32, lo_y: u32, l
 @group(0) @binding(9) var<storage, read_write> hist: array<u32>;
 @group(0) @binding(10) var<storage, read> ranks: array<u32>;
 @group(0) @binding(11) var<storage, read_write> medoids: array<u32>;
-// Packed centroid cells (x | y << 10 | z << 20), from word base.
+// Packed fine centroid cells, two words a triangle (x | y << 16, z), from word base.
 @group(0) @binding(12) var<storage, read_write> centres: array<u32>;
 
 fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART]; }
@@ -93,11 +93,21 @@ fn spread(v: u32) -> u32 {
     return x;
 }
 
+// The triangle's corner sum minus three times the low corner (MortonFrame::cell's first step).
+fn offset_sum(t: u32) -> vec3<f32> {
+    let lo3 = vec3<f32>(bitcast<f32>(p.lo_x), bitcast<f32>(p.lo_y), bitcast<f32>(p.lo_z));
+    return (pos(idx(3u * t)) + pos(idx(3u * t + 1u))) + pos(idx(3u * t + 2u)) - lo3;
+}
+
 // The triangle's centroid cell, 0..=1023 per axis (MortonFrame::cell).
 fn cell(t: u32) -> vec3<u32> {
-    let lo3 = vec3<f32>(bitcast<f32>(p.lo_x), bitcast<f32>(p.lo_y), bitcast<f32>(p.lo_z));
-    let s = (pos(idx(3u * t)) + pos(idx(3u * t + 1u))) + pos(idx(3u * t + 2u));
-    return vec3<u32>(clamp((s - lo3) * bitcast<f32>(p.factor), vec3<f32>(0.0), vec3<f32>(1023.0)));
+    return vec3<u32>(clamp(offset_sum(t) * bitcast<f32>(p.factor), vec3<f32>(0.0), vec3<f32>(1023.0)));
+}
+
+// The triangle's fine centroid cell, 0..=FINE_MAX per axis (MortonFrame::fine_cell).
+fn fine_cell(t: u32) -> vec3<u32> {
+    let top = vec3<f32>(f32(FINE_MAX));
+    return vec3<u32>(clamp(offset_sum(t) * bitcast<f32>(p.fine), vec3<f32>(0.0), top));
 }
 
 @compute @workgroup_size(64)
@@ -113,8 +123,9 @@ fn keys(@builtin(global_invocation_id) gid: vec3<u32>) {
 fn centre_cells(@builtin(global_invocation_id) gid: vec3<u32>) {
     let t = flat(gid);
     if (t >= p.t) { return; }
-    let q = cell(t);
-    centres[p.base + t] = q.x | (q.y << 10u) | (q.z << 20u);
+    let q = fine_cell(t);
+    centres[p.base + 2u * t] = q.x | (q.y << 16u);
+    centres[p.base + 2u * t + 1u] = q.z;
 }
 
 // Pass parity: even passes read a and write b.

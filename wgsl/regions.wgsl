@@ -33,8 +33,8 @@ struct Params { t: u32, regions: u32, max_v: u32, max_t: u32, k: u32, pad: u32 }
 // Per triangle, seven sections of T: region, lc cluster, frontier cluster, hops, aux, piece,
 // position in the seed order.
 @group(0) @binding(11) var<storage, read_write> tri: array<u32>;
-// [0, 3T) per corner: the canonical corner; [3T, 4T) per triangle: its centroid, 10 bits per
-// axis, from the host (packed_centres).
+// [0, 3T) per corner: the canonical corner; [3T, 5T) per triangle: its fine centroid cell, two
+// words (x | y << 16, z), from morton.wgsl (packed_centres).
 @group(0) @binding(12) var<storage, read_write> canon: array<u32>;
 // Per canonical corner, three sections of 3T: mark, first, wmark. Once `grow` is done, the
 // medoid kernel's scratch (9 words per member at 9x the cluster's member offset).
@@ -144,17 +144,14 @@ fn free_neighbours(x: u32) -> u32 {
     return f;
 }
 
-fn centre(x: u32) -> u32 { return canon[3u * p.t + x]; }
+fn centre(x: u32) -> vec3<u32> {
+    let w = canon[3u * p.t + 2u * x];
+    return vec3<u32>(w & 0xffffu, w >> 16u, canon[3u * p.t + 2u * x + 1u]);
+}
 
-fn distance2(a: u32, b: u32) -> u32 {
-    var d = 0u;
-    for (var j = 0u; j < 3u; j++) {
-        let u = (a >> (10u * j)) & 1023u;
-        let v = (b >> (10u * j)) & 1023u;
-        let e = max(u, v) - min(u, v);
-        d += e * e;
-    }
-    return d;
+fn distance2(a: vec3<u32>, b: vec3<u32>) -> u32 {
+    let e = max(a, b) - min(a, b);
+    return e.x * e.x + e.y * e.y + e.z * e.z;
 }
 
 // Strict order of the growth key (added vertices, free neighbours, squared distance to the
@@ -411,7 +408,7 @@ fn grow_one(r: u32) {
         tri[3u * p.t + seed] = 0u;
         while (glen < p.max_t) {
             var cen = centre(seed);
-            if (glen > 0u) { cen = sx / glen | (sy / glen) << 10u | (sz / glen) << 20u; }
+            if (glen > 0u) { cen = vec3<u32>(sx, sy, sz) / glen; }
             var bi = NONE;
             var best = vec4<u32>(0u);
             var best_hop = 0u;
@@ -445,9 +442,9 @@ fn grow_one(r: u32) {
             arena[VC + glen] = nv;
             glen += 1u;
             let cx = centre(x);
-            sx += cx & 1023u;
-            sy += (cx >> 10u) & 1023u;
-            sz += (cx >> 20u) & 1023u;
+            sx += cx.x;
+            sy += cx.y;
+            sz += cx.z;
             for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
                 let y = nb(e);
                 if (in_region(y) && lab(y) == NONE && inq(y) != C) {

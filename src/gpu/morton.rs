@@ -39,6 +39,8 @@ param_block! {
         k,
         /// First word of the packed centroid cells in `centres`.
         base,
+        /// `MortonFrame::fine` as bits.
+        fine,
     }
 }
 
@@ -187,6 +189,7 @@ fn run(
         factor: 0,
         k: ranks.len() as u32,
         base: base as u32,
+        fine: 0,
     };
     let mut b = Batch::new(gpu);
     let groups = gpu.stride_groups(mesh.vertices);
@@ -200,6 +203,7 @@ fn run(
     params.lo_y = frame.lo3.y.to_bits();
     params.lo_z = frame.lo3.z.to_bits();
     params.factor = frame.factor.to_bits();
+    params.fine = frame.fine.to_bits();
     let mut b = Batch::new(gpu);
     if centres.is_some() {
         b.threads(&kernels, "centre_cells", &bind, params, t);

@@ -117,7 +117,7 @@ pub fn cluster_regions(
     let (t, n) = source.counts();
     fits(gpu, "regions' triangle state", 7 * t)?;
     fits(gpu, "regions' corner state", 9 * t)?;
-    fits(gpu, "regions' canonical corners and centres", 4 * t)?;
+    fits(gpu, "regions' canonical corners and centres", 5 * t)?;
     let k_regions = region_count(t, cfg.region_triangles as usize);
     let arena_len = 7 * t + 3 * k_regions * limits.max_triangles as usize;
     fits(gpu, "regions' lists", arena_len)?;
@@ -146,7 +146,7 @@ pub fn cluster_regions(
         (
             gpu.zeros("region info", info_len),
             gpu.zeros("region triangle state", 7 * t),
-            gpu.zeros("canonical corners and centres", 4 * t),
+            gpu.zeros("canonical corners and centres", 5 * t),
             gpu.zeros("corner state", 9 * t),
             gpu.zeros("region lists", arena_len),
             gpu.zeros("labels", t),

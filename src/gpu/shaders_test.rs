@@ -238,3 +238,11 @@ fn device_minimums_are_what_the_widest_kernels_use() {
         "the widest kernel uses {workgroup} bytes of workgroup memory"
     );
 }
+
+#[test]
+fn the_prelude_fine_cell_bound_is_the_cpus() {
+    assert_eq!(
+        constant("regions.wgsl", "FINE_MAX"),
+        crate::strategy::kmedoids::flat::FINE_MAX
+    );
+}

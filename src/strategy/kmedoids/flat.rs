@@ -172,7 +172,16 @@ pub struct MortonFrame {
     pub lo3: glam::Vec3,
     /// 1023 over three times the box's longest side.
     pub factor: f32,
+    /// [`FINE_MAX`] over three times the box's longest side.
+    pub fine: f32,
 }
+
+/// The largest coordinate of a fine centroid cell ([`MortonFrame::fine_cell`], 13 bits per axis):
+/// `kmedoids-regions`' growth key. The Morton cells (10 bits) are as large as a triangle of a mesh
+/// of some million triangles, and ties in the key then leave clusters less round, so more of
+/// them (the bit counts measured are in `docs/gpu-clustering.md`); 13 bits is the most whose
+/// squared distances still fit a `u32`. `wgsl/prelude.wgsl` holds the same value.
+pub const FINE_MAX: u32 = (1 << 13) - 1;
 
 impl MortonFrame {
     /// The frame of the box `lo`..`hi`.
@@ -181,7 +190,16 @@ impl MortonFrame {
         Self {
             lo3: lo * 3.0,
             factor: 1023.0 / (3.0 * scale),
+            fine: FINE_MAX as f32 / (3.0 * scale),
         }
+    }
+
+    /// The fine grid cell (0..=[`FINE_MAX`] per axis) of the centroid of `a`, `b`, `c`: as
+    /// [`Self::cell`], with `fine` for the factor.
+    pub fn fine_cell(&self, a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> [u32; 3] {
+        let q = (((a + b) + c - self.lo3) * self.fine)
+            .clamp(glam::Vec3::ZERO, glam::Vec3::splat(FINE_MAX as f32));
+        [q.x as u32, q.y as u32, q.z as u32]
     }
 
     /// The grid cell (0..=1023 per axis) of the centroid of the triangle `a`, `b`, `c`.

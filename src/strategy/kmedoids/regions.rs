@@ -14,7 +14,7 @@
 //!      least (vertices added, free neighbours, squared distance to the cluster's centre, hops
 //!      from the seed, triangle id): the first key fills the vertex limit, the second closes
 //!      pockets, the third keeps the cluster round. Distances are between the triangles'
-//!      centroid cells of the Morton order (10 bits per axis, [`packed_centres`]), and the
+//!      centroid cells in the Morton order's frame (13 bits per axis, [`packed_centres`]), and the
 //!      centre is their integer mean, so the key is the same integer on every device;
 //!    - a cluster whose piece ran out while it still has room continues at the next seed (small
 //!      pieces packed together instead of one part-filled meshlet each), if that seed's piece is
@@ -160,27 +160,32 @@ pub fn canonical_corners(mesh: &Mesh, vt: &Csr, region: &[u32]) -> Vec<u32> {
         .collect()
 }
 
-/// Squared distance between two packed 10-bit centres.
-fn distance2(a: u32, b: u32) -> u32 {
-    (0..3)
-        .map(|j| {
-            let d = ((a >> (10 * j)) & 1023).abs_diff((b >> (10 * j)) & 1023);
-            d * d
-        })
-        .sum()
+/// A packed centre: `[x | y << 16, z]`, 13 bits per axis.
+pub type Centre = [u32; 2];
+
+/// The three coordinates of a packed centre.
+fn unpack(c: Centre) -> [u32; 3] {
+    [c[0] & 0xffff, c[0] >> 16, c[1]]
 }
 
-/// Each triangle's centroid cell in the Morton frame ([`MortonFrame::cell`]: 10 bits per axis
-/// along the box's longest side), packed `x | y << 10 | z << 20`: the growth's geometric key.
+/// Squared distance between two packed centres.
+fn distance2(a: Centre, b: Centre) -> u32 {
+    let (a, b) = (unpack(a), unpack(b));
+    (0..3).map(|j| a[j].abs_diff(b[j]).pow(2)).sum()
+}
+
+/// Each triangle's fine centroid cell in the Morton frame ([`MortonFrame::fine_cell`], 13 bits
+/// per axis along the box's longest side), packed as a [`Centre`]: the growth's geometric key.
 /// Only `+`, `-` and `x` touch a triangle, so `wgsl/morton.wgsl` computes the same words.
-pub fn packed_centres(mesh: &Mesh) -> Vec<u32> {
+pub fn packed_centres(mesh: &Mesh) -> Vec<Centre> {
     let (lo, hi) = mesh.bounding_box();
     let frame = MortonFrame::new(lo, hi);
     (0..mesh.triangle_count())
+        .into_par_iter()
         .map(|t| {
             let [a, b, c] = mesh.triangle(t).map(|v| mesh.position(v));
-            let [x, y, z] = frame.cell(a, b, c);
-            x | y << 10 | z << 20
+            let [x, y, z] = frame.fine_cell(a, b, c);
+            [x | y << 16, z]
         })
         .collect()
 }
@@ -202,7 +207,7 @@ pub struct RegionInput<'a> {
     /// [`canonical_corners`].
     pub canon: &'a [u32],
     /// [`packed_centres`].
-    pub centres: &'a [u32],
+    pub centres: &'a [Centre],
     /// Meshlet limits.
     pub limits: Limits,
 }
@@ -350,7 +355,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
                 input.centres[tris[seed] as usize]
             } else {
                 let g = grown.len() as u32;
-                (sum[0] / g) | ((sum[1] / g) << 10) | ((sum[2] / g) << 20)
+                [(sum[0] / g) | ((sum[1] / g) << 16), sum[2] / g]
             };
             let mut best: Option<(GrowKey, usize)> = None;
             for (fi, &i) in front.iter().enumerate() {
@@ -378,8 +383,8 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
                 }
             }
             grown.push(i);
-            for (j, x) in sum.iter_mut().enumerate() {
-                *x += (input.centres[tris[i] as usize] >> (10 * j)) & 1023;
+            for (x, q) in sum.iter_mut().zip(unpack(input.centres[tris[i] as usize])) {
+                *x += q;
             }
             vcount.push(nv as u32);
             for j in nbrs(i) {
