@@ -178,27 +178,18 @@ pub fn run_except(
             ],
         ));
     }
-    let flat = if runs(Family::Flat) {
-        let (cpu, check) = check_flat(gpu, mesh, limits, &cfg)?;
-        out.push(check);
-        Some(cpu)
-    } else {
-        None
-    };
-    let capacity_medoids = if runs(Family::Capacity) {
-        let (medoids, check) = check_capacity(gpu, mesh, limits, &cfg)?;
-        out.push(check);
-        Some(medoids)
-    } else {
-        None
-    };
-    let regions = if runs(Family::Regions) {
-        let (cpu, check) = check_regions(gpu, mesh, limits, &cfg)?;
-        out.push(check);
-        Some(cpu)
-    } else {
-        None
-    };
+    let flat = runs(Family::Flat)
+        .then(|| check_flat(gpu, mesh, limits, &cfg))
+        .transpose()?
+        .map(|r| keep(&mut out, r));
+    let capacity_medoids = runs(Family::Capacity)
+        .then(|| check_capacity(gpu, mesh, limits, &cfg))
+        .transpose()?
+        .map(|r| keep(&mut out, r));
+    let regions = runs(Family::Regions)
+        .then(|| check_regions(gpu, mesh, limits, &cfg))
+        .transpose()?
+        .map(|r| keep(&mut out, r));
     if runs(Family::Assignment) {
         // The capacity-aware assignment alone, from the final medoids: a run runs it only in the
         // rounds it tries (none on most surfaces) and keeps its result only when a round is
@@ -242,6 +233,12 @@ pub fn run_except(
         gpu_spheres,
         cpu_spheres,
     })
+}
+
+/// Records a family's check and passes on what later families read from it.
+fn keep<T>(out: &mut Vec<Check>, (value, check): (T, Check)) -> T {
+    out.push(check);
+    value
 }
 
 /// The flat k-medoids on both sides; returns the CPU's meshlets.
