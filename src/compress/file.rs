@@ -386,12 +386,12 @@ impl CompressedFile {
     }
 }
 
-#[cfg(test)]
+/// Only with the tool: the names are checked against clap's.
+#[cfg(all(test, feature = "tool"))]
 mod tests {
     use super::*;
 
     /// `name()` is written out so the core needs no clap; it must stay clap's kebab-case.
-    #[cfg(feature = "tool")]
     #[test]
     fn names_are_the_command_lines() {
         use clap::ValueEnum;
