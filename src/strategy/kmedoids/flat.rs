@@ -197,16 +197,26 @@ impl MortonFrame {
     /// The fine grid cell (0..=[`FINE_MAX`] per axis) of the centroid of `a`, `b`, `c`: as
     /// [`Self::cell`], with `fine` for the factor.
     pub fn fine_cell(&self, a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> [u32; 3] {
-        let q = (((a + b) + c - self.lo3) * self.fine)
-            .clamp(glam::Vec3::ZERO, glam::Vec3::splat(FINE_MAX as f32));
+        self.quantise(a, b, c, self.fine, FINE_MAX)
+    }
+
+    /// The corner sum minus `lo3`, times `factor`, truncated to `0..=top` per axis.
+    fn quantise(
+        &self,
+        a: glam::Vec3,
+        b: glam::Vec3,
+        c: glam::Vec3,
+        factor: f32,
+        top: u32,
+    ) -> [u32; 3] {
+        let q = (((a + b) + c - self.lo3) * factor)
+            .clamp(glam::Vec3::ZERO, glam::Vec3::splat(top as f32));
         [q.x as u32, q.y as u32, q.z as u32]
     }
 
     /// The grid cell (0..=1023 per axis) of the centroid of the triangle `a`, `b`, `c`.
     pub fn cell(&self, a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> [u32; 3] {
-        let q = (((a + b) + c - self.lo3) * self.factor)
-            .clamp(glam::Vec3::ZERO, glam::Vec3::splat(1023.0));
-        [q.x as u32, q.y as u32, q.z as u32]
+        self.quantise(a, b, c, self.factor, 1023)
     }
 
     /// Morton key (30 bits) of the triangle with corners `a`, `b`, `c`.

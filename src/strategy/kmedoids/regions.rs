@@ -168,9 +168,8 @@ fn unpack(c: Centre) -> [u32; 3] {
     [c[0] & 0xffff, c[0] >> 16, c[1]]
 }
 
-/// Squared distance between two packed centres.
-fn distance2(a: Centre, b: Centre) -> u32 {
-    let (a, b) = (unpack(a), unpack(b));
+/// Squared distance between two cells.
+fn distance2(a: [u32; 3], b: [u32; 3]) -> u32 {
     (0..3).map(|j| a[j].abs_diff(b[j]).pow(2)).sum()
 }
 
@@ -352,10 +351,10 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         while grown.len() < mt {
             // The cluster's centre so far (integer division: exact on every device).
             let centre = if grown.is_empty() {
-                input.centres[tris[seed] as usize]
+                unpack(input.centres[tris[seed] as usize])
             } else {
                 let g = grown.len() as u32;
-                [(sum[0] / g) | ((sum[1] / g) << 16), sum[2] / g]
+                sum.map(|x| x / g)
             };
             let mut best: Option<(GrowKey, usize)> = None;
             for (fi, &i) in front.iter().enumerate() {
@@ -364,7 +363,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
                     continue;
                 }
                 let free = nbrs(i).filter(|&j| s.label[j] == NONE).count();
-                let d2 = distance2(input.centres[tris[i] as usize], centre);
+                let d2 = distance2(unpack(input.centres[tris[i] as usize]), centre);
                 let key = (a, free, d2, s.hop[i], i);
                 if best.is_none_or(|(b, _)| key < b) {
                     best = Some((key, fi));
