@@ -77,8 +77,10 @@ struct SweepRow {
     mode: Method,
     threshold: f64,
     max_iterations: u32,
-    /// Triangles per region (`kmedoids-parallel` only).
+    /// Triangles per region (the region methods' sweep).
     region: Option<u32>,
+    /// Rounds of boundary moves (`kmedoids-parallel`'s second sweep).
+    moves: Option<u32>,
     seconds: f64,
     c: Clustering,
     metrics: Metrics,
@@ -351,6 +353,8 @@ fn verdict_table<'a>() -> Table<'a, Verdict> {
 
 /// Region sizes of the parallel method's sweep.
 const REGION_SWEEP: [u32; 7] = [1024, 2048, 4096, 8192, 16384, 32768, 65536];
+/// Rounds of boundary moves in the sweep.
+const MOVE_SWEEP: [u32; 5] = [0, 1, 2, 4, 8];
 
 /// One mesh's verdict on the `kmedoids-parallel` targets (held to `kmedoids-regions` too).
 struct ParallelVerdict {
@@ -362,6 +366,8 @@ struct ParallelVerdict {
     count_meshopt: f64,
     count_sequential: f64,
     objective_sequential: f64,
+    /// The same before the method's medoid iteration (`kmedoids-parallel`'s boundary moves).
+    objective_before: f64,
     radius: f64,
     time: f64,
     threads: Option<f64>,
@@ -384,6 +390,7 @@ fn parallel_verdicts(runs: &[Run], method: Method) -> Vec<ParallelVerdict> {
                 count_meshopt: r.c.meshlets.len() as f64 / r.meshopt.meshlets as f64,
                 count_sequential: r.c.meshlets.len() as f64 / seq.c.meshlets.len() as f64,
                 objective_sequential: r.c.mean_distance() / seq.c.mean_distance(),
+                objective_before: r.c.initial_mean_distance / seq.c.mean_distance(),
                 radius: r.metrics.mean_radius_rel / r.meshopt.mean_radius_rel,
                 time: r.seconds / r.meshopt_seconds,
                 threads: r.seconds_1t.map(|one| one / r.seconds),
@@ -416,6 +423,9 @@ fn parallel_table<'a>() -> Table<'a, ParallelVerdict> {
                 v.count_sequential,
                 mark(v.count_sequential <= 1.02)
             )
+        })
+        .col("objective before its iteration / kmedoids", Right, |v| {
+            format!("{:.3}", v.objective_before)
         })
         .col("objective / kmedoids (<= 1)", Right, move |v| {
             format!(
@@ -452,6 +462,9 @@ fn sweep_table(mesh: &str) -> Table<'_, SweepRow> {
         })
         .renamed("region", "region_triangles", Right, |r| {
             r.region.map_or("-".into(), |x| x.to_string())
+        })
+        .renamed("move rounds", "move_rounds", Right, |r| {
+            r.moves.map_or("-".into(), |x| x.to_string())
         })
         .renamed("iterations run", "iterations_run", Right, |r| {
             r.c.iterations.to_string()
@@ -687,6 +700,7 @@ pub fn run(cfg: &Config) -> Result<()> {
                 threshold: 0.0,
                 max_iterations: it,
                 region: None,
+                moves: None,
                 seconds,
                 c,
                 metrics,
@@ -708,6 +722,7 @@ pub fn run(cfg: &Config) -> Result<()> {
                 threshold: th,
                 max_iterations: it,
                 region: None,
+                moves: None,
                 seconds,
                 c,
                 metrics,
@@ -730,6 +745,27 @@ pub fn run(cfg: &Config) -> Result<()> {
             threshold: 0.0,
             max_iterations: kc.max_iterations,
             region: Some(region),
+            moves: None,
+            seconds,
+            c,
+            metrics,
+            pareto: false,
+        });
+    }
+    // `kmedoids-parallel`'s other knob: rounds of boundary moves, at the default region size.
+    for rounds in MOVE_SWEEP {
+        let kc = KConfig {
+            move_rounds: rounds,
+            ..Method::Parallel.config()
+        };
+        let (seconds, c, metrics) =
+            run_one(sm, cfg.limits, Method::Parallel, kc, cfg.sweep_mesh())?;
+        sweep.push(SweepRow {
+            mode: Method::Parallel,
+            threshold: 0.0,
+            max_iterations: kc.max_iterations,
+            region: None,
+            moves: Some(rounds),
             seconds,
             c,
             metrics,
@@ -767,11 +803,24 @@ pub fn run(cfg: &Config) -> Result<()> {
                 ),
                 points: sweep
                     .iter()
-                    .filter(|r| r.mode == m)
+                    .filter(|r| r.mode == m && r.region.is_some())
                     .map(|r| (r.seconds, y(r)))
                     .collect(),
             });
         }
+        out.push(plot::Series {
+            label: format!(
+                "{} (move rounds {}..{})",
+                Method::Parallel.name(),
+                MOVE_SWEEP[0],
+                MOVE_SWEEP[MOVE_SWEEP.len() - 1]
+            ),
+            points: sweep
+                .iter()
+                .filter(|r| r.moves.is_some())
+                .map(|r| (r.seconds, y(r)))
+                .collect(),
+        });
         out.extend(thresholds.iter().map(|&th| {
             plot::Series {
                 label: format!("kmedoids-flat, shift threshold {th}"),
@@ -885,7 +934,8 @@ pub fn run(cfg: &Config) -> Result<()> {
          meshoptimizer's on surface meshes, and <= the sequential method's + 2 % on every mesh (the neurons and \
          stress meshes are held to this one alone: their meshoptimizer ratio is shown unmarked). Time: <= 1.5x meshoptimizer's. Threads: one-thread time \
          over the pool's (>= 1.6 on the dragon with two threads; `-` where the one-thread run was left out). \
-         Pool: {} threads.\n",
+         The objective before its iteration: the mean hop distance before `kmedoids-parallel`'s boundary \
+         moves (the same as after for the methods without one). Pool: {} threads.\n",
         rayon::current_num_threads()
     );
     let _ = writeln!(
@@ -942,8 +992,9 @@ pub fn run(cfg: &Config) -> Result<()> {
     );
     let _ = writeln!(
         s,
-        "`kmedoids-parallel`: triangles per region (`region`), from many small regions to few. \
-         `kmedoids` and its `hops` growth: their most capacity-aware re-assignment rounds (no effect where \
+        "`kmedoids-parallel` and `kmedoids-regions`: triangles per region (`region`), from many small \
+         regions to few; `kmedoids-parallel` also its rounds of boundary moves (`move rounds`, its medoid \
+         iteration: the objective falls with each, the count stays). `kmedoids` and its `hops` growth: their most capacity-aware re-assignment rounds (no effect where \
          too few clusters are light for a round to run: `iterations run` says how many ran); `kmedoids-flat`: the iteration limit and \
          convergence threshold (mean medoid shift in hops) of its clustering. One run per point. Error: mean \
          hops to the medoid, and the meshlet count. The Pareto front is taken over time and meshlets. Data: \

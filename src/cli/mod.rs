@@ -70,6 +70,10 @@ pub struct StrategyArgs {
     /// smaller regions give more parallel work and a few more meshlets at their borders).
     #[arg(long, default_value_t = strategy::kmedoids::DEFAULT_REGION_TRIANGLES, value_parser = clap::value_parser!(u32).range(1..))]
     pub kmedoids_regions: u32,
+    /// kmedoids-parallel: most rounds of boundary moves (triangles moved to a neighbouring
+    /// cluster whose medoid is nearer, within the limits; 0 turns them off).
+    #[arg(long, default_value_t = strategy::kmedoids::DEFAULT_MOVE_ROUNDS)]
+    pub kmedoids_moves: u32,
     /// kmedoids-paper: seconds before the remaining splits are done the flat way.
     #[arg(long, default_value_t = 300.0)]
     pub paper_budget: f64,
@@ -92,6 +96,7 @@ impl StrategyArgs {
                 shift_threshold: self.kmedoids_threshold,
                 grow: self.kmedoids_grow,
                 region_triangles: self.kmedoids_regions,
+                move_rounds: self.kmedoids_moves,
                 paper_budget: Duration::from_secs_f64(self.paper_budget),
                 ..Default::default()
             },

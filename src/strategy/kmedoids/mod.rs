@@ -23,6 +23,7 @@
 //! - [`merge`]: merging neighbours and small pieces, renumbering;
 //! - [`capacity`]: the default's driver and its capacity-aware assignment (CPU reference of
 //!   `wgsl/capacity.wgsl`);
+//! - [`moves`]: boundary moves, the parallel method's medoid iteration;
 //! - [`flat`]: the flat and paper drivers;
 //! - [`coarse`]: the coarse regions of the two region-parallel methods (CPU reference of
 //!   `wgsl/coarse.wgsl`);
@@ -42,6 +43,7 @@ pub mod coarse;
 pub mod flat;
 mod local_graph;
 pub mod merge;
+pub mod moves;
 pub mod parallel;
 pub mod regions;
 pub mod seed;
@@ -95,6 +97,11 @@ impl Mode {
 /// from a million triangles up (the region-size sweep of `meshletlab bench kmedoids`).
 pub const DEFAULT_REGION_TRIANGLES: u32 = 16384;
 
+/// Rounds of boundary moves of `kmedoids-parallel` by default: two take its objective (mean hop
+/// distance to the medoid) below the sequential method's on the shared meshes, where the later
+/// rounds gain less for the same cost (the sweep of `meshletlab bench kmedoids`).
+pub const DEFAULT_MOVE_ROUNDS: u32 = 2;
+
 /// k-medoids tunables; each names the methods that read it. The method itself is a [`Mode`],
 /// chosen by the strategy name, never by these settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -117,6 +124,10 @@ pub struct Config {
     /// Triangles per region, each clustered on its own (parallel, regions): smaller regions give more
     /// parallel work and more partly filled clusters at their borders.
     pub region_triangles: u32,
+    /// Most rounds of boundary moves, the medoid iteration that lowers the objective without
+    /// changing the count (parallel; [`moves`]): each round costs about a tenth of the run, and
+    /// the first rounds gain the most.
+    pub move_rounds: u32,
 }
 
 impl Default for Config {
@@ -130,6 +141,7 @@ impl Default for Config {
             parallel: true,
             grow: Default::default(),
             region_triangles: DEFAULT_REGION_TRIANGLES,
+            move_rounds: DEFAULT_MOVE_ROUNDS,
         }
     }
 }
@@ -204,8 +216,7 @@ pub struct Clustering {
     /// Whether the paper's method ran out of budget and finished the flat way.
     pub budget_exhausted: bool,
     /// Mean hop distance after the initial clustering, before any split (the k-medoids
-    /// objective); for the parallel method, that of the per-region clusters before the border
-    /// merges.
+    /// objective); for the parallel method, that before its boundary moves ([`moves`]).
     pub initial_mean_distance: f64,
     /// Iterations of the initial clustering.
     pub initial_iterations: u32,
