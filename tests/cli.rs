@@ -684,10 +684,33 @@ fn kmedoids_regions_knob_reaches_kmedoids_parallel() {
     };
     let (seq, whole) = meshlets("65536");
     let (seq_again, cut) = meshlets("1024");
-    // One region is the sequential method itself; the knob does not touch `kmedoids`.
+    // One region is the sequential method's clusters (its boundary moves keep the count); the
+    // knob does not touch `kmedoids`.
     assert_eq!((whole, seq_again), (seq, seq));
     // Many regions: part-filled clusters at their borders, a few more meshlets.
     assert!(cut > whole, "{cut} vs {whole}");
+    // `--kmedoids-moves` reaches it too: other clusters, the same count.
+    let metrics = |moves: &str| {
+        let out = ok(&[
+            "stats",
+            "-q",
+            mesh.to_str().unwrap(),
+            "--json",
+            "-s",
+            "kmedoids-parallel",
+            "--kmedoids-moves",
+            moves,
+        ]);
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        let m = &v["strategies"][0]["metrics"];
+        (
+            m["meshlets"].as_u64().unwrap(),
+            m["mean_radius_rel"].as_f64().unwrap(),
+        )
+    };
+    let ((n0, r0), (n2, r2)) = (metrics("0"), metrics("2"));
+    assert_eq!(n0, n2);
+    assert_ne!(r0, r2);
     let out = cli(&[
         "stats",
         "-q",
