@@ -63,8 +63,8 @@ struct Proposal {
 }
 
 /// Runs at most `max_rounds` rounds of steps 1-4 over `labels` and `distances` (hop distances to
-/// `medoids` inside each cluster, as [`medoid_of`] gives them), then step 5: the paper's medoid
-/// of every cluster that changed, and its members' distances.
+/// `medoids` inside each cluster, as the paper's medoid update gives them), then step 5: the
+/// paper's medoid of every cluster that changed, and its members' distances.
 #[allow(clippy::too_many_arguments)]
 pub fn move_boundaries(
     mesh: &Mesh,
