@@ -665,20 +665,25 @@ fn the_gpu_refuses_strategies_without_a_gpu_path_and_says_when_there_is_no_adapt
 fn kmedoids_regions_knob_reaches_kmedoids_parallel() {
     // gaspra (32 k triangles) is one region by default and many at 1024 triangles per region.
     let mesh = common::meshes_dir().join("stellarium_gaspra.ply.zst");
-    let meshlets = |regions: &str| {
+    // The JSON rows of `stats -s strategies` with one k-medoids option set, every row valid.
+    let rows = |strategies: &str, option: &str, value: &str| {
         let out = ok(&[
             "stats",
             "-q",
             mesh.to_str().unwrap(),
             "--json",
             "-s",
-            "kmedoids,kmedoids-parallel",
-            "--kmedoids-regions",
-            regions,
+            strategies,
+            option,
+            value,
         ]);
         let v: serde_json::Value = serde_json::from_str(&out).unwrap();
         let rows = v["strategies"].as_array().unwrap().clone();
         assert!(rows.iter().all(|r| r["invalid"].is_null()), "{out}");
+        rows
+    };
+    let meshlets = |regions: &str| {
+        let rows = rows("kmedoids,kmedoids-parallel", "--kmedoids-regions", regions);
         let n = |i: usize| rows[i]["metrics"]["meshlets"].as_u64().unwrap();
         (n(0), n(1))
     };
@@ -691,18 +696,7 @@ fn kmedoids_regions_knob_reaches_kmedoids_parallel() {
     assert!(cut > whole, "{cut} vs {whole}");
     // `--kmedoids-moves` reaches it too: other clusters, the same count.
     let metrics = |moves: &str| {
-        let out = ok(&[
-            "stats",
-            "-q",
-            mesh.to_str().unwrap(),
-            "--json",
-            "-s",
-            "kmedoids-parallel",
-            "--kmedoids-moves",
-            moves,
-        ]);
-        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-        let m = &v["strategies"][0]["metrics"];
+        let m = &rows("kmedoids-parallel", "--kmedoids-moves", moves)[0]["metrics"];
         (
             m["meshlets"].as_u64().unwrap(),
             m["mean_radius_rel"].as_f64().unwrap(),
