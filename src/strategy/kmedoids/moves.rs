@@ -32,6 +32,7 @@
 
 use super::assign::{members, UNREACHED};
 use super::capacity::medoid_of;
+use super::local_graph::LocalGraph;
 use super::mean;
 use crate::common::{sorted, Csr};
 use crate::mesh::Mesh;
@@ -289,26 +290,10 @@ fn vertex_count(mesh: &Mesh, m: &[u32]) -> u32 {
 /// Hop distances from `root` inside the cluster whose members are `m` (ascending; the cluster is
 /// edge-connected), in member order.
 fn bfs_distances(dual: &Csr, labels: &[u32], m: &[u32], root: u32) -> Vec<u32> {
-    let c = labels[root as usize];
-    let mut d = vec![u32::MAX; m.len()];
-    let at = |x: u32| m.binary_search(&x).expect("same label means member");
-    let mut queue = vec![root];
-    d[at(root)] = 0;
-    let mut head = 0;
-    while head < queue.len() {
-        let u = queue[head];
-        head += 1;
-        let next = d[at(u)] + 1;
-        for &n in dual.row(u as usize) {
-            if labels[n as usize] == c {
-                let i = at(n);
-                if d[i] == u32::MAX {
-                    d[i] = next;
-                    queue.push(n);
-                }
-            }
-        }
-    }
+    let sub = LocalGraph::new(dual, labels, labels[root as usize], m);
+    let mut d = vec![0; m.len()];
+    let at = m.binary_search(&root).expect("the root is a member");
+    sub.bfs(at, &mut d, &mut Vec::new());
     debug_assert!(d.iter().all(|&x| x != u32::MAX), "a connected cluster");
     d
 }
@@ -358,7 +343,7 @@ mod tests {
     }
 
     #[test]
-    fn a_cluster_with_no_room_takes_nothing() {
+    fn triangles_move_only_into_a_cluster_with_room() {
         // A grid cut in two halves by triangle id: triangles near the cut are nearer the other
         // half's medoid than their own.
         let m = generate::terrain(9, 1);
