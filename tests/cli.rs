@@ -662,7 +662,7 @@ fn the_gpu_refuses_strategies_without_a_gpu_path_and_says_when_there_is_no_adapt
 }
 
 #[test]
-fn kmedoids_regions_knob_reaches_kmedoids_parallel() {
+fn kmedoids_regions_and_moves_knobs_reach_their_methods() {
     // gaspra (32 k triangles) is one region by default and many at 1024 triangles per region.
     let mesh = common::meshes_dir().join("stellarium_gaspra.ply.zst");
     // The JSON rows of `stats -s strategies` with one k-medoids option set, every row valid.
@@ -694,17 +694,22 @@ fn kmedoids_regions_knob_reaches_kmedoids_parallel() {
     assert_eq!((whole, seq_again), (seq, seq));
     // Many regions: part-filled clusters at their borders, a few more meshlets.
     assert!(cut > whole, "{cut} vs {whole}");
-    // `--kmedoids-moves` reaches it too: other clusters, the same count.
+    // `--kmedoids-moves` reaches it and `kmedoids-regions`: other clusters, the same counts.
     let metrics = |moves: &str| {
-        let m = &rows("kmedoids-parallel", "--kmedoids-moves", moves)[0]["metrics"];
-        (
-            m["meshlets"].as_u64().unwrap(),
-            m["mean_radius_rel"].as_f64().unwrap(),
-        )
+        let rows = rows("kmedoids-parallel,kmedoids-regions", "--kmedoids-moves", moves);
+        let m = |i: usize| {
+            let m = &rows[i]["metrics"];
+            (
+                m["meshlets"].as_u64().unwrap(),
+                m["mean_radius_rel"].as_f64().unwrap(),
+            )
+        };
+        [m(0), m(1)]
     };
-    let ((n0, r0), (n2, r2)) = (metrics("0"), metrics("2"));
-    assert_eq!(n0, n2);
-    assert_ne!(r0, r2);
+    for ((n0, r0), (n2, r2)) in metrics("0").into_iter().zip(metrics("2")) {
+        assert_eq!(n0, n2);
+        assert_ne!(r0, r2);
+    }
     let out = cli(&[
         "stats",
         "-q",

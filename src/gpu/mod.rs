@@ -11,7 +11,8 @@
 //! | [`kmedoids`] (`cluster_flat`, `cluster_capacity`) | `assign.wgsl`, `update.wgsl`, `split.wgsl` | `strategy::kmedoids::{assign, update, split}`, driven as `strategy::kmedoids::flat` |
 //! | [`morton`] | `morton.wgsl` | `strategy::kmedoids::flat::{morton_order, initial_medoids}` (the flat method's seeds), `strategy::kmedoids::regions::packed_centres` |
 //! | [`coarse`] | `coarse.wgsl` (with `morton.wgsl`, `assign.wgsl`) | `strategy::kmedoids::coarse` (the regions of `kmedoids-parallel` and `kmedoids-regions`) |
-//! | [`regions`] | `regions.wgsl` | `strategy::kmedoids::regions` (`kmedoids-regions`) |
+//! | [`regions`] | `regions.wgsl` (with `medoid.wgsl`) | `strategy::kmedoids::regions` (`kmedoids-regions`) |
+//! | [`moves`] | `moves.wgsl` (with `medoid.wgsl`) | `strategy::kmedoids::moves` (the medoid iteration of `kmedoids-regions`) |
 //! | [`capacity`] | `capacity.wgsl` | `strategy::kmedoids::capacity::assign_capacity` |
 //! | [`grow`] | `grow.wgsl` | `strategy::grow` (`bsphere-parallel`) |
 //! | [`assemble`] | `assemble.wgsl` | `meshlet::assemble` (meshlets from a clustering) |
@@ -44,6 +45,7 @@ pub mod copy;
 pub mod grow;
 pub mod kmedoids;
 pub mod morton;
+pub mod moves;
 pub mod parity;
 pub mod regions;
 mod scan;
@@ -598,16 +600,26 @@ macro_rules! binding_set {
 pub(crate) use binding_set;
 
 /// The WGSL source of `wgsl/<file>` behind the shared prelude (`wgsl/prelude.wgsl`: the split
-/// part size, `NONE` and the flat-id helpers every module uses).
+/// part size, `NONE` and the flat-id helpers every module uses), followed by the shared parts it
+/// names (each listed in [`WGSL_PARTS`]).
 macro_rules! wgsl {
-    ($file:literal) => {
+    ($file:literal $(, $part:literal)*) => {
         concat!(
             include_str!("../../wgsl/prelude.wgsl"),
             include_str!(concat!("../../wgsl/", $file))
+            $(, include_str!(concat!("../../wgsl/", $part)))*
         )
     };
 }
 pub(crate) use wgsl;
+
+/// WGSL files that are not modules but parts of several (functions over bindings each includer
+/// declares), with the modules that include them: one definition where two kernel families run
+/// the same step. The drivers name the parts in their `wgsl!` calls; `gpu::shaders_test` reads
+/// this list.
+#[cfg(test)]
+pub(crate) const WGSL_PARTS: &[(&str, &[&str])] =
+    &[("medoid.wgsl", &["regions.wgsl", "moves.wgsl"])];
 
 /// Bytes between the parameter blocks of consecutive dispatches in the uniform buffer (dynamic
 /// offsets must be multiples of 256).

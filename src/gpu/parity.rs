@@ -360,8 +360,14 @@ fn check_regions(
             first_difference("distances", &r_gpu.distances, &r_cpu.distances),
             (r_gpu.initial_mean_distance != r_cpu.initial_mean_distance).then(|| {
                 format!(
-                    "objective: GPU {}, CPU {}",
+                    "objective before the moves: GPU {}, CPU {}",
                     r_gpu.initial_mean_distance, r_cpu.initial_mean_distance
+                )
+            }),
+            (r_gpu.iterations != r_cpu.iterations).then(|| {
+                format!(
+                    "rounds of moves: GPU {}, CPU {}",
+                    r_gpu.iterations, r_cpu.iterations
                 )
             }),
         ]);
@@ -375,7 +381,7 @@ fn check_regions(
     }
     let check = check(
             Family::Regions,
-        "kmedoids-regions: medoids, labels, distances, objective, meshlets (default and 1024-triangle regions)",
+        "kmedoids-regions: medoids, labels, distances, objective before the moves, their rounds, meshlets (default and 1024-triangle regions)",
         cpu_total,
         gpu_total,
         diffs,

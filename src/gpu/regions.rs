@@ -7,21 +7,24 @@
 //! reaches, members sorted by region) and the packed centroid cells, then the per-triangle setup
 //! and one invocation per region growing its clusters; after the host reads the cluster count of
 //! each region and writes their prefix sums, the global labels, one invocation per cluster for
-//! its medoid and distances, and the assembly (`wgsl/assemble.wgsl`). The host reads back only
-//! control words: the box, the seeds, the BFS's frontier sizes, hooking-round counts where a
-//! piece has no seed, one count per region, and one medoid per cluster.
+//! its medoid and distances, the boundary moves ([`super::moves`], in the same submission), and
+//! the assembly (`wgsl/assemble.wgsl`). The host reads back only control words: the box, the
+//! seeds, the BFS's frontier sizes, hooking-round counts where a piece has no seed, one count per
+//! region, one medoid per cluster and the moves' counters.
 
 use super::adjacency::{AdjacencyKernels, Timing};
 use super::assemble::{Assembly, DeviceMeshlets, Groups};
 use super::coarse::DeviceRegions;
 use super::kmedoids::{MeshSource, Placed};
 use super::morton::DeviceInput;
+use super::moves::{DeviceClusters, DeviceMoves};
 use super::{
     binding_set, param_block, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan,
 };
 use crate::meshlet::Limits;
 use crate::strategy::kmedoids::coarse::region_count;
-use crate::strategy::kmedoids::{regions, Clustering, Config};
+use crate::strategy::kmedoids::moves::Moves;
+use crate::strategy::kmedoids::{mean, regions, Clustering, Config};
 use std::time::Instant;
 
 param_block! {
@@ -138,7 +141,7 @@ pub fn cluster_regions(
     let kernels = Kernels::new::<Buffers>(
         gpu,
         "regions",
-        wgsl!("regions.wgsl"),
+        wgsl!("regions.wgsl", "medoid.wgsl"),
         &["init", "grow", "grow_rows", "relabel", "medoid"],
     );
     let info_len = 3 * k_regions + 2 + t;
@@ -247,11 +250,30 @@ pub fn cluster_regions(
         )
     });
     timing.upload += up;
-    // Steps 3 and 4, and the medoids.
+    // Steps 3, 4 and 5, then the medoids and the moves' counters back.
+    let moves = (cfg.move_rounds > 0)
+        .then(|| {
+            let clusters = DeviceClusters {
+                labels: &labels,
+                dist: &dist,
+                info: &info,
+                medoid_at: 3 * k_regions + 2,
+                k,
+                arena: &arena,
+                cstate: &cstate,
+            };
+            DeviceMoves::new(gpu, &adj, &clusters, limits, cfg.move_rounds)
+        })
+        .transpose()?;
     let mut b = Batch::new(gpu);
     b.threads(&kernels, "relabel", &bind, params(k), t);
     b.threads(&kernels, "medoid", &bind, params(k), k);
-    let (kernel, mut out) = b.run_read(&[(&info, 3 * k_regions + 2, k)])?;
+    let mut reads = vec![(&info, 3 * k_regions + 2, k)];
+    if let Some(m) = &moves {
+        m.record(&mut b);
+        reads.push(m.counters());
+    }
+    let (kernel, mut out) = b.run_read(&reads)?;
     timing.kernel += kernel;
     let medoids = out.remove(0);
     let scan = Scan::new(gpu);
@@ -276,11 +298,19 @@ pub fn cluster_regions(
     } else {
         Default::default()
     };
+    let moves = match &moves {
+        Some(m) => m.moves(&out[0]),
+        None => Moves {
+            objective_before: mean(&distances),
+            ..Moves::default()
+        },
+    };
     let clustering = regions::clustering(
         medoids,
         labels,
         distances,
         meshlets,
+        &moves,
         start.elapsed().as_secs_f64(),
     );
     Ok((

@@ -9,7 +9,11 @@ use naga::valid::GlobalUse;
 fn source(file: &str) -> String {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
     let read = |f: &str| std::fs::read_to_string(dir.join(f)).unwrap();
-    read("prelude.wgsl") + &read(file)
+    let parts = super::WGSL_PARTS
+        .iter()
+        .filter(|(_, users)| users.contains(&file))
+        .map(|(part, _)| read(part));
+    read("prelude.wgsl") + &read(file) + &parts.collect::<String>()
 }
 
 fn parse(file: &str) -> (naga::Module, naga::valid::ModuleInfo) {
@@ -105,13 +109,17 @@ fn interface<'b, P: ParamBlock, B: BindingSet<'b>>(file: &str) -> Vec<String> {
     bad
 }
 
-/// The kernel modules: every WGSL file but the prelude, by name.
+/// The kernel modules: every WGSL file but the prelude and the shared parts, by name.
 fn kernel_files() -> Vec<String> {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
     let mut files: Vec<String> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_str().unwrap().to_string())
-        .filter(|f| f.ends_with(".wgsl") && f != "prelude.wgsl")
+        .filter(|f| {
+            f.ends_with(".wgsl")
+                && f != "prelude.wgsl"
+                && !super::WGSL_PARTS.iter().any(|(part, _)| part == f)
+        })
         .collect();
     files.sort();
     files
@@ -135,14 +143,14 @@ fn every_wgsl_file_validates_and_emits_spirv() {
         assert_eq!(spv[0], 0x0723_0203, "{file}: SPIR-V magic");
         n += 1;
     }
-    assert_eq!(n, 14, "the kernel modules in wgsl/");
+    assert_eq!(n, 15, "the kernel modules in wgsl/");
 }
 
 #[test]
 fn every_module_matches_its_rust_interface() {
     use super::{
-        adjacency, assemble, bounds, capacity, coarse, copy, grow, kmedoids, morton, regions, scan,
-        select,
+        adjacency, assemble, bounds, capacity, coarse, copy, grow, kmedoids, morton, moves,
+        regions, scan, select,
     };
     let bad: Vec<String> = [
         interface::<adjacency::Params, adjacency::Buffers>("adjacency.wgsl"),
@@ -154,6 +162,7 @@ fn every_module_matches_its_rust_interface() {
         interface::<morton::Params, morton::Buffers>("morton.wgsl"),
         interface::<coarse::Params, coarse::Buffers>("coarse.wgsl"),
         interface::<regions::Params, regions::Buffers>("regions.wgsl"),
+        interface::<moves::Params, moves::Buffers>("moves.wgsl"),
         interface::<kmedoids::Params, kmedoids::UpdateBuffers>("update.wgsl"),
         interface::<kmedoids::Params, kmedoids::AssignBuffers>("assign.wgsl"),
         interface::<kmedoids::Params, kmedoids::SplitBuffers>("split.wgsl"),

@@ -1,5 +1,5 @@
-//! Boundary moves: the medoid iteration of `kmedoids-parallel`, data-parallel and within the
-//! limits.
+//! Boundary moves: the medoid iteration of `kmedoids-parallel` and `kmedoids-regions`,
+//! data-parallel and within the limits (the CPU reference of `wgsl/moves.wgsl`).
 //!
 //! The paper's iteration (section 3) re-assigns every triangle to its nearest medoid and moves
 //! each medoid to its cluster's centre, with no regard to the limits. Here, with the medoids held
@@ -14,8 +14,8 @@
 //!    its neighbours one level further out has another parent in the cluster that is not a
 //!    candidate.
 //! 3. **Acceptance per target**: all of a cluster's proposals if their triangles and new vertices
-//!    (summed: an upper bound where two share a vertex) fit the limits, else the one of greatest
-//!    gain (then the lowest triangle id) if it fits alone.
+//!    (summed: an upper bound where two share a vertex) fit the limits at the sizes the round
+//!    began with, else the one of greatest gain (then the lowest triangle id) if it fits alone.
 //! 4. **Distances** of every cluster that changed, by BFS from its medoid.
 //!
 //! Every accepted move lowers the sum of hop distances to the fixed medoids by its gain: sources
@@ -157,7 +157,7 @@ pub fn move_boundaries(
             }
         }
         let mut changed_now = vec![false; k];
-        let mut arrivals = Vec::new();
+        let mut moved = Vec::new();
         for &(x, p) in &proposals {
             let b = p.target as usize;
             let all_fit = mem[b].len() as u32 + demand[b].0 <= mt && vcount[b] + demand[b].1 <= mv;
@@ -169,17 +169,17 @@ pub fn move_boundaries(
             distances[x as usize] = p.distance;
             changed_now[a] = true;
             changed_now[b] = true;
-            arrivals.push((b, x));
-            let i = mem[a].binary_search(&x).expect("a member");
-            mem[a].remove(i);
+            moved.push((a, b, x));
         }
-        if arrivals.is_empty() {
+        if moved.is_empty() {
             break;
         }
         out.rounds += 1;
-        out.moved += arrivals.len() as u64;
-        // Arrivals after every decision: the fit tests read the sizes the round began with.
-        for (b, x) in arrivals {
+        out.moved += moved.len() as u64;
+        // Member lists after every decision: the fit tests read the sizes the round began with.
+        for (a, b, x) in moved {
+            let i = mem[a].binary_search(&x).expect("a member");
+            mem[a].remove(i);
             let i = mem[b].binary_search(&x).expect_err("not yet a member");
             mem[b].insert(i, x);
         }

@@ -28,11 +28,16 @@
 //! 3. **Labels**: cluster `c` of region `r` is `base[r] + c`, regions in order.
 //! 4. **Medoids**: the paper's medoid of each cluster and its members' in-cluster hop distances
 //!    (one invocation per cluster on the GPU), which order the members when packing.
+//! 5. **Medoid iteration**: [`super::moves`]' boundary moves, as in `kmedoids-parallel`
+//!    (`wgsl/moves.wgsl` on the GPU): border triangles move to a neighbouring cluster whose
+//!    medoid is nearer while the limits hold, then changed clusters take the paper's medoid
+//!    again. The objective falls and the count stays.
 //!
 //! Where it differs from the paper (section 3): k comes out of the growth, nothing is split, and
-//! no medoid iteration runs (the growth keys, not nearest-medoid assignment, shape the clusters);
-//! where it differs from `kmedoids-parallel`: merges only inside a region (none across region
-//! borders), no packing of whole pieces by distance, no re-assignment rounds, and the running centroid in quantised integers. Every cluster is edge-connected except where small whole
+//! the iteration moves only border triangles, within the limits (the growth keys, not
+//! nearest-medoid assignment, shape the clusters); where it differs from `kmedoids-parallel`:
+//! merges only inside a region (none across region borders), no packing of whole pieces by
+//! distance, and the running centroid in quantised integers. Every cluster is edge-connected except where small whole
 //! pieces are packed together. Determinism: regions share no state and every choice is a strict
 //! minimum over integer keys, so the result is the same for any thread count and on the GPU.
 //!
@@ -45,6 +50,7 @@ use super::assign::{members, UNREACHED};
 use super::capacity::{medoid_of, Grown};
 use super::coarse::regions;
 use super::flat::MortonFrame;
+use super::moves::{move_boundaries, Moves};
 use super::{pack, Clustering, Config};
 use crate::common::Csr;
 use crate::mesh::Mesh;
@@ -56,7 +62,7 @@ const NONE: u32 = UNREACHED;
 /// Marks a pocket stamp whose free component is too large to absorb.
 const BIG: u32 = 1 << 31;
 
-/// Runs steps 1-4 over the dual graph; `t0` is when the run began (the adjacency counts in).
+/// Runs steps 1-5 over the dual graph; `t0` is when the run began (the adjacency counts in).
 pub fn cluster(
     mesh: &Mesh,
     dual: &Csr,
@@ -94,33 +100,49 @@ pub fn cluster(
         k += count;
     }
     // Step 4.
-    let (medoids, distances) = medoids_and_distances(dual, &labels, k as usize);
+    let (mut medoids, mut distances) = medoids_and_distances(dual, &labels, k as usize);
+    // Step 5.
+    let moves = move_boundaries(
+        mesh,
+        dual,
+        vt,
+        limits,
+        &mut labels,
+        &mut medoids,
+        &mut distances,
+        cfg.move_rounds,
+    );
     let meshlets = pack(mesh, &labels, &distances, k as usize, limits);
     clustering(
         medoids,
         labels,
         distances,
         meshlets,
+        &moves,
         t0.elapsed().as_secs_f64(),
     )
 }
 
-/// A run's result (CPU or GPU): the grown clusters (no medoid iteration) and their meshlets;
-/// `seconds` is its wall time.
+/// A run's result (CPU or GPU): the clusters after the moves and their meshlets, with the
+/// objective before the moves and the rounds that moved triangles; `seconds` is its wall time.
 pub fn clustering(
     medoids: Vec<u32>,
     labels: Vec<u32>,
     distances: Vec<u32>,
     meshlets: Meshlets,
+    moves: &Moves,
     seconds: f64,
 ) -> Clustering {
     let grown = Grown {
         medoids,
         labels,
         distances,
-        iterations: 0,
+        iterations: moves.rounds,
     };
-    Clustering::grown(grown, meshlets, seconds)
+    Clustering {
+        initial_mean_distance: moves.objective_before,
+        ..Clustering::grown(grown, meshlets, seconds)
+    }
 }
 
 /// Each triangle's position in its region's (ascending) member list.
