@@ -696,7 +696,11 @@ fn kmedoids_regions_and_moves_knobs_reach_their_methods() {
     assert!(cut > whole, "{cut} vs {whole}");
     // `--kmedoids-moves` reaches it and `kmedoids-regions`: other clusters, the same counts.
     let metrics = |moves: &str| {
-        let rows = rows("kmedoids-parallel,kmedoids-regions", "--kmedoids-moves", moves);
+        let rows = rows(
+            "kmedoids-parallel,kmedoids-regions",
+            "--kmedoids-moves",
+            moves,
+        );
         let m = |i: usize| {
             let m = &rows[i]["metrics"];
             (

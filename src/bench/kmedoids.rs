@@ -752,16 +752,18 @@ pub fn run(cfg: &Config) -> Result<()> {
             pareto: false,
         });
     }
-    // `kmedoids-parallel`'s other knob: rounds of boundary moves, at the default region size.
-    for rounds in MOVE_SWEEP {
+    // Their other knob: rounds of boundary moves, at the default region size.
+    for (method, rounds) in [Method::Parallel, Method::Regions]
+        .into_iter()
+        .flat_map(|m| MOVE_SWEEP.map(|r| (m, r)))
+    {
         let kc = KConfig {
             move_rounds: rounds,
-            ..Method::Parallel.config()
+            ..method.config()
         };
-        let (seconds, c, metrics) =
-            run_one(sm, cfg.limits, Method::Parallel, kc, cfg.sweep_mesh())?;
+        let (seconds, c, metrics) = run_one(sm, cfg.limits, method, kc, cfg.sweep_mesh())?;
         sweep.push(SweepRow {
-            mode: Method::Parallel,
+            mode: method,
             threshold: 0.0,
             max_iterations: kc.max_iterations,
             region: None,
@@ -808,19 +810,21 @@ pub fn run(cfg: &Config) -> Result<()> {
                     .collect(),
             });
         }
-        out.push(plot::Series {
-            label: format!(
-                "{} (move rounds {}..{})",
-                Method::Parallel.name(),
-                MOVE_SWEEP[0],
-                MOVE_SWEEP[MOVE_SWEEP.len() - 1]
-            ),
-            points: sweep
-                .iter()
-                .filter(|r| r.moves.is_some())
-                .map(|r| (r.seconds, y(r)))
-                .collect(),
-        });
+        for m in [Method::Parallel, Method::Regions] {
+            out.push(plot::Series {
+                label: format!(
+                    "{} (move rounds {}..{})",
+                    m.name(),
+                    MOVE_SWEEP[0],
+                    MOVE_SWEEP[MOVE_SWEEP.len() - 1]
+                ),
+                points: sweep
+                    .iter()
+                    .filter(|r| r.mode == m && r.moves.is_some())
+                    .map(|r| (r.seconds, y(r)))
+                    .collect(),
+            });
+        }
         out.extend(thresholds.iter().map(|&th| {
             plot::Series {
                 label: format!("kmedoids-flat, shift threshold {th}"),
@@ -934,8 +938,8 @@ pub fn run(cfg: &Config) -> Result<()> {
          meshoptimizer's on surface meshes, and <= the sequential method's + 2 % on every mesh (the neurons and \
          stress meshes are held to this one alone: their meshoptimizer ratio is shown unmarked). Time: <= 1.5x meshoptimizer's. Threads: one-thread time \
          over the pool's (>= 1.6 on the dragon with two threads; `-` where the one-thread run was left out). \
-         The objective before its iteration: the mean hop distance before `kmedoids-parallel`'s boundary \
-         moves (the same as after for the methods without one). Pool: {} threads.\n",
+         The objective before its iteration: the mean hop distance before the boundary moves of \
+         `kmedoids-parallel` and `kmedoids-regions` (the same as after for the methods without one). Pool: {} threads.\n",
         rayon::current_num_threads()
     );
     let _ = writeln!(
@@ -993,7 +997,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     let _ = writeln!(
         s,
         "`kmedoids-parallel` and `kmedoids-regions`: triangles per region (`region`), from many small \
-         regions to few; `kmedoids-parallel` also its rounds of boundary moves (`move rounds`, its medoid \
+         regions to few; both also their rounds of boundary moves (`move rounds`, their medoid \
          iteration: the objective falls with each, the count stays). `kmedoids` and its `hops` growth: their most capacity-aware re-assignment rounds (no effect where \
          too few clusters are light for a round to run: `iterations run` says how many ran); `kmedoids-flat`: the iteration limit and \
          convergence threshold (mean medoid shift in hops) of its clustering. One run per point. Error: mean \
