@@ -14,8 +14,9 @@
 //                  triangle)
 //   pick_best      step 3: the lowest triangle id among the proposals of greatest gain
 //   accept         step 3: labels and distances of the accepted moves (per triangle)
-// After the last round tally, count_members, scan and place run once more, then `medoid` (step
-// 5: the paper's medoid of every changed cluster, medoid.wgsl). A round that moves nothing leaves
+// After the last round tally, count_members (members only: `round` is NONE), scan and place run
+// once more, then `new_medoids` (step 5: the paper's medoid of every changed cluster,
+// medoid.wgsl). A round that moves nothing leaves
 // the state as it found it, so the rounds after it do nothing, as the CPU's early stop does.
 // The CPU keeps members in sorted lists; here a list is in slot order, which nothing depends on:
 // the BFS distances and the medoid (ties by triangle id) are functions of the member set.
@@ -99,6 +100,8 @@ fn count_members(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (x >= p.t) { return; }
     let a = labels[x];
     arena[s_slot() + x] = atomicAdd(&state[c_count(a)], 1u);
+    // After the rounds only the lists are needed.
+    if (p.round == NONE) { return; }
     // A vertex counts once per cluster: at the cluster's lowest triangle using it (rows ascend).
     var v = vec3<u32>(idx(3u * x), idx(3u * x + 1u), idx(3u * x + 2u));
     for (var j = 0u; j < 3u; j++) {
@@ -246,7 +249,7 @@ fn set_medoid(g: u32, m: u32) { info[p.medoid_at + g] = m; }
 
 // Step 5, one invocation per cluster: the paper's medoid of each changed cluster.
 @compute @workgroup_size(64)
-fn medoid(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn new_medoids(@builtin(global_invocation_id) gid: vec3<u32>) {
     let c = flat(gid);
     if (c >= p.k || (ld(c_flags(c)) & CHANGED) == 0u) { return; }
     atomicAdd(&state[h_changed()], 1u);

@@ -24,7 +24,7 @@ param_block! {
         max_v,
         /// Triangle limit.
         max_t,
-        /// The round (the rounds' count in the pass after the last).
+        /// The round (`u32::MAX` in the pass after the last).
         round,
         /// Where the medoids start in `info`.
         medoid_at,
@@ -126,7 +126,7 @@ impl DeviceMoves {
                 "propose",
                 "pick_best",
                 "accept",
-                "medoid",
+                "new_medoids",
             ],
         );
         let state = gpu.zeros("moves' cluster state", state_len);
@@ -193,8 +193,9 @@ impl DeviceMoves {
                 b.threads(kn, entry, bind, at(round), t);
             }
         }
-        lists(b, self.rounds);
-        b.threads(kn, "medoid", bind, at(self.rounds), k);
+        // NONE: no round, only the lists.
+        lists(b, u32::MAX);
+        b.threads(kn, "new_medoids", bind, at(u32::MAX), k);
     }
 
     /// The counters' words, to read after the batch: `(buffer, offset, len)` in u32.
