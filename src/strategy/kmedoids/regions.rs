@@ -37,9 +37,10 @@
 //! the iteration moves only border triangles, within the limits (the growth keys, not
 //! nearest-medoid assignment, shape the clusters); where it differs from `kmedoids-parallel`:
 //! merges only inside a region (none across region borders), no packing of whole pieces by
-//! distance, and the running centroid in quantised integers. Every cluster is edge-connected except where small whole
-//! pieces are packed together. Determinism: regions share no state and every choice is a strict
-//! minimum over integer keys, so the result is the same for any thread count and on the GPU.
+//! distance, and the running centroid in quantised integers. Every cluster is edge-connected
+//! except where small whole pieces are packed together. Determinism: regions share no state and
+//! every choice is a strict minimum over integer keys (the moves' sums are order-independent), so
+//! the result is the same for any thread count and on the GPU.
 //!
 //! A vertex is tracked through its canonical corner in the region ([`canonical_corners`]): the
 //! first corner, in triangle order, of the region's lowest triangle using it. Per-corner state
