@@ -795,35 +795,28 @@ pub fn run(cfg: &Config) -> Result<()> {
                     .collect(),
             })
             .collect();
-        for m in [Method::Parallel, Method::Regions] {
-            out.push(plot::Series {
-                label: format!(
-                    "{} (region triangles {}..{})",
-                    m.name(),
-                    REGION_SWEEP[0],
-                    REGION_SWEEP[REGION_SWEEP.len() - 1]
-                ),
-                points: sweep
-                    .iter()
-                    .filter(|r| r.mode == m && r.region.is_some())
-                    .map(|r| (r.seconds, y(r)))
-                    .collect(),
-            });
-        }
-        for m in [Method::Parallel, Method::Regions] {
-            out.push(plot::Series {
-                label: format!(
-                    "{} (move rounds {}..{})",
-                    m.name(),
-                    MOVE_SWEEP[0],
-                    MOVE_SWEEP[MOVE_SWEEP.len() - 1]
-                ),
-                points: sweep
-                    .iter()
-                    .filter(|r| r.mode == m && r.moves.is_some())
-                    .map(|r| (r.seconds, y(r)))
-                    .collect(),
-            });
+        // The region methods' two knobs, one series per method and knob.
+        let knobs = [
+            ("region triangles", &REGION_SWEEP[..], true),
+            ("move rounds", &MOVE_SWEEP[..], false),
+        ];
+        for (knob, values, by_region) in knobs {
+            for m in [Method::Parallel, Method::Regions] {
+                out.push(plot::Series {
+                    label: format!(
+                        "{} ({knob} {}..{})",
+                        m.name(),
+                        values[0],
+                        values[values.len() - 1]
+                    ),
+                    points: sweep
+                        .iter()
+                        // A region method's row sweeps one knob: the region size or the move rounds.
+                        .filter(|r| r.mode == m && r.region.is_some() == by_region)
+                        .map(|r| (r.seconds, y(r)))
+                        .collect(),
+                });
+            }
         }
         out.extend(thresholds.iter().map(|&th| {
             plot::Series {

@@ -70,8 +70,8 @@ pub struct StrategyArgs {
     /// smaller regions give more parallel work and a few more meshlets at their borders).
     #[arg(long, default_value_t = strategy::kmedoids::DEFAULT_REGION_TRIANGLES, value_parser = clap::value_parser!(u32).range(1..))]
     pub kmedoids_regions: u32,
-    /// kmedoids-parallel, kmedoids-regions: most rounds of boundary moves (triangles moved to a neighbouring
-    /// cluster whose medoid is nearer, within the limits; 0 turns them off).
+    /// kmedoids-parallel, kmedoids-regions: most rounds of boundary moves (triangles moved to a
+    /// neighbouring cluster whose medoid is nearer, within the limits; 0 turns them off).
     #[arg(long, default_value_t = strategy::kmedoids::DEFAULT_MOVE_ROUNDS)]
     pub kmedoids_moves: u32,
     /// kmedoids-paper: seconds before the remaining splits are done the flat way.

@@ -97,9 +97,10 @@ impl Mode {
 /// from a million triangles up (the region-size sweep of `meshletlab bench kmedoids`).
 pub const DEFAULT_REGION_TRIANGLES: u32 = 16384;
 
-/// Rounds of boundary moves of `kmedoids-parallel` and `kmedoids-regions` by default: two take its objective (mean hop
-/// distance to the medoid) below the sequential method's on the shared meshes, where the later
-/// rounds gain less for the same cost (the sweep of `meshletlab bench kmedoids`).
+/// Rounds of boundary moves of `kmedoids-parallel` and `kmedoids-regions` by default: two take
+/// their objective (mean hop distance to the medoid) below the sequential method's on the shared
+/// meshes, where the later rounds gain less for the same cost (the sweep of
+/// `meshletlab bench kmedoids`).
 pub const DEFAULT_MOVE_ROUNDS: u32 = 2;
 
 /// k-medoids tunables; each names the methods that read it. The method itself is a [`Mode`],
@@ -125,8 +126,8 @@ pub struct Config {
     /// parallel work and more partly filled clusters at their borders.
     pub region_triangles: u32,
     /// Most rounds of boundary moves, the medoid iteration that lowers the objective without
-    /// changing the count (parallel, regions; [`moves`]): each round costs about a tenth of the run, and
-    /// the first rounds gain the most.
+    /// changing the count (parallel, regions; [`moves`]): each round costs about a tenth of the
+    /// run, and the first rounds gain the most.
     pub move_rounds: u32,
 }
 
