@@ -2,7 +2,8 @@
 // (driver: src/gpu/regions.rs):
 //   init      canonical_corners, and the State words of grow_region set to their start values
 //             (per triangle)
-//   grow      grow_region with absorb_pockets and merge_neighbours: one invocation per region
+//   grow      grow_region with absorb_pockets (shed_front) and merge_neighbours: one invocation
+//             per region
 //             (one per workgroup, or eight per workgroup in grow_rows),
 //             the same sequential steps over the same integer keys (regions share no word, so
 //             they run at once)
@@ -276,7 +277,6 @@ fn absorb(len: u32) -> vec2<u32> {
             }
         }
     }
-    if (ntaken == 0u) { return vec2<u32>(NONE, NONE); }
     let L = s_left() + RS;
     var earliest = NONE;
     for (var gi = keep; gi < len; gi++) {
@@ -296,6 +296,182 @@ fn absorb(len: u32) -> vec2<u32> {
             arena[G + glen] = x;
             glen += 1u;
         }
+    }
+    // The front rule for each pocket left, in the same order (largest first).
+    var changed = ntaken > 0u;
+    for (var sz = cap; sz >= 1u; sz--) {
+        for (var pk = 0u; pk < npk; pk++) {
+            let pw = arena[P + pk];
+            if ((pw & 255u) != sz || lab(arena[Q + (pw >> 8u)]) == C) { continue; }
+            let got = shed_front(glen, pw);
+            if (got.x != NONE) {
+                glen = got.x;
+                earliest = min(earliest, got.y);
+                changed = true;
+            }
+        }
+    }
+    if (!changed) { return vec2<u32>(NONE, NONE); }
+    return vec2<u32>(glen, earliest);
+}
+
+// Marks the pocket being tried by the front rule in `aux`, beside its stamp (regions.rs TRYING).
+const TRYING: u32 = 0x40000000u;
+// Marks the front rule's per-attempt stamps in `hop`, apart from hop counts (regions.rs ATTEMPT).
+const ATTEMPT: u32 = 0x80000000u;
+
+fn set_hop(x: u32, v: u32) { tri[3u * p.t + x] = v; }
+fn set_first(k: u32, v: u32) { cstate[3u * p.t + k] = v; }
+fn set_wmark(k: u32, v: u32) { cstate[6u * p.t + k] = v; }
+fn in_pocket(y: u32) -> bool {
+    return in_region(y) && lab(y) == NONE && aux(y) == ((C + 1u) | TRYING);
+}
+fn next_to_pocket(x: u32) -> bool {
+    for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
+        if (in_pocket(nb(e))) { return true; }
+    }
+    return false;
+}
+
+// shed_front for the pocket of word `pw` (start << 8 | size in the pockets' triangles) and the
+// cluster in `grown` (length `len`): returns the new length and the earliest seed-order position
+// given back, or NONE with nothing changed. Its queue is the histogram's slots, its flood stack
+// the vertex counts' (both free once the last-grown rule is done; each holds at most max_t).
+fn shed_front(len: u32, pw: u32) -> vec2<u32> {
+    let stamp = C + 1u;
+    let G = s_grown(R);
+    let Q = s_q() + RS;
+    let QU = s_hist(R);
+    let ST = s_vcount(R);
+    let ps = pw >> 8u;
+    let psz = pw & 255u;
+    for (var i = ps; i < ps + psz; i++) { set_aux(arena[Q + i], stamp | TRYING); }
+    // Stamps: cluster vertex (`a`), also the pocket's (`a + 1`), the pocket's only (`a + 2`).
+    let a = SERIAL + 1u;
+    SERIAL += 3u;
+    let seen = ATTEMPT | a;
+    let gone = ATTEMPT | (a + 1u);
+    let reached = ATTEMPT | (a + 2u);
+    var nv = 0u;
+    for (var gi = 0u; gi < len; gi++) {
+        let x = arena[G + gi];
+        for (var j = 0u; j < 3u; j++) {
+            let k = canon[3u * x + j];
+            if (wmark(k) != a) {
+                set_wmark(k, a);
+                set_first(k, 0u);
+                nv += 1u;
+            }
+            set_first(k, first_pos(k) + 1u);
+        }
+    }
+    var outside = 0u;
+    for (var i = ps; i < ps + psz; i++) {
+        let x = arena[Q + i];
+        for (var j = 0u; j < 3u; j++) {
+            let k = canon[3u * x + j];
+            let w = wmark(k);
+            if (w == a) {
+                set_wmark(k, a + 1u);
+            } else if (w != a + 1u && w != a + 2u) {
+                set_wmark(k, a + 2u);
+                outside += 1u;
+            }
+        }
+    }
+    // Members next to the open side (free, in no pocket of this cluster), not next to the pocket.
+    var qlen = 0u;
+    for (var gi = 0u; gi < len; gi++) {
+        let x = arena[G + gi];
+        var open = false;
+        var by_pocket = false;
+        for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
+            let y = nb(e);
+            if (!in_region(y) || lab(y) != NONE) { continue; }
+            if (aux(y) == (stamp | TRYING)) { by_pocket = true; } else if (aux(y) != stamp) { open = true; }
+        }
+        if (open && !by_pocket) {
+            set_hop(x, seen);
+            arena[QU + qlen] = x;
+            qlen += 1u;
+        }
+    }
+    var removed = 0u;
+    var fits = len + psz <= p.max_t && nv + outside <= p.max_v;
+    while (!fits && removed < qlen && 2u * (removed + 1u) <= len) {
+        let u = arena[QU + removed];
+        removed += 1u;
+        for (var j = 0u; j < 3u; j++) {
+            let k = canon[3u * u + j];
+            set_first(k, first_pos(k) - 1u);
+            if (first_pos(k) == 0u) {
+                nv -= 1u;
+                if (wmark(k) == a + 1u) { outside += 1u; }
+            }
+        }
+        for (var e = dual_off[u]; e < dual_off[u + 1u]; e++) {
+            let y = nb(e);
+            if (in_region(y) && lab(y) == C && hop(y) != seen && !next_to_pocket(y)) {
+                set_hop(y, seen);
+                arena[QU + qlen] = y;
+                qlen += 1u;
+            }
+        }
+        fits = len - removed + psz <= p.max_t && nv + outside <= p.max_v;
+    }
+    var whole = false;
+    if (fits) {
+        for (var qi = 0u; qi < removed; qi++) { set_hop(arena[QU + qi], gone); }
+        // One piece: flood the kept members and the pocket from the pocket.
+        let p0 = arena[Q + ps];
+        set_hop(p0, reached);
+        arena[ST] = p0;
+        var sl = 1u;
+        var flooded = 1u;
+        while (sl > 0u) {
+            sl -= 1u;
+            let u = arena[ST + sl];
+            for (var e = dual_off[u]; e < dual_off[u + 1u]; e++) {
+                let y = nb(e);
+                if (!in_region(y)) { continue; }
+                let member = (lab(y) == C && hop(y) != gone) || in_pocket(y);
+                if (member && hop(y) != reached) {
+                    set_hop(y, reached);
+                    flooded += 1u;
+                    arena[ST + sl] = y;
+                    sl += 1u;
+                }
+            }
+        }
+        whole = flooded == len - removed + psz;
+    }
+    if (!whole) {
+        for (var i = ps; i < ps + psz; i++) { set_aux(arena[Q + i], stamp); }
+        return vec2<u32>(NONE, NONE);
+    }
+    let L = s_left() + RS;
+    var earliest = NONE;
+    for (var qi = 0u; qi < removed; qi++) {
+        let x = arena[QU + qi];
+        set_lab(x, NONE);
+        set_aux(x, 0u);
+        arena[L + piece(x)] += 1u;
+        earliest = min(earliest, opos(x));
+    }
+    var glen = 0u;
+    for (var gi = 0u; gi < len; gi++) {
+        let x = arena[G + gi];
+        if (lab(x) == C) {
+            arena[G + glen] = x;
+            glen += 1u;
+        }
+    }
+    for (var i = ps; i < ps + psz; i++) {
+        let x = arena[Q + i];
+        set_lab(x, C);
+        arena[L + piece(x)] -= 1u;
+        arena[G + glen] = x;
+        glen += 1u;
     }
     return vec2<u32>(glen, earliest);
 }

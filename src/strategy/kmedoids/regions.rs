@@ -22,7 +22,9 @@
 //!      parts of one mesh piece);
 //!    - when a cluster stops, free pockets next to it of at most half the triangle limit are
 //!      absorbed, largest first, if giving back its last-grown triangles (at most half of them)
-//!      makes room: the pocket would otherwise become a meshlet of its own;
+//!      makes room: the pocket would otherwise become a meshlet of its own; each pocket that
+//!      rule cannot take is tried by the front rule (`shed_front`), which gives back the
+//!      triangles nearest the open free side instead;
 //!    - then clusters merge into a neighbour across an edge whose union fits, smallest first
 //!      (what tube ends and enclosed leftovers need: on the neurons a sixth fewer meshlets).
 //! 3. **Labels**: cluster `c` of region `r` is `base[r] + c`, regions in order.
@@ -37,7 +39,8 @@
 //! the iteration moves only border triangles, within the limits (the growth keys, not
 //! nearest-medoid assignment, shape the clusters); where it differs from `kmedoids-parallel`:
 //! merges only inside a region (none across region borders), no packing of whole pieces by
-//! distance, and the running centroid in quantised integers. Every cluster is edge-connected
+//! distance, the orphan rules over pockets of the region only, and the running centroid in
+//! quantised integers. Every cluster is edge-connected
 //! except where small whole pieces are packed together. Determinism: regions share no state and
 //! every choice is a strict minimum over integer keys (the moves' sums are order-independent), so
 //! the result is the same for any thread count and on the GPU.
@@ -667,9 +670,6 @@ where
             extra += hist[m];
         }
     }
-    if taken.is_empty() {
-        return None;
-    }
     let mut earliest = usize::MAX;
     for &i in &grown[keep..] {
         s.label[i] = NONE;
@@ -686,7 +686,167 @@ where
             grown.push(i);
         }
     }
-    Some(earliest)
+    // The front rule for each pocket left, in the same order (largest first).
+    let mut changed = !taken.is_empty();
+    for size in (1..=cap).rev() {
+        for &(start, sz) in &pockets {
+            let pocket = &q[start..start + sz];
+            if sz != size || s.label[pocket[0]] == c {
+                continue;
+            }
+            let Some(shed) = shed_front(s, nbrs, corners, grown, pocket, c, mv, mt, serial) else {
+                continue;
+            };
+            for i in shed {
+                left[s.piece[i] as usize] += 1;
+                earliest = earliest.min(s.opos[i] as usize);
+            }
+            for &i in pocket {
+                left[s.piece[i] as usize] -= 1;
+            }
+            changed = true;
+        }
+    }
+    changed.then_some(earliest)
+}
+
+/// Marks the pocket being tried by the front rule in `aux`, beside its stamp `c + 1`.
+const TRYING: u32 = 1 << 30;
+/// Marks the front rule's per-attempt stamps in `hop`, apart from hop counts.
+const ATTEMPT: u32 = 1 << 31;
+
+/// The front rule for a pocket the last-grown rule could not take (free, stamped `c + 1`): the
+/// cluster gives back instead its triangles nearest the open free side (breadth-first inwards from
+/// the front), never one next to the pocket, until the pocket fits; kept only when at most half is
+/// given back and the cluster with the pocket is one piece (the pocket usually lies by the growth
+/// front, where the last-grown rule would have to give back the triangles touching it). On the
+/// neurons' tube ends this took a further sixteenth off the count. Returns the triangles given
+/// back, or `None` with nothing changed. Scratch: `hop` (attempt stamps; hop counts are set again
+/// when a triangle next joins a frontier), `first` (per vertex, the kept members using it) and
+/// `wmark`.
+#[allow(clippy::too_many_arguments)]
+fn shed_front<N, I>(
+    s: &mut State,
+    nbrs: &N,
+    corners: &impl Fn(usize) -> [usize; 3],
+    grown: &mut Vec<usize>,
+    pocket: &[usize],
+    c: u32,
+    mv: usize,
+    mt: usize,
+    serial: &mut u32,
+) -> Option<Vec<usize>>
+where
+    N: Fn(usize) -> I,
+    I: Iterator<Item = usize>,
+{
+    let stamp = c + 1;
+    for &i in pocket {
+        s.aux[i] = stamp | TRYING;
+    }
+    // Stamps: cluster vertex (`a`), also the pocket's (`a + 1`), the pocket's only (`a + 2`).
+    let a = *serial + 1;
+    *serial += 3;
+    let (seen, gone, reached) = (ATTEMPT | a, ATTEMPT | (a + 1), ATTEMPT | (a + 2));
+    let mut nv = 0usize;
+    for &g in grown.iter() {
+        for k in corners(g) {
+            if s.wmark[k] != a {
+                s.wmark[k] = a;
+                s.first[k] = 0;
+                nv += 1;
+            }
+            s.first[k] += 1;
+        }
+    }
+    let mut outside = 0usize;
+    for &i in pocket {
+        for k in corners(i) {
+            if s.wmark[k] == a {
+                s.wmark[k] = a + 1;
+            } else if s.wmark[k] != a + 1 && s.wmark[k] != a + 2 {
+                s.wmark[k] = a + 2;
+                outside += 1;
+            }
+        }
+    }
+    let in_pocket = |s: &State, j: usize| s.label[j] == NONE && s.aux[j] == stamp | TRYING;
+    let next_to_pocket = |s: &State, i: usize| nbrs(i).any(|j| in_pocket(s, j));
+    // Free and in no pocket of this cluster: the open side (or given back, or a large component).
+    let open =
+        |s: &State, j: usize| s.label[j] == NONE && s.aux[j] != stamp && s.aux[j] != stamp | TRYING;
+    let mut queue: Vec<usize> = Vec::new();
+    for &g in grown.iter() {
+        if nbrs(g).any(|j| open(s, j)) && !next_to_pocket(s, g) {
+            s.hop[g] = seen;
+            queue.push(g);
+        }
+    }
+    let len = grown.len();
+    let fits = |removed: usize, nv: usize, outside: usize| {
+        len - removed + pocket.len() <= mt && nv + outside <= mv
+    };
+    let mut removed = 0;
+    while !fits(removed, nv, outside) && removed < queue.len() && 2 * (removed + 1) <= len {
+        let u = queue[removed];
+        removed += 1;
+        for k in corners(u) {
+            s.first[k] -= 1;
+            if s.first[k] == 0 {
+                nv -= 1;
+                if s.wmark[k] == a + 1 {
+                    outside += 1;
+                }
+            }
+        }
+        for j in nbrs(u) {
+            if s.label[j] == c && s.hop[j] != seen && !next_to_pocket(s, j) {
+                s.hop[j] = seen;
+                queue.push(j);
+            }
+        }
+    }
+    let restore = |s: &mut State| {
+        for &i in pocket {
+            s.aux[i] = stamp;
+        }
+    };
+    if !fits(removed, nv, outside) {
+        restore(s);
+        return None;
+    }
+    queue.truncate(removed);
+    for &u in &queue {
+        s.hop[u] = gone;
+    }
+    // One piece: flood the kept members and the pocket from the pocket.
+    let mut stack = vec![pocket[0]];
+    s.hop[pocket[0]] = reached;
+    let mut flooded = 1;
+    while let Some(u) = stack.pop() {
+        for j in nbrs(u) {
+            let member = (s.label[j] == c && s.hop[j] != gone) || in_pocket(s, j);
+            if member && s.hop[j] != reached {
+                s.hop[j] = reached;
+                flooded += 1;
+                stack.push(j);
+            }
+        }
+    }
+    if flooded != len - removed + pocket.len() {
+        restore(s);
+        return None;
+    }
+    for &u in &queue {
+        s.label[u] = NONE;
+        s.aux[u] = 0;
+    }
+    for &i in pocket {
+        s.label[i] = c;
+    }
+    grown.retain(|&g| s.label[g] == c);
+    grown.extend_from_slice(pocket);
+    Some(queue)
 }
 
 /// Step 4: the paper's medoid of every cluster and each triangle's in-cluster hop distance to it
@@ -777,6 +937,145 @@ mod tests {
                 assert_eq!(same, canon[a] == canon[b]);
             }
         }
+    }
+
+    /// The terrain as one region with cluster 0 the ball of the first `ball` triangles in
+    /// breadth-first order from triangle 300 (grown in that order), the next triangle in that
+    /// order (or the first after it passing `pick`) a free pocket of cluster 0 (stamped), its
+    /// other neighbours in cluster 7, and the rest free (the open side). Returns the mesh, its
+    /// dual graph, the canonical corners, the state, the ball and the pocket.
+    fn ball_and_pocket(
+        ball: usize,
+        pick: impl Fn(&Mesh, &[u32], u32) -> bool,
+    ) -> (Mesh, Csr, Vec<u32>, State, Vec<usize>, usize) {
+        let m = generate::terrain(24, 5);
+        let vt = vertex_triangles(&m);
+        let dual = dual_graph(&m, &vt);
+        let t = m.triangle_count();
+        let canon = canonical_corners(&m, &vt, &vec![0; t]);
+        let mut order = vec![300u32];
+        let mut seen = vec![false; t];
+        seen[300] = true;
+        let mut i = 0;
+        while order.len() < ball + 100 {
+            for &x in dual.row(order[i] as usize) {
+                if !seen[x as usize] {
+                    seen[x as usize] = true;
+                    order.push(x);
+                }
+            }
+            i += 1;
+        }
+        let pocket = *order[ball..]
+            .iter()
+            .find(|&&x| pick(&m, &order[..ball], x))
+            .unwrap() as usize;
+        let mut s = State {
+            label: vec![NONE; t],
+            inq: vec![NONE; t],
+            hop: vec![0; t],
+            aux: vec![0; t],
+            piece: vec![0; t],
+            opos: vec![0; t],
+            mark: vec![NONE; 3 * t],
+            first: vec![0; 3 * t],
+            wmark: vec![0; 3 * t],
+        };
+        let grown: Vec<usize> = order[..ball].iter().map(|&x| x as usize).collect();
+        for (p, &g) in grown.iter().enumerate() {
+            s.label[g] = 0;
+            s.aux[g] = p as u32;
+        }
+        for &x in dual.row(pocket) {
+            if s.label[x as usize] == NONE {
+                s.label[x as usize] = 7;
+            }
+        }
+        s.aux[pocket] = 1;
+        (m, dual, canon, s, grown, pocket)
+    }
+
+    /// Runs the front rule for cluster 0 on [`ball_and_pocket`]'s state.
+    fn front(
+        dual: &Csr,
+        canon: &[u32],
+        s: &mut State,
+        grown: &mut Vec<usize>,
+        pocket: usize,
+        limits: Limits,
+    ) -> Option<Vec<usize>> {
+        let nbrs = |i: usize| dual.row(i).iter().map(|&x| x as usize);
+        let corners = |i: usize| [0, 1, 2].map(|j| canon[3 * i + j] as usize);
+        let (mv, mt) = (limits.max_vertices as usize, limits.max_triangles as usize);
+        shed_front(s, &nbrs, &corners, grown, &[pocket], 0, mv, mt, &mut 0)
+    }
+
+    /// Checks what the front rule promises after taking `pocket`: the given-back triangles are
+    /// free, none next to the pocket; the pocket joined; the cluster within `limits`, one piece.
+    fn check_taken(
+        m: &Mesh,
+        dual: &Csr,
+        s: &State,
+        grown: &[usize],
+        pocket: usize,
+        shed: &[usize],
+        limits: Limits,
+    ) {
+        assert!(!shed.is_empty());
+        for &x in shed {
+            assert_eq!(s.label[x], NONE);
+            assert!(!dual.row(x).contains(&(pocket as u32)));
+        }
+        assert_eq!(s.label[pocket], 0);
+        let members: Vec<usize> = (0..m.triangle_count())
+            .filter(|&x| s.label[x] == 0)
+            .collect();
+        let mut sorted = grown.to_vec();
+        sorted.sort_unstable();
+        assert_eq!(sorted, members);
+        let mut verts: Vec<u32> = members.iter().flat_map(|&x| m.triangle(x)).collect();
+        verts.sort_unstable();
+        verts.dedup();
+        assert!(members.len() <= limits.max_triangles as usize);
+        assert!(verts.len() <= limits.max_vertices as usize);
+        let two: Vec<u32> = s.label.iter().map(|&l| (l != 0) as u32).collect();
+        assert_eq!(cluster_pieces(dual, &two, 2)[0], (1, 1));
+    }
+
+    #[test]
+    fn a_pocket_by_the_front_is_taken_for_triangles_given_back_at_the_open_side() {
+        // Triangle limit: the ball holds 126, one triangle on the open side goes.
+        let limits = Limits::new(255, 126).unwrap();
+        let (m, dual, canon, mut s, mut grown, pocket) = ball_and_pocket(126, |_, _, _| true);
+        let shed = front(&dual, &canon, &mut s, &mut grown, pocket, limits).expect("fits");
+        assert_eq!(shed.len(), 1);
+        assert!(dual
+            .row(shed[0])
+            .iter()
+            .any(|&x| s.label[x as usize] == NONE));
+        check_taken(&m, &dual, &s, &grown, pocket, &shed, limits);
+        // Vertex limit: the ball holds exactly the limit and the pocket adds a vertex.
+        let uses_new = |m: &Mesh, ball: &[u32], x: u32| {
+            let inside: Vec<u32> = ball.iter().flat_map(|&b| m.triangle(b as usize)).collect();
+            m.triangle(x as usize).iter().any(|v| !inside.contains(v))
+        };
+        let (m, dual, canon, mut s, mut grown, pocket) = ball_and_pocket(126, uses_new);
+        let mut verts: Vec<u32> = grown.iter().flat_map(|&x| m.triangle(x)).collect();
+        verts.sort_unstable();
+        verts.dedup();
+        let limits = Limits::new(verts.len() as u32, 255).unwrap();
+        let shed = front(&dual, &canon, &mut s, &mut grown, pocket, limits).expect("fits");
+        check_taken(&m, &dual, &s, &grown, pocket, &shed, limits);
+    }
+
+    #[test]
+    fn the_front_rule_gives_back_at_most_half_and_otherwise_changes_nothing() {
+        // Room for the pocket needs 67 of the 126 triangles back: more than half.
+        let limits = Limits::new(255, 60).unwrap();
+        let (_, dual, canon, mut s, mut grown, pocket) = ball_and_pocket(126, |_, _, _| true);
+        let before = (s.label.clone(), s.aux.clone(), grown.clone());
+        assert!(front(&dual, &canon, &mut s, &mut grown, pocket, limits).is_none());
+        assert_eq!((s.label, s.aux, grown), before);
     }
 
     #[test]
