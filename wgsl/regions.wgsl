@@ -388,7 +388,11 @@ fn shed_front(len: u32, pw: u32) -> vec2<u32> {
         for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
             let y = nb(e);
             if (!in_region(y) || lab(y) != NONE) { continue; }
-            if (aux(y) == (stamp | TRYING)) { by_pocket = true; } else if (aux(y) != stamp) { open = true; }
+            if (aux(y) == (stamp | TRYING)) {
+                by_pocket = true;
+            } else if (aux(y) != stamp) {
+                open = true;
+            }
         }
         if (open && !by_pocket) {
             set_hop(x, seen);

@@ -40,10 +40,10 @@
 //! nearest-medoid assignment, shape the clusters); where it differs from `kmedoids-parallel`:
 //! merges only inside a region (none across region borders), no packing of whole pieces by
 //! distance, the orphan rules over pockets of the region only, and the running centroid in
-//! quantised integers. Every cluster is edge-connected
-//! except where small whole pieces are packed together. Determinism: regions share no state and
-//! every choice is a strict minimum over integer keys (the moves' sums are order-independent), so
-//! the result is the same for any thread count and on the GPU.
+//! quantised integers. Every cluster is edge-connected except where small whole pieces are packed
+//! together. Determinism: regions share no state and every choice is a strict minimum over
+//! integer keys (the moves' sums are order-independent), so the result is the same for any
+//! thread count and on the GPU.
 //!
 //! A vertex is tracked through its canonical corner in the region ([`canonical_corners`]): the
 //! first corner, in triangle order, of the region's lowest triangle using it. Per-corner state
@@ -719,11 +719,10 @@ const ATTEMPT: u32 = 1 << 31;
 /// cluster gives back instead its triangles nearest the open free side (breadth-first inwards from
 /// the front), never one next to the pocket, until the pocket fits; kept only when at most half is
 /// given back and the cluster with the pocket is one piece (the pocket usually lies by the growth
-/// front, where the last-grown rule would have to give back the triangles touching it). On the
-/// neurons' tube ends this took a further sixteenth off the count. Returns the triangles given
-/// back, or `None` with nothing changed. Scratch: `hop` (attempt stamps; hop counts are set again
-/// when a triangle next joins a frontier), `first` (per vertex, the kept members using it) and
-/// `wmark`.
+/// front, where the last-grown rule would have to give back the triangles touching it; tube ends
+/// on the neurons). Returns the triangles given back, or `None` with nothing changed. Scratch:
+/// `hop` (attempt stamps; hop counts are set again when a triangle next joins a frontier),
+/// `first` (per vertex, the kept members using it) and `wmark`.
 #[allow(clippy::too_many_arguments)]
 fn shed_front<N, I>(
     s: &mut State,
