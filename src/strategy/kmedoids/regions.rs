@@ -14,7 +14,7 @@
 //!      least (vertices added, free neighbours, squared distance to the cluster's centre, hops
 //!      from the seed, triangle id): the first key fills the vertex limit, the second closes
 //!      pockets, the third keeps the cluster round. Distances are between the triangles'
-//!      centroid cells in the Morton order's frame (13 bits per axis, [`packed_centres`]), and the
+//!      centroid cells in the Morton order's frame (15 bits per axis, [`packed_centres`]), and the
 //!      centre is their integer mean, so the key is the same integer on every device;
 //!    - a cluster whose piece ran out while it still has room continues at the next seed (small
 //!      pieces packed together instead of one part-filled meshlet each), if that seed's piece is
@@ -186,7 +186,7 @@ pub fn canonical_corners(mesh: &Mesh, vt: &Csr, region: &[u32]) -> Vec<u32> {
         .collect()
 }
 
-/// A packed centre: `[x | y << 16, z]`, 13 bits per axis.
+/// A packed centre: `[x | y << 16, z]`, 15 bits per axis.
 pub type Centre = [u32; 2];
 
 /// The three coordinates of a packed centre.
@@ -199,7 +199,7 @@ fn distance2(a: [u32; 3], b: [u32; 3]) -> u32 {
     (0..3).map(|j| a[j].abs_diff(b[j]).pow(2)).sum()
 }
 
-/// Each triangle's fine centroid cell in the Morton frame ([`MortonFrame::fine_cell`], 13 bits
+/// Each triangle's fine centroid cell in the Morton frame ([`MortonFrame::fine_cell`], 15 bits
 /// per axis along the box's longest side), packed as a [`Centre`]: the growth's geometric key.
 /// Only `+`, `-` and `x` touch a triangle, so `wgsl/morton.wgsl` computes the same words.
 pub fn packed_centres(mesh: &Mesh) -> Vec<Centre> {
