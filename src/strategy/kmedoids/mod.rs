@@ -126,8 +126,8 @@ pub struct Config {
     /// parallel work and more partly filled clusters at their borders.
     pub region_triangles: u32,
     /// Most rounds of boundary moves, the medoid iteration that lowers the objective without
-    /// changing the count (parallel, regions; [`moves`]): each round costs about a tenth of the
-    /// run, and the first rounds gain the most.
+    /// changing the count (parallel, regions; [`moves`]). The first rounds gain the most; the
+    /// cost and the gain per round are in `results/kmedoids.md`'s run-time-against-error sweep.
     pub move_rounds: u32,
 }
 

@@ -258,6 +258,23 @@ struct State {
     wmark: Vec<u32>,
 }
 
+impl State {
+    /// A region of `n` triangles before its growth: everything free, no piece found yet.
+    fn new(n: usize) -> Self {
+        Self {
+            label: vec![NONE; n],
+            inq: vec![NONE; n],
+            hop: vec![0; n],
+            aux: vec![0; n],
+            piece: vec![NONE; n],
+            opos: vec![0; n],
+            mark: vec![NONE; 3 * n],
+            first: vec![0; 3 * n],
+            wmark: vec![0; 3 * n],
+        }
+    }
+}
+
 /// Step 2 for region `r` (members `tris`, ascending): each member's cluster, numbered from 0 in
 /// the order clusters close, and the cluster count.
 pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, u32) {
@@ -266,17 +283,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         input.limits.max_vertices as usize,
         input.limits.max_triangles as usize,
     );
-    let mut s = State {
-        label: vec![NONE; n],
-        inq: vec![NONE; n],
-        hop: vec![0; n],
-        aux: vec![0; n],
-        piece: vec![NONE; n],
-        opos: vec![0; n],
-        mark: vec![NONE; 3 * n],
-        first: vec![0; 3 * n],
-        wmark: vec![0; 3 * n],
-    };
+    let mut s = State::new(n);
     // Neighbours of local triangle `i` inside the region, as local indices.
     let nbrs = |i: usize| {
         input
@@ -969,17 +976,9 @@ mod tests {
             .iter()
             .find(|&&x| pick(&m, &order[..ball], x))
             .unwrap() as usize;
-        let mut s = State {
-            label: vec![NONE; t],
-            inq: vec![NONE; t],
-            hop: vec![0; t],
-            aux: vec![0; t],
-            piece: vec![0; t],
-            opos: vec![0; t],
-            mark: vec![NONE; 3 * t],
-            first: vec![0; 3 * t],
-            wmark: vec![0; 3 * t],
-        };
+        let mut s = State::new(t);
+        // One piece: the whole terrain.
+        s.piece.fill(0);
         let grown: Vec<usize> = order[..ball].iter().map(|&x| x as usize).collect();
         for (p, &g) in grown.iter().enumerate() {
             s.label[g] = 0;
