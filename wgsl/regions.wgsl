@@ -2,8 +2,8 @@
 // (driver: src/gpu/regions.rs):
 //   init      canonical_corners, and the State words of grow_region set to their start values
 //             (per triangle)
-//   grow      grow_region with absorb_pockets (shed_front) and merge_neighbours: one invocation
-//             per region
+//   grow      grow_region with Packing::nearest (nearest_piece), absorb_pockets (shed_front)
+//             and merge_neighbours: one invocation per region
 //             (one per workgroup, or eight per workgroup in grow_rows),
 //             the same sequential steps over the same integer keys (regions share no word, so
 //             they run at once)
@@ -41,8 +41,8 @@ struct Params { t: u32, regions: u32, max_v: u32, max_t: u32, k: u32, pad: u32 }
 // medoid kernel's scratch (9 words per member at 9x the cluster's member offset).
 @group(0) @binding(13) var<storage, read_write> cstate: array<u32>;
 // Per region at its member offset, sections of T: order, front, pockets' triangles, pockets,
-// pieces left, members by cluster (seq), cluster starts; then per region `max_t` words each:
-// grown, vertex counts, histogram.
+// pieces left, members by cluster (seq), cluster starts, piece starts; then per region `max_t`
+// words each: grown, vertex counts, histogram.
 @group(0) @binding(14) var<storage, read_write> arena: array<u32>;
 @group(0) @binding(15) var<storage, read_write> labels: array<u32>;
 @group(0) @binding(16) var<storage, read_write> dist: array<u32>;
@@ -76,9 +76,10 @@ fn s_pockets() -> u32 { return 3u * p.t; }
 fn s_left() -> u32 { return 4u * p.t; }
 fn s_seq() -> u32 { return 5u * p.t; }
 fn s_cstart() -> u32 { return 6u * p.t; }
-fn s_grown(r: u32) -> u32 { return 7u * p.t + r * p.max_t; }
-fn s_vcount(r: u32) -> u32 { return 7u * p.t + (p.regions + r) * p.max_t; }
-fn s_hist(r: u32) -> u32 { return 7u * p.t + (2u * p.regions + r) * p.max_t; }
+fn s_pstart() -> u32 { return 7u * p.t; }
+fn s_grown(r: u32) -> u32 { return 8u * p.t + r * p.max_t; }
+fn s_vcount(r: u32) -> u32 { return 8u * p.t + (p.regions + r) * p.max_t; }
+fn s_hist(r: u32) -> u32 { return 8u * p.t + (2u * p.regions + r) * p.max_t; }
 
 // ---- init ------------------------------------------------------------------------------------
 
@@ -121,6 +122,8 @@ const CUT: u32 = 0x80000000u;
 const BIG: u32 = 0x80000000u;
 // Pocket evaluations so far (the wmark stamp).
 var<private> SERIAL: u32;
+// Pieces a packing cluster weighs for its next piece (regions::PACK_WINDOW).
+const PACK_WINDOW: u32 = 32u;
 
 fn in_region(x: u32) -> bool { return region(x) == R; }
 
@@ -501,6 +504,34 @@ fn grow_rows(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_in
     grow_one(group(wid) * 8u + lid);
 }
 
+// Packing::nearest: the seed of the piece nearest the centre `cen` (ties to the earlier piece)
+// among the PACK_WINDOW pieces from the cursor's, the cursor's own or an untouched one after it,
+// if it is not cut by the region's border and its seed fits; NONE if no piece qualifies.
+fn nearest_piece(np: u32, cursor: u32, nv: u32, cen: vec3<u32>) -> u32 {
+    let O = s_order() + RS;
+    let L = s_left() + RS;
+    let PS = s_pstart() + RS;
+    let first = piece(arena[O + cursor]);
+    var best = NONE;
+    var best_d = 0u;
+    for (var q = first; q < min(first + PACK_WINDOW, np); q++) {
+        var seed = arena[O + cursor];
+        if (q != first) {
+            var end = N;
+            if (q + 1u < np) { end = arena[PS + q + 1u]; }
+            if ((arena[L + q] & ~CUT) != end - arena[PS + q]) { continue; }
+            seed = arena[O + arena[PS + q]];
+        }
+        if ((arena[L + q] & CUT) != 0u || nv + added(seed) > p.max_v) { continue; }
+        let d = distance2(centre(seed), cen);
+        if (best == NONE || d < best_d) {
+            best = seed;
+            best_d = d;
+        }
+    }
+    return best;
+}
+
 fn grow_one(r: u32) {
     if (r >= p.regions) { return; }
     R = r;
@@ -512,6 +543,7 @@ fn grow_one(r: u32) {
     let O = s_order() + RS;
     let F = s_front() + RS;
     let L = s_left() + RS;
+    let PS = s_pstart() + RS;
     let G = s_grown(r);
     let VC = s_vcount(r);
     // Pieces in reversed BFS order, the seed order.
@@ -540,6 +572,7 @@ fn grow_one(r: u32) {
             }
         }
         arena[L + np] = (olen - start) | cut;
+        arena[PS + np] = start;
         var a = start;
         var b = olen - 1u;
         while (a < b) {
@@ -567,20 +600,22 @@ fn grow_one(r: u32) {
             if (open) { written = close(glen, written); }
             break;
         }
-        let seed = arena[O + cursor];
-        if (!open) {
+        var seed = arena[O + cursor];
+        if (open) {
+            // A packing cluster goes on at the nearest piece that fits, or closes as it is.
+            seed = nearest_piece(np, cursor, nv, vec3<u32>(sx, sy, sz) / glen);
+            if (seed == NONE) {
+                written = close(glen, written);
+                open = false;
+                continue;
+            }
+        } else {
             nv = 0u;
             open = true;
             glen = 0u;
             sx = 0u;
             sy = 0u;
             sz = 0u;
-        }
-        if (glen >= p.max_t || nv + added(seed) > p.max_v
-            || (glen > 0u && (arena[L + piece(seed)] & CUT) != 0u)) {
-            written = close(glen, written);
-            open = false;
-            continue;
         }
         arena[F] = seed;
         var flen = 1u;

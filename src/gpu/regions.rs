@@ -122,7 +122,7 @@ pub fn cluster_regions(
     fits(gpu, "regions' corner state", 9 * t)?;
     fits(gpu, "regions' canonical corners and centres", 5 * t)?;
     let k_regions = region_count(t, cfg.region_triangles as usize);
-    let arena_len = 7 * t + 3 * k_regions * limits.max_triangles as usize;
+    let arena_len = 8 * t + 3 * k_regions * limits.max_triangles as usize;
     fits(gpu, "regions' lists", arena_len)?;
     if t.div_ceil(k_regions) >= 1 << 24 {
         // Regions hold at most ceil(T / k) plus the small pieces they take in; checked exactly

@@ -255,3 +255,11 @@ fn the_prelude_fine_cell_bound_is_the_cpus() {
         crate::strategy::kmedoids::flat::FINE_MAX
     );
 }
+
+#[test]
+fn the_grower_packs_over_the_cpus_window() {
+    assert_eq!(
+        constant("regions.wgsl", "PACK_WINDOW") as usize,
+        crate::strategy::kmedoids::regions::PACK_WINDOW
+    );
+}

@@ -16,10 +16,12 @@
 //!      pockets, the third keeps the cluster round. Distances are between the triangles'
 //!      centroid cells in the Morton order's frame (15 bits per axis, [`packed_centres`]), and the
 //!      centre is their integer mean, so the key is the same integer on every device;
-//!    - a cluster whose piece ran out while it still has room continues at the next seed (small
-//!      pieces packed together instead of one part-filled meshlet each), if that seed's piece is
-//!      a whole piece of the mesh (one the region's border cuts could put the cluster in two
-//!      parts of one mesh piece);
+//!    - a cluster whose piece ran out while it still has room continues in another piece (small
+//!      pieces packed together instead of one part-filled meshlet each): of the next
+//!      [`PACK_WINDOW`] pieces in seed order, the one whose seed is nearest the cluster's centre
+//!      and fits, if it is a whole piece of the mesh (one the region's border cuts could put the
+//!      cluster in two parts of one mesh piece). Taking the next piece instead packed pieces far
+//!      apart where a lattice's struts come in rows;
 //!    - when a cluster stops, free pockets next to it of at most half the triangle limit are
 //!      absorbed, largest first, if giving back its last-grown triangles (at most half of them)
 //!      makes room: the pocket would otherwise become a meshlet of its own; each pocket that
@@ -38,8 +40,9 @@
 //! Where it differs from the paper (section 3): k comes out of the growth, nothing is split, and
 //! the iteration moves only border triangles, within the limits (the growth keys, not
 //! nearest-medoid assignment, shape the clusters); where it differs from `kmedoids-parallel`:
-//! merges only inside a region (none across region borders), no packing of whole pieces by
-//! distance, the orphan rules over pockets of the region only, and the running centroid in
+//! merges only inside a region (none across region borders), whole pieces packed during the
+//! growth (nearest within a window, not nearest over all clusters afterwards), the orphan rules
+//! over pockets of the region only, and the running centroid in
 //! quantised integers. Every cluster is edge-connected except where small whole pieces are packed
 //! together. Determinism: regions share no state and every choice is a strict minimum over
 //! integer keys (the moves' sums are order-independent), so the result is the same for any
@@ -65,6 +68,11 @@ use std::time::Instant;
 const NONE: u32 = UNREACHED;
 /// Marks a pocket stamp whose free component is too large to absorb.
 const BIG: u32 = 1 << 31;
+/// How many pieces, in seed order from the first free one, a packing cluster weighs for its next
+/// piece: pieces come in runs along the mesh (the order a generator or a scanner wrote them), so
+/// the nearest is usually a few ahead, and the bound keeps a region of many pieces linear.
+/// `wgsl/regions.wgsl` holds the same value.
+pub const PACK_WINDOW: usize = 32;
 
 /// Runs steps 1-5 over the dual graph; `t0` is when the run began (the adjacency counts in).
 pub fn cluster(
@@ -306,6 +314,8 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
     let mut left = Vec::new();
     // Whether a piece is a whole piece of the mesh (no edge leaves the region).
     let mut closed: Vec<bool> = Vec::new();
+    // Where each piece starts in the seed order (pieces are contiguous there).
+    let mut starts: Vec<usize> = Vec::new();
     for root in 0..n {
         if s.piece[root] != NONE {
             continue;
@@ -328,6 +338,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
             }
         }
         left.push((order.len() - start) as u32);
+        starts.push(start);
         closed.push(whole);
         order[start..].reverse();
     }
@@ -359,24 +370,34 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
             }
             break;
         }
-        let seed = order[cursor];
-        if !open {
+        let seed = if open {
+            // A packing cluster (its piece ran out while it had room) goes on at the nearest
+            // piece that fits among the next ones, or closes as it is.
+            let g = grown.len() as u32;
+            let pack = Packing {
+                order: &order,
+                starts: &starts,
+                left: &left,
+                closed: &closed,
+                cursor,
+                centre: sum.map(|x| x / g),
+            };
+            let fits = |i: usize| nv + added(&s, i, c) <= mv;
+            match pack.nearest(&s.piece, &|i| input.centres[tris[i] as usize], &fits) {
+                Some(i) => i,
+                None => {
+                    c += 1;
+                    open = false;
+                    continue;
+                }
+            }
+        } else {
             (nv, open) = (0, true);
             sum = [0; 3];
             grown.clear();
             vcount.clear();
-        }
-        // A packing cluster closes as it is when the next piece does not fit, or is part of a
-        // mesh piece cut by the region's border (which another of its parts may already be in:
-        // the cluster would then be in two parts of one piece).
-        if grown.len() >= mt
-            || nv + added(&s, seed, c) > mv
-            || (!grown.is_empty() && !closed[s.piece[seed] as usize])
-        {
-            c += 1;
-            open = false;
-            continue;
-        }
+            order[cursor]
+        };
         front.clear();
         front.push(seed);
         s.inq[seed] = c;
@@ -451,6 +472,53 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
     }
     let k = merge_neighbours(&mut s, &nbrs, &corners, n, c, mv, mt, &mut serial);
     (s.label, k)
+}
+
+/// Where a packing cluster may go on: the region's pieces in seed order and its centre.
+struct Packing<'a> {
+    order: &'a [usize],
+    starts: &'a [usize],
+    left: &'a [u32],
+    closed: &'a [bool],
+    /// The first free triangle's position in `order`.
+    cursor: usize,
+    centre: [u32; 3],
+}
+
+impl Packing<'_> {
+    /// The seed of the piece nearest the cluster's centre (ties to the earlier piece) among the
+    /// [`PACK_WINDOW`] pieces from the cursor's: the cursor's own, or an untouched one after it
+    /// (its first triangle in the seed order), if it is a whole piece of the mesh (a piece the
+    /// region's border cuts could put the cluster in two parts of one mesh piece) and its seed
+    /// `fits` the cluster.
+    fn nearest(
+        &self,
+        piece: &[u32],
+        centre_of: &impl Fn(usize) -> Centre,
+        fits: &impl Fn(usize) -> bool,
+    ) -> Option<usize> {
+        let first = piece[self.order[self.cursor]] as usize;
+        let mut best: Option<(u32, usize)> = None;
+        for p in first..(first + PACK_WINDOW).min(self.starts.len()) {
+            let seed = if p == first {
+                self.order[self.cursor]
+            } else {
+                let end = self.starts.get(p + 1).copied().unwrap_or(self.order.len());
+                if self.left[p] as usize != end - self.starts[p] {
+                    continue;
+                }
+                self.order[self.starts[p]]
+            };
+            if !self.closed[p] || !fits(seed) {
+                continue;
+            }
+            let d = distance2(unpack(centre_of(seed)), self.centre);
+            if best.is_none_or(|(b, _)| d < b) {
+                best = Some((d, seed));
+            }
+        }
+        best.map(|(_, seed)| seed)
+    }
 }
 
 /// Step 2b for one region: clusters merged into a neighbour across an edge whose union fits,
@@ -1074,6 +1142,36 @@ mod tests {
         let before = (s.label.clone(), s.aux.clone(), grown.clone());
         assert!(front(&dual, &canon, &mut s, &mut grown, pocket, limits).is_none());
         assert_eq!((s.label, s.aux, grown), before);
+    }
+
+    #[test]
+    fn a_packing_cluster_goes_on_at_the_nearest_piece_not_the_next() {
+        // Three quads written near, far, near: a cluster holds two, and the first quad's cluster
+        // takes the third (near it), not the second (next in the seed order).
+        let quad = |x: f32, base: u32| {
+            let p = [
+                [x, 0.0, 0.0],
+                [x + 1.0, 0.0, 0.0],
+                [x + 1.0, 1.0, 0.0],
+                [x, 1.0, 0.0],
+            ];
+            let i = [0, 1, 2, 0, 2, 3].map(|v| base + v);
+            (p, i)
+        };
+        let (mut positions, mut indices) = (Vec::new(), Vec::new());
+        for (q, x) in [0.0, 100.0, 2.0].into_iter().enumerate() {
+            let (p, i) = quad(x, 4 * q as u32);
+            positions.extend(p);
+            indices.extend(i);
+        }
+        let m = Mesh::from_slices(&positions, &indices, "three quads").unwrap();
+        let limits = Limits::new(8, 4).unwrap();
+        let out = run(&m, limits, Mode::Regions, &Config::default());
+        validate(&m, &out.meshlets, limits).unwrap();
+        let l = &out.labels;
+        assert_eq!((l[0], l[1], l[4], l[5]), (l[0], l[0], l[0], l[0]));
+        assert_eq!(l[2], l[3]);
+        assert_ne!(l[0], l[2]);
     }
 
     #[test]
