@@ -42,11 +42,10 @@
 //! nearest-medoid assignment, shape the clusters); where it differs from `kmedoids-parallel`:
 //! merges only inside a region (none across region borders), whole pieces packed during the
 //! growth (nearest within a window, not nearest over all clusters afterwards), the orphan rules
-//! over pockets of the region only, and the running centroid in
-//! quantised integers. Every cluster is edge-connected except where small whole pieces are packed
-//! together. Determinism: regions share no state and every choice is a strict minimum over
-//! integer keys (the moves' sums are order-independent), so the result is the same for any
-//! thread count and on the GPU.
+//! over pockets of the region only, and the running centroid in quantised integers. Every
+//! cluster is edge-connected except where small whole pieces are packed together. Determinism:
+//! regions share no state and every choice is a strict minimum over integer keys (the moves'
+//! sums are order-independent), so the result is the same for any thread count and on the GPU.
 //!
 //! A vertex is tracked through its canonical corner in the region ([`canonical_corners`]): the
 //! first corner, in triangle order, of the region's lowest triangle using it. Per-corner state
