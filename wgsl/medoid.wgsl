@@ -1,6 +1,6 @@
 // The paper's medoid of one cluster and its members' hop distances, shared by regions.wgsl and
 // moves.wgsl (src/gpu/mod.rs puts it after each, `wgsl!`). The CPU reference is
-// `capacity::medoid_of` (`LocalGraph::distance_sums_128` for the reach sets). The including
+// `capacity::medoid_of` (`LocalGraph::least_sum_128` for the reach sets). The including
 // module declares `labels`, `dist`, `arena` (the member list at `M`, a BFS queue at `Q`), `cstate`
 // (9 scratch words per member), `dual_off` with `nb`, and `set_medoid(g, m)`.
 
@@ -69,10 +69,10 @@ fn medoid_serial(g: u32, span: vec3<u32>) {
     finish_cluster(g, Q, M, m, best);
 }
 
-// medoid_index with 128-bit reach sets (distance_sums_128): the same sums as medoid_serial for
+// medoid_index with 128-bit reach sets (least_sum_128): the medoid of medoid_serial for
 // clusters of at most 128 members, each with at most 4 in-cluster neighbours (every manifold
 // cluster); `reach_k(i)` is i's set OR its neighbours' `reach_{k-1}`, and i's sum adds
-// m - |reach_k(i)| per level until no set grows. Its scratch is the cluster's corner-state words
+// m - |reach_k(i)| per level until the least sum is decided or no set grows. Its scratch is the cluster's corner-state words
 // (free once `grow` is done: 9 per member hold two generations of sets and the sums) and its
 // queue words (each member's neighbours, 4 local numbers of 8 bits). Returns false, touching
 // nothing the BFS path reads, when the cluster does not fit.
@@ -110,14 +110,23 @@ fn medoid_bits(g: u32, span: vec3<u32>, o: u32) -> bool {
     var cur = S;
     var nxt = S + 4u * m;
     var levels = 0u;
+    // least_sum_128's early stop: the least (sum, triangle) among full sets against the least
+    // (bound, triangle) among the others; `best` stays NONE if the levels run to the end.
+    var best = NONE;
     loop {
         levels += 1u;
         var grew = false;
+        var full_sum = NONE;
+        var full_s = NONE;
+        var bound = NONE;
+        var bound_s = NONE;
         for (var i = 0u; i < m; i++) {
             let c = cur + 4u * i;
             var d = vec4<u32>(cstate[c], cstate[c + 1u], cstate[c + 2u], cstate[c + 3u]);
             let before = dot(countOneBits(d), vec4<u32>(1u));
-            cstate[S + 8u * m + i] += m - before;
+            let acc = cstate[S + 8u * m + i] + m - before;
+            cstate[S + 8u * m + i] = acc;
+            var after = before;
             if (before != m) {
                 let packed = arena[Q + i];
                 for (var b = 0u; b < 4u; b++) {
@@ -126,31 +135,51 @@ fn medoid_bits(g: u32, span: vec3<u32>, o: u32) -> bool {
                     let y = cur + 4u * j;
                     d |= vec4<u32>(cstate[y], cstate[y + 1u], cstate[y + 2u], cstate[y + 3u]);
                 }
-                if (dot(countOneBits(d), vec4<u32>(1u)) != before) { grew = true; }
+                after = dot(countOneBits(d), vec4<u32>(1u));
+                if (after != before) { grew = true; }
             }
             let n = nxt + 4u * i;
             cstate[n] = d.x;
             cstate[n + 1u] = d.y;
             cstate[n + 2u] = d.z;
             cstate[n + 3u] = d.w;
+            let s = arena[M + i];
+            if (after == m) {
+                if (acc < full_sum || (acc == full_sum && s < full_s)) {
+                    full_sum = acc;
+                    full_s = s;
+                }
+            } else {
+                let lb = acc + m - after;
+                if (lb < bound || (lb == bound && s < bound_s)) {
+                    bound = lb;
+                    bound_s = s;
+                }
+            }
         }
         let t = cur;
         cur = nxt;
         nxt = t;
+        if (full_sum < bound || (full_sum == bound && full_s < bound_s)) {
+            best = full_s;
+            break;
+        }
         if (!grew) { break; }
     }
-    var best = NONE;
+    let decided = best != NONE;
     var best_sum = NONE;
     for (var i = 0u; i < m; i++) {
-        let c = cur + 4u * i;
-        let count = dot(countOneBits(vec4<u32>(cstate[c], cstate[c + 1u], cstate[c + 2u], cstate[c + 3u])), vec4<u32>(1u));
-        // An unreachable member was counted once per level; it counts m instead.
-        let missing = m - count;
-        let sum = cstate[S + 8u * m + i] - missing * levels + missing * m;
         let s = arena[M + i];
-        if (sum < best_sum || (sum == best_sum && s < best)) {
-            best_sum = sum;
-            best = s;
+        if (!decided) {
+            let c = cur + 4u * i;
+            let count = dot(countOneBits(vec4<u32>(cstate[c], cstate[c + 1u], cstate[c + 2u], cstate[c + 3u])), vec4<u32>(1u));
+            // In pieces: an unreachable member was counted once per level; it counts m instead.
+            let missing = m - count;
+            let sum = cstate[S + 8u * m + i] - missing * levels + missing * m;
+            if (sum < best_sum || (sum == best_sum && s < best)) {
+                best_sum = sum;
+                best = s;
+            }
         }
         dist[s] = NONE;
     }

@@ -8,7 +8,7 @@
 //             the same sequential steps over the same integer keys (regions share no word, so
 //             they run at once)
 //   relabel   step 3: cluster c of region r becomes base[r] + c (per triangle)
-//   medoid    medoids_and_distances: the paper's medoid of one cluster (distance_sums_128's reach
+//   medoid    medoids_and_distances: the paper's medoid of one cluster (least_sum_128's reach
 //             sets, or a BFS per member for wider clusters) and its members' hop distances (one
 //             invocation per cluster; the steps are in medoid.wgsl, shared with moves.wgsl)
 // The CPU keeps a region's state in lc arrays; here the same words live in global arrays
@@ -31,8 +31,8 @@ struct Params { t: u32, regions: u32, max_v: u32, max_t: u32, k: u32, pad: u32 }
 @group(0) @binding(9) var<storage, read_write> info: array<u32>;
 // Members of each region, ascending.
 @group(0) @binding(10) var<storage, read> items: array<u32>;
-// Per triangle, seven sections of T: region, lc cluster, frontier cluster, hops, aux, piece,
-// position in the seed order.
+// Per triangle, eight sections of T: region, lc cluster, frontier cluster, hops, aux, piece,
+// position in the seed order, free neighbours while on the frontier (State::free).
 @group(0) @binding(11) var<storage, read_write> tri: array<u32>;
 // [0, 3T) per corner: the canonical corner; [3T, 5T) per triangle: its fine centroid cell, two
 // words (x | y << 16, z), from morton.wgsl (packed_centres).
@@ -62,6 +62,8 @@ fn set_aux(x: u32, v: u32) { tri[4u * p.t + x] = v; }
 fn piece(x: u32) -> u32 { return tri[5u * p.t + x]; }
 // Position in the region's seed order.
 fn opos(x: u32) -> u32 { return tri[6u * p.t + x]; }
+fn free_of(x: u32) -> u32 { return tri[7u * p.t + x]; }
+fn set_free(x: u32, v: u32) { tri[7u * p.t + x] = v; }
 
 // cstate sections.
 fn mark(k: u32) -> u32 { return cstate[k]; }
@@ -107,6 +109,7 @@ fn init(@builtin(global_invocation_id) gid: vec3<u32>) {
     tri[3u * p.t + t] = 0u;
     set_aux(t, 0u);
     tri[5u * p.t + t] = NONE;
+    set_free(t, 0u);
 }
 
 // ---- grow ------------------------------------------------------------------------------------
@@ -621,6 +624,7 @@ fn grow_one(r: u32) {
         var flen = 1u;
         tri[2u * p.t + seed] = C;
         tri[3u * p.t + seed] = 0u;
+        set_free(seed, free_neighbours(seed));
         while (glen < p.max_t) {
             var cen = centre(seed);
             if (glen > 0u) { cen = vec3<u32>(sx, sy, sz) / glen; }
@@ -631,7 +635,7 @@ fn grow_one(r: u32) {
                 let x = arena[F + fi];
                 let a = added(x);
                 if (nv + a > p.max_v) { continue; }
-                let key = vec4<u32>(a, free_neighbours(x), distance2(centre(x), cen), x);
+                let key = vec4<u32>(a, free_of(x), distance2(centre(x), cen), x);
                 if (bi == NONE || key_less(key, hop(x), best, best_hop)) {
                     best = key;
                     best_hop = hop(x);
@@ -662,9 +666,14 @@ fn grow_one(r: u32) {
             sz += cx.z;
             for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
                 let y = nb(e);
-                if (in_region(y) && lab(y) == NONE && inq(y) != C) {
+                if (!in_region(y) || lab(y) != NONE) { continue; }
+                // On the frontier: one free neighbour fewer; else it joins, counted afresh.
+                if (inq(y) == C) {
+                    set_free(y, free_of(y) - 1u);
+                } else {
                     tri[2u * p.t + y] = C;
                     tri[3u * p.t + y] = hop(x) + 1u;
+                    set_free(y, free_neighbours(y));
                     arena[F + flen] = y;
                     flen += 1u;
                 }

@@ -48,8 +48,8 @@ pub struct Config {
     /// Above this many triangles the one-thread runs are left out (they double a long run).
     #[arg(long, default_value_t = 1_000_000)]
     pub one_thread_max: usize,
-    /// Timed runs of `kmedoids`, `kmedoids-parallel` and meshoptimizer, interleaved, per mesh under 2 M
-    /// triangles (the median is reported); one run above.
+    /// Timed runs of `kmedoids`, `kmedoids-parallel`, `kmedoids-regions` and meshoptimizer,
+    /// interleaved, per mesh under 2 M triangles (the median is reported); one run above.
     #[arg(long, default_value_t = 3)]
     pub runs: usize,
     /// Mesh (file stem) for the iteration/threshold sweep.
@@ -592,13 +592,17 @@ pub fn run(cfg: &Config) -> Result<()> {
         let t = m.triangle_count();
         let scaled = name.contains(' ');
         let reps = if t < 2_000_000 { cfg.runs } else { 1 };
-        // meshoptimizer, `kmedoids` and `kmedoids-parallel` interleaved, so machine noise hits
-        // them alike (the targets compare their times).
-        pb.set_message(format!("{name} / meshopt, kmedoids, kmedoids-parallel"));
+        // meshoptimizer, `kmedoids`, `kmedoids-parallel` and `kmedoids-regions` interleaved, so
+        // machine noise hits them alike (the targets compare their times).
+        pb.set_message(format!(
+            "{name} / meshopt, kmedoids, kmedoids-parallel, kmedoids-regions"
+        ));
         let (mut mo_times, mut km_times, mut par_times) = (Vec::new(), Vec::new(), Vec::new());
+        let mut reg_times = Vec::new();
         let mut mo_out = None;
         let mut km_out = None;
         let mut par_out = None;
+        let mut reg_out = None;
         for _ in 0..reps.max(1) {
             let (s, out) = timed(1, || meshopt.build(m, cfg.limits));
             mo_times.push(s);
@@ -611,6 +615,12 @@ pub fn run(cfg: &Config) -> Result<()> {
             let (s, c) = timed(1, || cluster(m, cfg.limits, Mode::Parallel, &pc));
             par_times.push(s);
             par_out = Some(c);
+            if modes.contains(&Method::Regions) {
+                let rc = Method::Regions.config();
+                let (s, c) = timed(1, || cluster(m, cfg.limits, Method::Regions.mode(), &rc));
+                reg_times.push(s);
+                reg_out = Some(c);
+            }
         }
         let mo = mo_out.expect("one run");
         validate(m, &mo, cfg.limits).with_context(|| format!("{name}: meshopt invalid"))?;
@@ -629,6 +639,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             let interleaved = match mode {
                 Method::Default => km_out.take().map(|c| (super::median(&km_times), c)),
                 Method::Parallel => par_out.take().map(|c| (super::median(&par_times), c)),
+                Method::Regions => reg_out.take().map(|c| (super::median(&reg_times), c)),
                 _ => None,
             };
             let (seconds, c) = match interleaved {
@@ -901,8 +912,8 @@ pub fn run(cfg: &Config) -> Result<()> {
          round and the mesh re-clustered (the default before; what the GPU kernels run). `kmedoids-paper`: one \
          cluster added and everything re-run per overflow, as the paper does; when its budget of {} s runs out \
          it finishes the fast way (marked; not run on the subdivided dragons). Seconds: rayon pool, median of {} \
-         runs of `kmedoids` and of `kmedoids-parallel` interleaved with meshoptimizer's `build_meshlets` under \
-         2 M triangles, else one run; one run of the others. `1 thread s`: one run on a one-thread pool (up to {} triangles), whose \
+         runs of `kmedoids`, `kmedoids-parallel` and `kmedoids-regions` interleaved with meshoptimizer's \
+         `build_meshlets` under 2 M triangles, else one run; one run of the others. `1 thread s`: one run on a one-thread pool (up to {} triangles), whose \
          output was checked identical to the pool's. Mean hops: the k-medoids objective (hop distance of a \
          triangle to its medoid inside its cluster). Radius: mean bounding-sphere radius over meshoptimizer's. \
          `connected`: meshlets that are one edge-connected piece; `connected where the mesh is`: clusters with \

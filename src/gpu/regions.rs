@@ -68,7 +68,7 @@ binding_set! {
         info: ReadWrite,
         /// Members of each region, ascending.
         items: Read,
-        /// Per-triangle state (seven sections).
+        /// Per-triangle state (eight sections).
         tri: ReadWrite,
         /// Canonical corners, then the triangles' packed centroid cells.
         canon: ReadWrite,
@@ -118,7 +118,7 @@ pub fn cluster_regions(
 ) -> Result<(GpuRegions, DeviceMeshlets), GpuError> {
     let start = Instant::now();
     let (t, n) = source.counts();
-    fits(gpu, "regions' triangle state", 7 * t)?;
+    fits(gpu, "regions' triangle state", 8 * t)?;
     fits(gpu, "regions' corner state", 9 * t)?;
     fits(gpu, "regions' canonical corners and centres", 5 * t)?;
     let k_regions = region_count(t, cfg.region_triangles as usize);
@@ -148,7 +148,7 @@ pub fn cluster_regions(
     let (bufs, up) = timed(|| {
         (
             gpu.zeros("region info", info_len),
-            gpu.zeros("region triangle state", 7 * t),
+            gpu.zeros("region triangle state", 8 * t),
             gpu.zeros("canonical corners and centres", 5 * t),
             gpu.zeros("corner state", 9 * t),
             gpu.zeros("region lists", arena_len),

@@ -156,9 +156,88 @@ impl LocalGraph {
     /// The node with the smallest [`Self::distance_sums`] (lowest index on ties): the paper's
     /// medoid.
     pub(crate) fn medoid_index(&self) -> usize {
+        if self.len() <= 128 {
+            return self.medoid_128();
+        }
         let sums = self.distance_sums();
         (0..self.len())
             .min_by_key(|&x| (sums[x], x))
+            .expect("a cluster has members")
+    }
+
+    /// [`Self::medoid_index`] for at most 128 nodes, with the popcnt build as in
+    /// [`Self::distance_sums_128`].
+    fn medoid_128(&self) -> usize {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("popcnt") {
+            // SAFETY: the CPU has the feature the function is compiled for (checked above).
+            return unsafe { self.medoid_128_popcnt() };
+        }
+        self.least_sum_128()
+    }
+
+    /// [`Self::least_sum_128`] compiled with hardware bit counts.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "popcnt")]
+    unsafe fn medoid_128_popcnt(&self) -> usize {
+        self.least_sum_128()
+    }
+
+    /// The reach-set levels of [`Self::sums_128`], stopped once the least sum is decided rather
+    /// than when no set grows. A node whose set is full has its exact sum; any other's sum is at
+    /// least what it has plus the next level's term (`n - |reach|`, already known). When the
+    /// least (sum, index) among full nodes is below every other node's (bound, index), it is the
+    /// medoid. The central node fills at its eccentricity, about half the diameter, and the
+    /// others' bounds pass it within a level or two, so this runs about half the levels. A
+    /// cluster in pieces never fills a set and runs to the end.
+    #[inline(always)]
+    fn least_sum_128(&self) -> usize {
+        let n = self.len();
+        let full = n as u32;
+        let mut cur: Vec<u128> = (0..n).map(|x| 1u128 << x).collect();
+        let mut next = vec![0u128; n];
+        let mut count = vec![1u32; n];
+        let mut acc = vec![0u64; n];
+        let mut levels = 0u64;
+        loop {
+            levels += 1;
+            let mut grew = false;
+            let mut best = (u64::MAX, usize::MAX);
+            let mut bound = (u64::MAX, usize::MAX);
+            for x in 0..n {
+                acc[x] += (full - count[x]) as u64;
+                let mut d = cur[x];
+                if count[x] != full {
+                    for &y in self.row(x) {
+                        d |= cur[y as usize];
+                    }
+                    let c = d.count_ones();
+                    if c != count[x] {
+                        grew = true;
+                        count[x] = c;
+                    }
+                }
+                next[x] = d;
+                if count[x] == full {
+                    best = best.min((acc[x], x));
+                } else {
+                    bound = bound.min((acc[x] + (full - count[x]) as u64, x));
+                }
+            }
+            std::mem::swap(&mut cur, &mut next);
+            if best < bound {
+                return best.1;
+            }
+            if !grew {
+                break;
+            }
+        }
+        // In pieces: an unreachable node was counted once per level; it counts n instead.
+        (0..n)
+            .min_by_key(|&x| {
+                let missing = (full - count[x]) as u64;
+                (acc[x] - missing * levels + missing * n as u64, x)
+            })
             .expect("a cluster has members")
     }
 
@@ -272,6 +351,34 @@ mod tests {
     use crate::mesh::generate;
 
     #[test]
+    fn the_early_stop_finds_the_least_sum_on_many_clusters() {
+        // Runs of triangles along a twisted tube: bands, strips and patches whose medoids tie
+        // often (symmetric shapes), which is where stopping early could go wrong.
+        let m = generate::knot_tube(60, 10, 2);
+        let vt = vertex_triangles(&m);
+        let dual = dual_graph(&m, &vt);
+        let t = m.triangle_count() as u32;
+        let mut checked = 0;
+        for start in (0..t).step_by(53) {
+            for len in [1u32, 2, 7, 33, 64, 100, 127, 128] {
+                let members: Vec<u32> = (start..(start + len).min(t)).collect();
+                let mut labels = vec![1u32; t as usize];
+                for &x in &members {
+                    labels[x as usize] = 0;
+                }
+                let g = LocalGraph::new(&dual, &labels, 0, &members);
+                let (mut dist, mut queue) = (vec![0; members.len()], Vec::new());
+                let least = (0..members.len())
+                    .min_by_key(|&s| (g.bfs(s, &mut dist, &mut queue), s))
+                    .unwrap();
+                assert_eq!(g.least_sum_128(), least, "start {start}, length {len}");
+                checked += 1;
+            }
+        }
+        assert!(checked > 100);
+    }
+
+    #[test]
     fn distance_sums_equal_one_bfs_per_member() {
         // A tube (cycles, several paths between members) and a cluster in two pieces (the
         // unreachable members count as the member count); sizes either side of the one-word
@@ -300,6 +407,12 @@ mod tests {
             // The portable build of the one-word path, whichever build the CPU took above.
             if members.len() <= 128 {
                 assert_eq!(g.sums_128(), sums);
+            }
+            // The medoid, stopped early or not, is the least (sum, index).
+            let least = (0..members.len()).min_by_key(|&x| (sums[x], x)).unwrap();
+            assert_eq!(g.medoid_index(), least);
+            if members.len() <= 128 {
+                assert_eq!(g.least_sum_128(), least);
             }
         }
     }

@@ -252,6 +252,10 @@ struct State {
     inq: Vec<u32>,
     /// Hops from the seed, set when put on the frontier.
     hop: Vec<u32>,
+    /// Free neighbours while on the frontier (the growth key's second term): counted when put on
+    /// the frontier and decremented as neighbours are grown, so that choosing the next triangle
+    /// does not walk every frontier triangle's neighbours again.
+    free: Vec<u32>,
     /// Position in the growing cluster (while grown) or the pocket stamp `c + 1` (while free).
     aux: Vec<u32>,
     piece: Vec<u32>,
@@ -272,6 +276,7 @@ impl State {
             label: vec![NONE; n],
             inq: vec![NONE; n],
             hop: vec![0; n],
+            free: vec![0; n],
             aux: vec![0; n],
             piece: vec![NONE; n],
             opos: vec![0; n],
@@ -351,6 +356,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
             .filter(|&j| s.mark[k[j]] != c && !k[..j].contains(&k[j]))
             .count()
     };
+    let free_neighbours = |s: &State, i: usize| nbrs(i).filter(|&j| s.label[j] == NONE).count();
     let mut front: Vec<usize> = Vec::new();
     let mut grown: Vec<usize> = Vec::new();
     // Cluster vertices after each grown triangle.
@@ -401,6 +407,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         front.push(seed);
         s.inq[seed] = c;
         s.hop[seed] = 0;
+        s.free[seed] = free_neighbours(&s, seed) as u32;
         while grown.len() < mt {
             // The cluster's centre so far (integer division: exact on every device).
             let centre = if grown.is_empty() {
@@ -411,11 +418,10 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
             };
             let mut best: Option<(GrowKey, usize)> = None;
             for (fi, &i) in front.iter().enumerate() {
-                let a = added(&s, i, c);
+                let (a, free) = (added(&s, i, c), s.free[i] as usize);
                 if nv + a > mv {
                     continue;
                 }
-                let free = nbrs(i).filter(|&j| s.label[j] == NONE).count();
                 let d2 = distance2(unpack(input.centres[tris[i] as usize]), centre);
                 let key = (a, free, d2, s.hop[i], i);
                 if best.is_none_or(|(b, _)| key < b) {
@@ -439,10 +445,18 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
                 *x += q;
             }
             vcount.push(nv as u32);
+            // Dual rows have no repeats, so each neighbour is seen once: on the frontier it
+            // has one free neighbour fewer, else it joins with its count taken afresh.
             for j in nbrs(i) {
-                if s.label[j] == NONE && s.inq[j] != c {
+                if s.label[j] != NONE {
+                    continue;
+                }
+                if s.inq[j] == c {
+                    s.free[j] -= 1;
+                } else {
                     s.inq[j] = c;
                     s.hop[j] = s.hop[i] + 1;
+                    s.free[j] = free_neighbours(&s, j) as u32;
                     front.push(j);
                 }
             }
