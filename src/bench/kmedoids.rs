@@ -356,6 +356,14 @@ const REGION_SWEEP: [u32; 7] = [1024, 2048, 4096, 8192, 16384, 32768, 65536];
 /// Rounds of boundary moves in the sweep.
 const MOVE_SWEEP: [u32; 5] = [0, 1, 2, 4, 8];
 
+/// A method timed interleaved with meshoptimizer: its pool and one-thread times, and its output.
+struct Interleaved {
+    method: Method,
+    times: Vec<f64>,
+    times_1t: Vec<f64>,
+    out: Option<Clustering>,
+}
+
 /// One mesh's verdict on the `kmedoids-parallel` targets (held to `kmedoids-regions` too).
 struct ParallelVerdict {
     mesh: String,
@@ -592,34 +600,43 @@ pub fn run(cfg: &Config) -> Result<()> {
         let t = m.triangle_count();
         let scaled = name.contains(' ');
         let reps = if t < 2_000_000 { cfg.runs } else { 1 };
-        // meshoptimizer, `kmedoids`, `kmedoids-parallel` and `kmedoids-regions` interleaved, so
-        // machine noise hits them alike (the targets compare their times).
+        // meshoptimizer and the capacity-aware methods interleaved, each on the pool and (up to
+        // `one_thread_max`) on one thread, so that machine noise hits them alike: the targets
+        // compare their times and their scaling.
         pb.set_message(format!(
             "{name} / meshopt, kmedoids, kmedoids-parallel, kmedoids-regions"
         ));
-        let (mut mo_times, mut km_times, mut par_times) = (Vec::new(), Vec::new(), Vec::new());
-        let mut reg_times = Vec::new();
+        let mut mo_times = Vec::new();
         let mut mo_out = None;
-        let mut km_out = None;
-        let mut par_out = None;
-        let mut reg_out = None;
+        let mut interleaved: Vec<Interleaved> =
+            [Method::Default, Method::Parallel, Method::Regions]
+                .into_iter()
+                .filter(|&x| x != Method::Regions || modes.contains(&x))
+                .map(|method| Interleaved {
+                    method,
+                    times: Vec::new(),
+                    times_1t: Vec::new(),
+                    out: None,
+                })
+                .collect();
         for _ in 0..reps.max(1) {
             let (s, out) = timed(1, || meshopt.build(m, cfg.limits));
             mo_times.push(s);
             mo_out = Some(out);
-            let kc = Method::Default.config();
-            let (s, c) = timed(1, || cluster(m, cfg.limits, Mode::Capacity, &kc));
-            km_times.push(s);
-            km_out = Some(c);
-            let pc = Method::Parallel.config();
-            let (s, c) = timed(1, || cluster(m, cfg.limits, Mode::Parallel, &pc));
-            par_times.push(s);
-            par_out = Some(c);
-            if modes.contains(&Method::Regions) {
-                let rc = Method::Regions.config();
-                let (s, c) = timed(1, || cluster(m, cfg.limits, Method::Regions.mode(), &rc));
-                reg_times.push(s);
-                reg_out = Some(c);
+            for run in &mut interleaved {
+                let kc = run.method.config();
+                let mode = run.method.mode();
+                let (s, c) = timed(1, || cluster(m, cfg.limits, mode, &kc));
+                run.times.push(s);
+                if t <= cfg.one_thread_max {
+                    let (s, one) = timed(1, || one_thread(|| cluster(m, cfg.limits, mode, &kc)));
+                    // Determinism, checked where it is cheap to: one thread = the pool.
+                    if one.labels != c.labels || one.medoids != c.medoids {
+                        bail!("{name}: {} differs on one thread", run.method.name());
+                    }
+                    run.times_1t.push(s);
+                }
+                run.out = Some(c);
             }
         }
         let mo = mo_out.expect("one run");
@@ -636,27 +653,33 @@ pub fn run(cfg: &Config) -> Result<()> {
                 paper_budget: cfg.paper_budget(),
                 ..mode.config()
             };
-            let interleaved = match mode {
-                Method::Default => km_out.take().map(|c| (super::median(&km_times), c)),
-                Method::Parallel => par_out.take().map(|c| (super::median(&par_times), c)),
-                Method::Regions => reg_out.take().map(|c| (super::median(&reg_times), c)),
-                _ => None,
-            };
-            let (seconds, c) = match interleaved {
+            let done = interleaved
+                .iter_mut()
+                .find(|r| r.method == mode)
+                .and_then(|r| {
+                    let one = (!r.times_1t.is_empty()).then(|| super::median(&r.times_1t));
+                    r.out.take().map(|c| (super::median(&r.times), one, c))
+                });
+            let (seconds, seconds_1t, c) = match done {
                 Some(run) => run,
-                None => timed(1, || cluster(m, cfg.limits, mode.mode(), &kc)),
+                None => {
+                    let (s, c) = timed(1, || cluster(m, cfg.limits, mode.mode(), &kc));
+                    let one = (mode != Method::Paper && t <= cfg.one_thread_max)
+                        .then(|| {
+                            let (s, one) = timed(1, || {
+                                one_thread(|| cluster(m, cfg.limits, mode.mode(), &kc))
+                            });
+                            // Determinism, checked where it is cheap to: one thread = the pool.
+                            (one.labels == c.labels && one.medoids == c.medoids)
+                                .then_some(s)
+                                .with_context(|| {
+                                    format!("{name}: {} differs on one thread", mode.name())
+                                })
+                        })
+                        .transpose()?;
+                    (s, one, c)
+                }
             };
-            let seconds_1t = (mode != Method::Paper && t <= cfg.one_thread_max)
-                .then(|| {
-                    let (s, one) = timed(1, || {
-                        one_thread(|| cluster(m, cfg.limits, mode.mode(), &kc))
-                    });
-                    // Determinism, checked where it is cheap to: one thread = the pool.
-                    (one.labels == c.labels && one.medoids == c.medoids)
-                        .then_some(s)
-                        .with_context(|| format!("{name}: {} differs on one thread", mode.name()))
-                })
-                .transpose()?;
             validate(m, &c.meshlets, cfg.limits)
                 .with_context(|| format!("{name}: {} produced invalid meshlets", mode.name()))?;
             let b = bounds::compute_bounds(m, &c.meshlets);
@@ -913,8 +936,9 @@ pub fn run(cfg: &Config) -> Result<()> {
          cluster added and everything re-run per overflow, as the paper does; when its budget of {} s runs out \
          it finishes the fast way (marked; not run on the subdivided dragons). Seconds: rayon pool, median of {} \
          runs of `kmedoids`, `kmedoids-parallel` and `kmedoids-regions` interleaved with meshoptimizer's \
-         `build_meshlets` under 2 M triangles, else one run; one run of the others. `1 thread s`: one run on a one-thread pool (up to {} triangles), whose \
-         output was checked identical to the pool's. Mean hops: the k-medoids objective (hop distance of a \
+         `build_meshlets` under 2 M triangles, else one run; one run of the others. `1 thread s`: on a one-thread pool (up to {} triangles), \
+         the median of as many runs, each right after the pool run it is compared with, for those three methods; one run for the \
+         others; its output was checked identical to the pool's. Mean hops: the k-medoids objective (hop distance of a \
          triangle to its medoid inside its cluster). Radius: mean bounding-sphere radius over meshoptimizer's. \
          `connected`: meshlets that are one edge-connected piece; `connected where the mesh is`: clusters with \
          as many edge-connected pieces as the mesh pieces they touch (a mesh joined only through vertices, such \
