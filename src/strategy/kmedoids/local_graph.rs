@@ -36,9 +36,6 @@ impl LocalGraph {
     /// medoid update's clusters (up to a few hundred members) that is several times less work.
     pub(crate) fn distance_sums(&self) -> Vec<u64> {
         let n = self.len();
-        if n <= 128 {
-            return self.distance_sums_128();
-        }
         let w = n.div_ceil(64);
         let mut cur = vec![0u64; n * w];
         for x in 0..n {
@@ -88,71 +85,6 @@ impl LocalGraph {
             .collect()
     }
 
-    /// [`Self::distance_sums`] for at most 128 nodes (every cluster that fits a meshlet: the
-    /// presets' triangle limits are at most 128), each reach set one `u128`: no inner loop over
-    /// words, the medoid update's hot loop. Same sums. On x86-64 the loop is compiled a second
-    /// time with the `popcnt` instruction, taken where the CPU has it: the default target lacks
-    /// it, and counting bits in software was most of this loop's time (integers either way, so
-    /// the sums are the same).
-    fn distance_sums_128(&self) -> Vec<u64> {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("popcnt") {
-            // SAFETY: the CPU has the feature the function is compiled for (checked above).
-            return unsafe { self.distance_sums_128_popcnt() };
-        }
-        self.sums_128()
-    }
-
-    /// [`Self::sums_128`] compiled with hardware bit counts.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "popcnt")]
-    unsafe fn distance_sums_128_popcnt(&self) -> Vec<u64> {
-        self.sums_128()
-    }
-
-    /// The body of [`Self::distance_sums_128`], inlined into both of its builds.
-    #[inline(always)]
-    fn sums_128(&self) -> Vec<u64> {
-        let n = self.len();
-        let full = n as u32;
-        let mut cur: Vec<u128> = (0..n).map(|x| 1u128 << x).collect();
-        let mut next = vec![0u128; n];
-        let mut count = vec![1u32; n];
-        let mut acc = vec![0u64; n];
-        let mut levels = 0u64;
-        loop {
-            for x in 0..n {
-                acc[x] += (full - count[x]) as u64;
-            }
-            levels += 1;
-            let mut grew = false;
-            for x in 0..n {
-                let mut d = cur[x];
-                if count[x] != full {
-                    for &y in self.row(x) {
-                        d |= cur[y as usize];
-                    }
-                    let c = d.count_ones();
-                    if c != count[x] {
-                        grew = true;
-                        count[x] = c;
-                    }
-                }
-                next[x] = d;
-            }
-            std::mem::swap(&mut cur, &mut next);
-            if !grew {
-                break;
-            }
-        }
-        (0..n)
-            .map(|x| {
-                let missing = (full - count[x]) as u64;
-                acc[x] - missing * levels + missing * n as u64
-            })
-            .collect()
-    }
-
     /// The node with the smallest [`Self::distance_sums`] (lowest index on ties): the paper's
     /// medoid.
     pub(crate) fn medoid_index(&self) -> usize {
@@ -165,8 +97,12 @@ impl LocalGraph {
             .expect("a cluster has members")
     }
 
-    /// [`Self::medoid_index`] for at most 128 nodes, with the popcnt build as in
-    /// [`Self::distance_sums_128`].
+    /// [`Self::medoid_index`] for at most 128 nodes (every cluster that fits a meshlet: the
+    /// presets' triangle limits are at most 128), each reach set one `u128`: no inner loop over
+    /// words, the medoid update's hot loop. On x86-64 the loop is compiled a second time with the
+    /// `popcnt` instruction, taken where the CPU has it: the default target lacks it, and
+    /// counting bits in software was most of this loop's time (integers either way, so the
+    /// medoid is the same).
     fn medoid_128(&self) -> usize {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("popcnt") {
@@ -183,8 +119,8 @@ impl LocalGraph {
         self.least_sum_128()
     }
 
-    /// The reach-set levels of [`Self::sums_128`], stopped once the least sum is decided rather
-    /// than when no set grows. A node whose set is full has its exact sum; any other's sum is at
+    /// The reach-set levels of [`Self::distance_sums`] in one `u128` per node, stopped once the
+    /// least sum is decided rather than when no set grows. A node whose set is full has its exact sum; any other's sum is at
     /// least what it has plus the next level's term (`n - |reach|`, already known). When the
     /// least (sum, index) among full nodes is below every other node's (bound, index), it is the
     /// medoid. The central node fills at its eccentricity, about half the diameter, and the
@@ -404,13 +340,10 @@ mod tests {
             for (s, &sum) in sums.iter().enumerate() {
                 assert_eq!(sum, g.bfs(s, &mut dist, &mut queue), "member {s}");
             }
-            // The portable build of the one-word path, whichever build the CPU took above.
-            if members.len() <= 128 {
-                assert_eq!(g.sums_128(), sums);
-            }
             // The medoid, stopped early or not, is the least (sum, index).
             let least = (0..members.len()).min_by_key(|&x| (sums[x], x)).unwrap();
             assert_eq!(g.medoid_index(), least);
+            // The portable build of the one-word path, whichever build the CPU took above.
             if members.len() <= 128 {
                 assert_eq!(g.least_sum_128(), least);
             }
