@@ -72,10 +72,10 @@ fn medoid_serial(g: u32, span: vec3<u32>) {
 // medoid_index with 128-bit reach sets (least_sum_128): the medoid of medoid_serial for
 // clusters of at most 128 members, each with at most 4 in-cluster neighbours (every manifold
 // cluster); `reach_k(i)` is i's set OR its neighbours' `reach_{k-1}`, and i's sum adds
-// m - |reach_k(i)| per level until the least sum is decided or no set grows. Its scratch is the cluster's corner-state words
-// (free once `grow` is done: 9 per member hold two generations of sets and the sums) and its
-// queue words (each member's neighbours, 4 local numbers of 8 bits). Returns false, touching
-// nothing the BFS path reads, when the cluster does not fit.
+// m - |reach_k(i)| per level until the least sum is decided or no set grows. Its scratch is the
+// cluster's corner-state words (free once `grow` is done: 9 per member hold two generations of
+// sets and the sums) and its queue words (each member's neighbours, 4 local numbers of 8 bits).
+// Returns false, touching nothing the BFS path reads, when the cluster does not fit.
 fn medoid_bits(g: u32, span: vec3<u32>, o: u32) -> bool {
     let M = span.x;
     let Q = span.y;
@@ -172,7 +172,8 @@ fn medoid_bits(g: u32, span: vec3<u32>, o: u32) -> bool {
         let s = arena[M + i];
         if (!decided) {
             let c = cur + 4u * i;
-            let count = dot(countOneBits(vec4<u32>(cstate[c], cstate[c + 1u], cstate[c + 2u], cstate[c + 3u])), vec4<u32>(1u));
+            let reach = vec4<u32>(cstate[c], cstate[c + 1u], cstate[c + 2u], cstate[c + 3u]);
+            let count = dot(countOneBits(reach), vec4<u32>(1u));
             // In pieces: an unreachable member was counted once per level; it counts m instead.
             let missing = m - count;
             let sum = cstate[S + 8u * m + i] - missing * levels + missing * m;
