@@ -120,12 +120,13 @@ impl LocalGraph {
     }
 
     /// The reach-set levels of [`Self::distance_sums`] in one `u128` per node, stopped once the
-    /// least sum is decided rather than when no set grows. A node whose set is full has its exact sum; any other's sum is at
-    /// least what it has plus the next level's term (`n - |reach|`, already known). When the
-    /// least (sum, index) among full nodes is below every other node's (bound, index), it is the
-    /// medoid. The central node fills at its eccentricity, about half the diameter, and the
-    /// others' bounds pass it within a level or two, so this runs about half the levels. A
-    /// cluster in pieces never fills a set and runs to the end.
+    /// least sum is decided rather than when no set grows. A node whose set is full has its
+    /// exact sum; any other's sum is at least what it has plus the next level's term
+    /// (`n - |reach|`, already known). When the least (sum, index) among full nodes is below
+    /// every other node's (bound, index), it is the medoid. The central node fills at its
+    /// eccentricity, about half the diameter, and the others' bounds usually pass it soon after,
+    /// so the levels stop well before the diameter. A cluster in pieces never fills a set and
+    /// runs to the end.
     #[inline(always)]
     fn least_sum_128(&self) -> usize {
         let n = self.len();
