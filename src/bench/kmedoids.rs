@@ -356,6 +356,23 @@ const REGION_SWEEP: [u32; 7] = [1024, 2048, 4096, 8192, 16384, 32768, 65536];
 /// Rounds of boundary moves in the sweep.
 const MOVE_SWEEP: [u32; 5] = [0, 1, 2, 4, 8];
 
+/// Seconds of one run of `method` on a one-thread pool, checked identical to the pool's output
+/// `pool` (determinism, checked where it is cheap to).
+fn one_thread_seconds(
+    name: &str,
+    m: &mesh::Mesh,
+    limits: Limits,
+    method: Method,
+    kc: &KConfig,
+    pool: &Clustering,
+) -> Result<f64> {
+    let (s, one) = timed(1, || one_thread(|| cluster(m, limits, method.mode(), kc)));
+    if one.labels != pool.labels || one.medoids != pool.medoids {
+        bail!("{name}: {} differs on one thread", method.name());
+    }
+    Ok(s)
+}
+
 /// A method timed interleaved with meshoptimizer: its pool and one-thread times, and its output.
 struct Interleaved {
     method: Method,
@@ -629,12 +646,9 @@ pub fn run(cfg: &Config) -> Result<()> {
                 let (s, c) = timed(1, || cluster(m, cfg.limits, mode, &kc));
                 run.times.push(s);
                 if t <= cfg.one_thread_max {
-                    let (s, one) = timed(1, || one_thread(|| cluster(m, cfg.limits, mode, &kc)));
-                    // Determinism, checked where it is cheap to: one thread = the pool.
-                    if one.labels != c.labels || one.medoids != c.medoids {
-                        bail!("{name}: {} differs on one thread", run.method.name());
-                    }
-                    run.times_1t.push(s);
+                    run.times_1t.push(one_thread_seconds(
+                        name, m, cfg.limits, run.method, &kc, &c,
+                    )?);
                 }
                 run.out = Some(c);
             }
@@ -665,17 +679,7 @@ pub fn run(cfg: &Config) -> Result<()> {
                 None => {
                     let (s, c) = timed(1, || cluster(m, cfg.limits, mode.mode(), &kc));
                     let one = (mode != Method::Paper && t <= cfg.one_thread_max)
-                        .then(|| {
-                            let (s, one) = timed(1, || {
-                                one_thread(|| cluster(m, cfg.limits, mode.mode(), &kc))
-                            });
-                            // Determinism, checked where it is cheap to: one thread = the pool.
-                            (one.labels == c.labels && one.medoids == c.medoids)
-                                .then_some(s)
-                                .with_context(|| {
-                                    format!("{name}: {} differs on one thread", mode.name())
-                                })
-                        })
+                        .then(|| one_thread_seconds(name, m, cfg.limits, mode, &kc, &c))
                         .transpose()?;
                     (s, one, c)
                 }
