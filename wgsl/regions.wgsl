@@ -2,8 +2,8 @@
 // (driver: src/gpu/regions.rs):
 //   init      canonical_corners, and the State words of grow_region set to their start values
 //             (per triangle)
-//   grow      grow_region with Packing::nearest (nearest_piece), absorb_pockets (shed_front)
-//             and merge_neighbours: one invocation per region
+//   grow      grow_region with Packing::nearest (nearest_piece), absorb_pockets (shed_front),
+//             merge_neighbours and pack_pieces: one invocation per region
 //             (one per workgroup, or eight per workgroup in grow_rows),
 //             the same sequential steps over the same integer keys (regions share no word, so
 //             they run at once)
@@ -797,6 +797,7 @@ fn merge_neighbours() {
         arena[s_q() + RS + keep] = size(keep) + size(gone);
         arena[s_q() + RS + gone] = 0u;
     }
+    pack_pieces();
     // Survivors renumbered in order, their members back in seq.
     var written = 0u;
     var nc = 0u;
@@ -813,6 +814,221 @@ fn merge_neighbours() {
         nc += 1u;
     }
     C = nc;
+}
+
+// ---- pack_pieces (step 2c, in the same invocation) -------------------------------------------
+//
+// Per cluster c, words growth no longer needs: its centre (x | y << 16, z) and radius in the hop,
+// aux and position sections and its vertex count in the free-count section, each at the region's
+// c-th triangle; the plan's room in seq and the cluster starts (the renumbering after rewrites
+// them). The order is the merge order's section; the plan (a's pieces ascending, their targets)
+// is in the grown and vertex-count rows.
+
+fn pk_word(section: u32, c: u32) -> u32 { return section * p.t + items[RS + c]; }
+fn pk_centre(c: u32) -> vec3<u32> {
+    let w = tri[pk_word(3u, c)];
+    return vec3<u32>(w & 0xffffu, w >> 16u, tri[pk_word(4u, c)]);
+}
+fn pk_radius(c: u32) -> u32 { return tri[pk_word(6u, c)]; }
+fn pk_verts(c: u32) -> u32 { return tri[pk_word(7u, c)]; }
+fn extra_t(c: u32) -> u32 { return arena[s_seq() + RS + c]; }
+fn extra_v(c: u32) -> u32 { return arena[s_cstart() + RS + c]; }
+
+// Integer floor square root, digit by digit (u32::isqrt on the CPU).
+fn isqrt(x: u32) -> u32 {
+    var v = x;
+    var r = 0u;
+    var bit = 1u << 30u;
+    while (bit > v) { bit >>= 2u; }
+    while (bit != 0u) {
+        if (v >= r + bit) {
+            v -= r + bit;
+            r = (r >> 1u) + bit;
+        } else {
+            r >>= 1u;
+        }
+        bit >>= 2u;
+    }
+    return r;
+}
+
+// The target planned for piece `q` of the cluster being dissolved (NONE if not in the plan).
+fn planned(q: u32, np: u32) -> u32 {
+    for (var i = 0u; i < np; i++) {
+        if (arena[s_grown(R) + i] == q) { return arena[s_vcount(R) + i]; }
+    }
+    return NONE;
+}
+
+// Centre and radius of cluster b together with the members of `a` planned for it (a == NONE:
+// b alone).
+fn centre_radius(b: u32, a: u32, np: u32) -> vec4<u32> {
+    var sum = vec3<u32>(0u);
+    var n = 0u;
+    for (var side = 0u; side < 2u; side++) {
+        var x = head(b);
+        if (side == 1u) {
+            if (a == NONE) { break; }
+            x = head(a);
+        }
+        while (x != NONE) {
+            if (side == 0u || planned(piece(x), np) == b) {
+                sum += centre(x);
+                n += 1u;
+            }
+            x = next_of(x);
+        }
+    }
+    let c = sum / max(n, 1u);
+    var far = 0u;
+    for (var side = 0u; side < 2u; side++) {
+        var x = head(b);
+        if (side == 1u) {
+            if (a == NONE) { break; }
+            x = head(a);
+        }
+        while (x != NONE) {
+            if (side == 0u || planned(piece(x), np) == b) { far = max(far, distance2(centre(x), c)); }
+            x = next_of(x);
+        }
+    }
+    return vec4<u32>(c, isqrt(far));
+}
+
+fn set_centre_radius(b: u32) {
+    let cr = centre_radius(b, NONE, 0u);
+    tri[pk_word(3u, b)] = cr.x | (cr.y << 16u);
+    tri[pk_word(4u, b)] = cr.z;
+    tri[pk_word(6u, b)] = cr.w;
+}
+
+fn pack_pieces() {
+    let k = C;
+    let L = s_left() + RS;
+    let OC = s_pockets() + RS;
+    let PL = s_grown(R);
+    let TG = s_vcount(R);
+    for (var c = 0u; c < k; c++) {
+        arena[s_seq() + RS + c] = 0u;
+        arena[s_cstart() + RS + c] = 0u;
+        if (size(c) == 0u) { continue; }
+        set_centre_radius(c);
+        tri[pk_word(7u, c)] = cluster_verts(c, NONE);
+    }
+    // Smallest first, ties to the lower id.
+    var o = 0u;
+    for (var sz = 1u; sz <= p.max_t; sz++) {
+        for (var c = 0u; c < k; c++) {
+            if (size(c) == sz) {
+                arena[OC + o] = c;
+                o += 1u;
+            }
+        }
+    }
+    for (var oi = 0u; oi < o; oi++) {
+        let a = arena[OC + oi];
+        // Made of whole pieces, with no neighbour in another cluster.
+        var closed = true;
+        var x = head(a);
+        while (x != NONE && closed) {
+            closed = (arena[L + piece(x)] & CUT) == 0u;
+            for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
+                let y = nb(e);
+                if (in_region(y) && lab(y) != a) { closed = false; }
+            }
+            x = next_of(x);
+        }
+        if (!closed) { continue; }
+        // Its pieces ascending, each planned to the nearest cluster with room.
+        var np = 0u;
+        var last = NONE;
+        var ok = true;
+        loop {
+            var q = NONE;
+            x = head(a);
+            while (x != NONE) {
+                let px = piece(x);
+                if ((last == NONE || px > last) && (q == NONE || px < q)) { q = px; }
+                x = next_of(x);
+            }
+            if (q == NONE) { break; }
+            last = q;
+            SERIAL += 1u;
+            var pt = 0u;
+            var pv = 0u;
+            var sum = vec3<u32>(0u);
+            x = head(a);
+            while (x != NONE) {
+                if (piece(x) == q) {
+                    pt += 1u;
+                    sum += centre(x);
+                    for (var j = 0u; j < 3u; j++) {
+                        let kk = canon[3u * x + j];
+                        if (wmark(kk) != SERIAL) {
+                            cstate[6u * p.t + kk] = SERIAL;
+                            pv += 1u;
+                        }
+                    }
+                }
+                x = next_of(x);
+            }
+            let pc = sum / pt;
+            var best = NONE;
+            var best_d = 0u;
+            for (var b = 0u; b < k; b++) {
+                if (b == a || size(b) == 0u || size(b) + extra_t(b) + pt > p.max_t
+                    || pk_verts(b) + extra_v(b) + pv > p.max_v) {
+                    continue;
+                }
+                let d = distance2(pk_centre(b), pc);
+                if (best == NONE || d < best_d) {
+                    best = b;
+                    best_d = d;
+                }
+            }
+            if (best == NONE) {
+                ok = false;
+                break;
+            }
+            arena[s_seq() + RS + best] += pt;
+            arena[s_cstart() + RS + best] += pv;
+            arena[PL + np] = q;
+            arena[TG + np] = best;
+            np += 1u;
+        }
+        for (var i = 0u; i < np; i++) {
+            arena[s_seq() + RS + arena[TG + i]] = 0u;
+            arena[s_cstart() + RS + arena[TG + i]] = 0u;
+        }
+        if (!ok) { continue; }
+        // The radii the targets gain, each target counted once (at its first piece).
+        var gain = 0i;
+        for (var i = 0u; i < np; i++) {
+            let b = arena[TG + i];
+            var seen = false;
+            for (var j = 0u; j < i; j++) { seen = seen || arena[TG + j] == b; }
+            if (seen) { continue; }
+            gain += i32(centre_radius(b, a, np).w) - i32(pk_radius(b));
+        }
+        if (gain > i32(pk_radius(a))) { continue; }
+        x = head(a);
+        while (x != NONE) {
+            let nx = next_of(x);
+            let b = planned(piece(x), np);
+            set_lab(x, b);
+            set_next(tail(b), x);
+            set_next(x, NONE);
+            arena[s_front() + RS + b] = x;
+            arena[s_q() + RS + b] = size(b) + 1u;
+            x = nx;
+        }
+        arena[s_q() + RS + a] = 0u;
+        for (var i = 0u; i < np; i++) {
+            let b = arena[TG + i];
+            set_centre_radius(b);
+            tri[pk_word(7u, b)] = cluster_verts(b, NONE);
+        }
+    }
 }
 
 // ---- relabel ---------------------------------------------------------------------------------

@@ -28,7 +28,12 @@
 //!      rule cannot take is tried by the front rule (`shed_front`), which gives back the
 //!      triangles nearest the open free side instead;
 //!    - then clusters merge into a neighbour across an edge whose union fits, smallest first
-//!      (what tube ends and enclosed leftovers need: on the neurons a sixth fewer meshlets).
+//!      (what tube ends and enclosed leftovers need: on the neurons a sixth fewer meshlets);
+//!    - then a cluster made only of whole small pieces is dissolved into the clusters nearest
+//!      its pieces that have room, where the targets' bounding radii grow by no more, summed,
+//!      than its own ([`pack_pieces`]): the growth packs pieces only into a cluster whose own
+//!      piece ran out, so detached pieces seeded among a large piece's clusters would otherwise
+//!      stay meshlets of their own.
 //! 3. **Labels**: cluster `c` of region `r` is `base[r] + c`, regions in order.
 //! 4. **Medoids**: the paper's medoid of each cluster and its members' in-cluster hop distances
 //!    (one invocation per cluster on the GPU), which order the members when packing.
@@ -41,7 +46,8 @@
 //! the iteration moves only border triangles, within the limits (the growth keys, not
 //! nearest-medoid assignment, shape the clusters); where it differs from `kmedoids-parallel`:
 //! merges only inside a region (none across region borders), whole pieces packed during the
-//! growth (nearest within a window, not nearest over all clusters afterwards), the orphan rules
+//! growth (nearest within a window) and, after the merges, into the region's clusters with room
+//! under the radius rule (not nearest over all clusters), the orphan rules
 //! over pockets of the region only, and the running centroid in quantised integers. Every
 //! cluster is edge-connected except where small whole pieces are packed together. Determinism:
 //! regions share no state and every choice is a strict minimum over integer keys (the moves'
@@ -483,7 +489,21 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         c += 1;
         open = false;
     }
-    let k = merge_neighbours(&mut s, &nbrs, &corners, n, c, mv, mt, &mut serial);
+    let lc: Vec<Centre> = tris.iter().map(|&t| input.centres[t as usize]).collect();
+    let whole: Vec<bool> = (0..n).map(|i| closed[s.piece[i] as usize]).collect();
+    let mut clusters = merge_neighbours(&mut s, &nbrs, &corners, n, c, mv, mt, &mut serial);
+    pack_pieces(
+        &mut s,
+        &mut clusters,
+        &nbrs,
+        &corners,
+        &lc,
+        &whole,
+        mv,
+        mt,
+        &mut serial,
+    );
+    let k = clusters.renumber(&mut s.label);
     (s.label, k)
 }
 
@@ -534,9 +554,59 @@ impl Packing<'_> {
     }
 }
 
+/// A region's clusters between the growth and the renumbering: members (local indices), distinct
+/// vertices, and whether a merge has emptied them.
+struct Clusters {
+    mem: Vec<Vec<usize>>,
+    nverts: Vec<usize>,
+    alive: Vec<bool>,
+}
+
+impl Clusters {
+    /// The survivors renumbered in order; returns their count.
+    fn renumber(&self, label: &mut [u32]) -> u32 {
+        let mut new_id = vec![NONE; self.alive.len()];
+        let mut next = 0;
+        for (c, &alive) in self.alive.iter().enumerate() {
+            if alive {
+                new_id[c] = next;
+                next += 1;
+            }
+        }
+        for l in label.iter_mut() {
+            *l = new_id[*l as usize];
+        }
+        next
+    }
+
+    /// Members in `order` of the clusters `cs` and of `extra` together: their distinct
+    /// vertices (a stamp per evaluation).
+    fn vertices(
+        &self,
+        s: &mut State,
+        corners: &impl Fn(usize) -> [usize; 3],
+        cs: &[usize],
+        extra: &[usize],
+        serial: &mut u32,
+    ) -> usize {
+        *serial += 1;
+        let mut nv = 0;
+        let lists = cs.iter().map(|&c| &self.mem[c][..]).chain([extra]);
+        for &i in lists.flatten() {
+            for kk in corners(i) {
+                if s.wmark[kk] != *serial {
+                    s.wmark[kk] = *serial;
+                    nv += 1;
+                }
+            }
+        }
+        nv
+    }
+}
+
 /// Step 2b for one region: clusters merged into a neighbour across an edge whose union fits,
 /// smallest first (ties to the lower id; among neighbours, the one sharing most vertices, then
-/// the lower id); the survivors renumbered in order. Returns the cluster count.
+/// the lower id).
 #[allow(clippy::too_many_arguments)]
 fn merge_neighbours<N, I>(
     s: &mut State,
@@ -547,58 +617,47 @@ fn merge_neighbours<N, I>(
     mv: usize,
     mt: usize,
     serial: &mut u32,
-) -> u32
+) -> Clusters
 where
     N: Fn(usize) -> I,
     I: Iterator<Item = usize>,
 {
     let k = k as usize;
-    let mut mem: Vec<Vec<usize>> = vec![Vec::new(); k];
-    for i in 0..n {
-        mem[s.label[i] as usize].push(i);
-    }
-    // Distinct vertices of the clusters in `cs` (a stamp per evaluation).
-    let verts = |s: &mut State, mem: &[Vec<usize>], cs: &[usize], serial: &mut u32| {
-        *serial += 1;
-        let mut nv = 0;
-        for &c in cs {
-            for &i in &mem[c] {
-                for kk in corners(i) {
-                    if s.wmark[kk] != *serial {
-                        s.wmark[kk] = *serial;
-                        nv += 1;
-                    }
-                }
-            }
-        }
-        nv
+    let mut cl = Clusters {
+        mem: vec![Vec::new(); k],
+        nverts: Vec::new(),
+        alive: vec![true; k],
     };
-    let mut nverts: Vec<usize> = (0..k).map(|c| verts(s, &mem, &[c], serial)).collect();
+    for i in 0..n {
+        cl.mem[s.label[i] as usize].push(i);
+    }
+    cl.nverts = (0..k)
+        .map(|c| cl.vertices(s, corners, &[c], &[], serial))
+        .collect();
     let mut order: Vec<usize> = (0..k).collect();
-    order.sort_by_key(|&c| (mem[c].len(), c));
-    let mut alive = vec![true; k];
+    order.sort_by_key(|&c| (cl.mem[c].len(), c));
     let mut cstamp = vec![usize::MAX; k];
     for a in order {
-        if !alive[a] || mem[a].len() >= mt || nverts[a] >= mv {
+        if !cl.alive[a] || cl.mem[a].len() >= mt || cl.nverts[a] >= mv {
             continue;
         }
         let mut best: Option<(usize, usize, usize)> = None;
-        for idx in 0..mem[a].len() {
-            let i = mem[a][idx];
+        for idx in 0..cl.mem[a].len() {
+            let i = cl.mem[a][idx];
             for j in nbrs(i) {
                 let b = s.label[j] as usize;
                 if b == a || cstamp[b] == a {
                     continue;
                 }
                 cstamp[b] = a;
-                if mem[a].len() + mem[b].len() > mt {
+                if cl.mem[a].len() + cl.mem[b].len() > mt {
                     continue;
                 }
-                let union = verts(s, &mem, &[a, b], serial);
+                let union = cl.vertices(s, corners, &[a, b], &[], serial);
                 if union > mv {
                     continue;
                 }
-                let shared = nverts[a] + nverts[b] - union;
+                let shared = cl.nverts[a] + cl.nverts[b] - union;
                 if best.is_none_or(|(sh, c, _)| {
                     (shared, std::cmp::Reverse(b)) > (sh, std::cmp::Reverse(c))
                 }) {
@@ -608,26 +667,154 @@ where
         }
         let Some((_, b, union)) = best else { continue };
         let (keep, gone) = (a.min(b), a.max(b));
-        let moved = std::mem::take(&mut mem[gone]);
+        let moved = std::mem::take(&mut cl.mem[gone]);
         for &i in &moved {
             s.label[i] = keep as u32;
         }
-        mem[keep].extend(moved);
-        nverts[keep] = union;
-        alive[gone] = false;
+        cl.mem[keep].extend(moved);
+        cl.nverts[keep] = union;
+        cl.alive[gone] = false;
     }
-    let mut new_id = vec![NONE; k];
-    let mut next = 0;
-    for c in 0..k {
-        if alive[c] {
-            new_id[c] = next;
-            next += 1;
+    cl
+}
+
+/// Step 2c for one region: a cluster made of whole pieces of the mesh (each piece without an
+/// edge leaving the region, and no member with a neighbour in another cluster) is dissolved when
+/// each of its pieces, in piece order, finds a cluster with room, the one whose centre is nearest
+/// the piece's (ties to the lower id), and the radii its targets gain sum to at most its own.
+/// Clusters go smallest first, in their order after the merges. Room is checked against the
+/// target's vertices plus the piece's as if they shared none, so a plan never overfills. A radius
+/// is the integer square root of the largest squared distance from a cluster's centre to a
+/// member's centroid cell (integers, so exact on every device).
+///
+/// Why: the growth packs pieces only into a cluster whose own piece ran out, so small pieces
+/// seeded among a large piece's clusters (the neurons' detached spines) end as clusters of their
+/// own; here they join the large piece's part-filled clusters. The radius rule keeps a dissolution
+/// only where the bounding spheres, summed, do not grow: scattered pieces moved into far clusters
+/// would cost culling more than the one meshlet saves.
+#[allow(clippy::too_many_arguments)]
+fn pack_pieces<N, I>(
+    s: &mut State,
+    cl: &mut Clusters,
+    nbrs: &N,
+    corners: &impl Fn(usize) -> [usize; 3],
+    centres: &[Centre],
+    whole: &[bool],
+    mv: usize,
+    mt: usize,
+    serial: &mut u32,
+) where
+    N: Fn(usize) -> I,
+    I: Iterator<Item = usize>,
+{
+    let k = cl.mem.len();
+    // The integer mean of the members' centroid cells.
+    let centre_of = |members: &mut dyn Iterator<Item = usize>| {
+        let (mut sum, mut n) = ([0u32; 3], 0u32);
+        for i in members {
+            for (x, q) in sum.iter_mut().zip(unpack(centres[i])) {
+                *x += q;
+            }
+            n += 1;
+        }
+        sum.map(|x| x / n.max(1))
+    };
+    // The radius around `c`: isqrt of the largest squared distance to a member.
+    let radius_of = |members: &mut dyn Iterator<Item = usize>, c: [u32; 3]| {
+        members
+            .map(|i| distance2(unpack(centres[i]), c))
+            .max()
+            .unwrap_or(0)
+            .isqrt()
+    };
+    let mut centre: Vec<[u32; 3]> = (0..k)
+        .map(|c| centre_of(&mut cl.mem[c].iter().copied()))
+        .collect();
+    let mut radius: Vec<u32> = (0..k)
+        .map(|c| radius_of(&mut cl.mem[c].iter().copied(), centre[c]))
+        .collect();
+    let mut order: Vec<usize> = (0..k).filter(|&c| cl.alive[c]).collect();
+    order.sort_by_key(|&c| (cl.mem[c].len(), c));
+    let (mut extra_t, mut extra_v) = (vec![0usize; k], vec![0usize; k]);
+    for a in order {
+        let closed = cl.mem[a]
+            .iter()
+            .all(|&i| whole[i] && nbrs(i).all(|j| s.label[j] as usize == a));
+        if !closed {
+            continue;
+        }
+        let mut pieces: Vec<u32> = cl.mem[a].iter().map(|&i| s.piece[i]).collect();
+        pieces.sort_unstable();
+        pieces.dedup();
+        // Members of `a` by piece (the pieces ascending).
+        let by_piece: Vec<Vec<usize>> = pieces
+            .iter()
+            .map(|&p| {
+                cl.mem[a]
+                    .iter()
+                    .copied()
+                    .filter(|&i| s.piece[i] == p)
+                    .collect()
+            })
+            .collect();
+        // The plan: a target per piece while each finds one with room.
+        let mut plan = Vec::with_capacity(pieces.len());
+        for tris in &by_piece {
+            let pv = cl.vertices(s, corners, &[], tris, serial);
+            let pc = centre_of(&mut tris.iter().copied());
+            let mut best: Option<(u32, usize)> = None;
+            for b in 0..k {
+                if b == a
+                    || !cl.alive[b]
+                    || cl.mem[b].len() + extra_t[b] + tris.len() > mt
+                    || cl.nverts[b] + extra_v[b] + pv > mv
+                {
+                    continue;
+                }
+                let d = distance2(centre[b], pc);
+                if best.is_none_or(|(bd, bb)| (d, b) < (bd, bb)) {
+                    best = Some((d, b));
+                }
+            }
+            let Some((_, b)) = best else { break };
+            extra_t[b] += tris.len();
+            extra_v[b] += pv;
+            plan.push(b);
+        }
+        for &b in &plan {
+            (extra_t[b], extra_v[b]) = (0, 0);
+        }
+        if plan.len() < pieces.len() {
+            continue;
+        }
+        // The radii the targets gain, each target counted once (at its first piece).
+        let mut gain = 0i64;
+        for (x, &b) in plan.iter().enumerate() {
+            if plan[..x].contains(&b) {
+                continue;
+            }
+            let mut union = cl.mem[b].clone();
+            for (tris, _) in by_piece.iter().zip(&plan).filter(|&(_, &t)| t == b) {
+                union.extend_from_slice(tris);
+            }
+            let c = centre_of(&mut union.iter().copied());
+            gain += radius_of(&mut union.iter().copied(), c) as i64 - radius[b] as i64;
+        }
+        if gain > radius[a] as i64 {
+            continue;
+        }
+        for i in std::mem::take(&mut cl.mem[a]) {
+            let b = plan[pieces.binary_search(&s.piece[i]).expect("a member's piece")];
+            s.label[i] = b as u32;
+            cl.mem[b].push(i);
+        }
+        cl.alive[a] = false;
+        for &b in &plan {
+            cl.nverts[b] = cl.vertices(s, corners, &[b], &[], serial);
+            centre[b] = centre_of(&mut cl.mem[b].iter().copied());
+            radius[b] = radius_of(&mut cl.mem[b].iter().copied(), centre[b]);
         }
     }
-    for l in s.label.iter_mut() {
-        *l = new_id[*l as usize];
-    }
-    next
 }
 
 /// The pocket rule for cluster `c` as it stops (see the module doc), keeping `left` (free
@@ -1002,6 +1189,109 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Two strips of 8 triangles, of one piece the region cuts (so not whole), their centres
+    /// along x from 0 and from `far`: cluster 0 the first, clusters 1 and 3 the second's first
+    /// `len1` and the rest; cluster 2 two tetrahedra (whole pieces 1 and 2) at `tets`. Runs step
+    /// 2c at 64 vertices and `mt` triangles; returns the labels and which clusters are left.
+    fn pack_two_tets(
+        len1: usize,
+        far: u32,
+        tets: [[u32; 3]; 2],
+        mt: usize,
+    ) -> (Vec<u32>, Vec<bool>) {
+        let n = 16 + 8;
+        let mut adj: Vec<Vec<usize>> = vec![Vec::new(); n];
+        let mut corners: Vec<[usize; 3]> = Vec::new();
+        let mut centres: Vec<Centre> = Vec::new();
+        let mut s = State::new(n);
+        let pack = |c: [u32; 3]| [c[0] | c[1] << 16, c[2]];
+        for (strip, x0) in [(0usize, 0u32), (1, far)] {
+            for i in 0..8 {
+                let t = 8 * strip + i;
+                let v = 10 * strip + i;
+                corners.push([v, v + 1, v + 2]);
+                centres.push(pack([x0 + 100 * i as u32, 0, 0]));
+                if i > 0 {
+                    adj[t].push(t - 1);
+                    adj[t - 1].push(t);
+                }
+                s.piece[t] = 0;
+                s.label[t] = if strip == 1 && i >= len1 {
+                    3
+                } else {
+                    strip as u32
+                };
+            }
+        }
+        for (q, c) in tets.iter().enumerate() {
+            let v = 20 + 4 * q;
+            let faces = [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]];
+            for (f, face) in faces.iter().enumerate() {
+                let t = 16 + 4 * q + f;
+                corners.push(face.map(|j| v + j));
+                centres.push(pack([c[0] + f as u32, c[1], c[2]]));
+                adj[t] = (0..4).filter(|&g| g != f).map(|g| 16 + 4 * q + g).collect();
+                s.piece[t] = 1 + q as u32;
+                s.label[t] = 2;
+            }
+        }
+        let whole: Vec<bool> = (0..n).map(|i| s.piece[i] != 0).collect();
+        let nbrs = |i: usize| adj[i].clone().into_iter();
+        let corner = |i: usize| corners[i];
+        let mut serial = 0;
+        let mut cl = Clusters {
+            mem: vec![Vec::new(); 4],
+            nverts: Vec::new(),
+            alive: vec![true; 4],
+        };
+        for i in 0..n {
+            cl.mem[s.label[i] as usize].push(i);
+        }
+        cl.nverts = (0..4)
+            .map(|c| cl.vertices(&mut s, &corner, &[c], &[], &mut serial))
+            .collect();
+        cl.alive[3] = !cl.mem[3].is_empty();
+        pack_pieces(
+            &mut s,
+            &mut cl,
+            &nbrs,
+            &corner,
+            &centres,
+            &whole,
+            64,
+            mt,
+            &mut serial,
+        );
+        (s.label, cl.alive)
+    }
+
+    #[test]
+    fn whole_pieces_join_the_nearest_clusters_with_room() {
+        // Each tetrahedron beside one strip: their cluster dissolves, one into each.
+        let (labels, alive) = pack_two_tets(8, 10_000, [[350, 40, 0], [10_350, 40, 0]], 126);
+        assert_eq!(alive, [true, true, false, false]);
+        assert_eq!(&labels[16..20], &[0; 4]);
+        assert_eq!(&labels[20..24], &[1; 4]);
+        // Room for one tetrahedron in strip 0: the second goes on to the nearest with room.
+        let (labels, alive) = pack_two_tets(4, 700, [[0, 40, 0], [560, 40, 0]], 12);
+        assert_eq!(alive, [true, true, false, true]);
+        assert_eq!(&labels[16..20], &[0; 4]);
+        assert_eq!(&labels[20..24], &[1; 4]);
+    }
+
+    #[test]
+    fn whole_pieces_stay_where_moving_them_would_grow_the_spheres() {
+        // Both tetrahedra beside strip 0, which has no room; cluster 1 has room for both but is
+        // far: its sphere would grow far more than the tetrahedra's own.
+        let (labels, alive) = pack_two_tets(2, 20_000, [[350, 40, 0], [360, 40, 0]], 10);
+        assert_eq!(alive, [true, true, true, true]);
+        assert_eq!(&labels[16..24], &[2; 8]);
+        // Room for one tetrahedron only: the plan fails and nothing moves.
+        let (labels, alive) = pack_two_tets(2, 400, [[350, 40, 0], [360, 40, 0]], 8);
+        assert_eq!(alive, [true, true, true, true]);
+        assert_eq!(&labels[16..24], &[2; 8]);
     }
 
     #[test]
