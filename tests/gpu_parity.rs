@@ -111,6 +111,52 @@ fn every_shared_mesh_gives_identical_results() {
     assert_eq!(families, 10 * Family::ALL.len() - 3 * SLOW_ON_LARGE.len());
 }
 
+/// A tube with `count` small tetrahedra beside it, each a piece of its own next to one of the
+/// tube's vertices (as the neurons have); returns the mesh and the tube's vertex count.
+fn tube_with_tetrahedra(count: usize) -> (Mesh, usize) {
+    let mut m = generate::knot_tube(200, 8, 3);
+    let tube = m.vertex_count();
+    let (step, size) = (tube / count, 0.01);
+    for q in 0..count {
+        let p = m.positions[q * step + step / 2];
+        let v = m.positions.len() as u32;
+        for d in [
+            [0.5, 0.5, 0.5],
+            [1.5, 0.5, 0.5],
+            [0.5, 1.5, 0.5],
+            [0.5, 0.5, 1.5],
+        ] {
+            m.positions.push([0, 1, 2].map(|j| p[j] + size * d[j]));
+        }
+        m.indices.extend([v, v + 2, v + 1, v, v + 1, v + 3]);
+        m.indices.extend([v, v + 3, v + 2, v + 1, v + 2, v + 3]);
+    }
+    (m, tube)
+}
+
+#[test]
+fn detached_pieces_join_the_clusters_beside_them() {
+    let gpu = gpu();
+    let (m, tube) = tube_with_tetrahedra(60);
+    let limits = Limits::new(64, 84).unwrap();
+    assert_parity(&gpu, "tube with tetrahedra", &m, limits);
+    let opts = meshletlab::strategy::Options::default();
+    let out = meshletlab::strategy::by_name("kmedoids-regions", &opts)
+        .unwrap()
+        .build(&m, limits);
+    meshletlab::meshlet::validate(&m, &out, limits).unwrap();
+    // One region: the growth packs pieces only into a cluster whose own piece ran out, the
+    // tube's last one; tube meshlets holding tetrahedra beyond that are the packing after the
+    // merges at work.
+    let mixed = (0..out.len())
+        .filter(|&i| {
+            let v = out.meshlet_vertices(i);
+            v.iter().any(|&x| (x as usize) < tube) && v.iter().any(|&x| (x as usize) >= tube)
+        })
+        .count();
+    assert!(mixed >= 2, "{mixed} tube meshlets hold tetrahedra");
+}
+
 #[test]
 fn stress_meshes_give_identical_results() {
     let gpu = gpu();

@@ -860,9 +860,13 @@ fn planned(q: u32, np: u32) -> u32 {
     return NONE;
 }
 
+// A member's planned target while its cluster is being dissolved, in its first corner's mark
+// word (growth no longer reads marks).
+fn target_of(x: u32) -> u32 { return cstate[3u * x]; }
+
 // Centre and radius of cluster b together with the members of `a` planned for it (a == NONE:
 // b alone).
-fn centre_radius(b: u32, a: u32, np: u32) -> vec4<u32> {
+fn centre_radius(b: u32, a: u32) -> vec4<u32> {
     var sum = vec3<u32>(0u);
     var n = 0u;
     for (var side = 0u; side < 2u; side++) {
@@ -872,7 +876,7 @@ fn centre_radius(b: u32, a: u32, np: u32) -> vec4<u32> {
             x = head(a);
         }
         while (x != NONE) {
-            if (side == 0u || planned(piece(x), np) == b) {
+            if (side == 0u || target_of(x) == b) {
                 sum += centre(x);
                 n += 1u;
             }
@@ -888,7 +892,7 @@ fn centre_radius(b: u32, a: u32, np: u32) -> vec4<u32> {
             x = head(a);
         }
         while (x != NONE) {
-            if (side == 0u || planned(piece(x), np) == b) { far = max(far, distance2(centre(x), c)); }
+            if (side == 0u || target_of(x) == b) { far = max(far, distance2(centre(x), c)); }
             x = next_of(x);
         }
     }
@@ -896,7 +900,7 @@ fn centre_radius(b: u32, a: u32, np: u32) -> vec4<u32> {
 }
 
 fn set_centre_radius(b: u32) {
-    let cr = centre_radius(b, NONE, 0u);
+    let cr = centre_radius(b, NONE);
     tri[pk_word(3u, b)] = cr.x | (cr.y << 16u);
     tri[pk_word(4u, b)] = cr.z;
     tri[pk_word(6u, b)] = cr.w;
@@ -1001,6 +1005,11 @@ fn pack_pieces() {
             arena[s_cstart() + RS + arena[TG + i]] = 0u;
         }
         if (!ok) { continue; }
+        x = head(a);
+        while (x != NONE) {
+            cstate[3u * x] = planned(piece(x), np);
+            x = next_of(x);
+        }
         // The radii the targets gain, each target counted once (at its first piece).
         var gain = 0i;
         for (var i = 0u; i < np; i++) {
@@ -1008,13 +1017,13 @@ fn pack_pieces() {
             var seen = false;
             for (var j = 0u; j < i; j++) { seen = seen || arena[TG + j] == b; }
             if (seen) { continue; }
-            gain += i32(centre_radius(b, a, np).w) - i32(pk_radius(b));
+            gain += i32(centre_radius(b, a).w) - i32(pk_radius(b));
         }
         if (gain > i32(pk_radius(a))) { continue; }
         x = head(a);
         while (x != NONE) {
             let nx = next_of(x);
-            let b = planned(piece(x), np);
+            let b = target_of(x);
             set_lab(x, b);
             set_next(tail(b), x);
             set_next(x, NONE);
