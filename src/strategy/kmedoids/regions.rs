@@ -31,7 +31,7 @@
 //!      (what tube ends and enclosed leftovers need: on the neurons a sixth fewer meshlets);
 //!    - then a cluster made only of whole small pieces is dissolved into the clusters nearest
 //!      its pieces that have room, where the targets' bounding radii grow by no more, summed,
-//!      than its own ([`pack_pieces`]): the growth packs pieces only into a cluster whose own
+//!      than its own (`pack_pieces`): the growth packs pieces only into a cluster whose own
 //!      piece ran out, so detached pieces seeded among a large piece's clusters would otherwise
 //!      stay meshlets of their own.
 //! 3. **Labels**: cluster `c` of region `r` is `base[r] + c`, regions in order.
@@ -579,8 +579,8 @@ impl Clusters {
         next
     }
 
-    /// Members in `order` of the clusters `cs` and of `extra` together: their distinct
-    /// vertices (a stamp per evaluation).
+    /// Distinct vertices of the clusters `cs` and the triangles `extra` together (a stamp per
+    /// evaluation).
     fn vertices(
         &self,
         s: &mut State,
@@ -688,10 +688,10 @@ where
 /// member's centroid cell (integers, so exact on every device).
 ///
 /// Why: the growth packs pieces only into a cluster whose own piece ran out, so small pieces
-/// seeded among a large piece's clusters (the neurons' detached spines) end as clusters of their
-/// own; here they join the large piece's part-filled clusters. The radius rule keeps a dissolution
-/// only where the bounding spheres, summed, do not grow: scattered pieces moved into far clusters
-/// would cost culling more than the one meshlet saves.
+/// seeded among a large piece's clusters (the neurons' detached tetrahedra) end as clusters of
+/// their own; here they join the large piece's part-filled clusters. The radius rule keeps a
+/// dissolution only where the bounding spheres, summed, do not grow: scattered pieces moved into
+/// far clusters would cost culling more than the one meshlet saves.
 #[allow(clippy::too_many_arguments)]
 fn pack_pieces<N, I>(
     s: &mut State,
