@@ -705,6 +705,19 @@ fn head(c: u32) -> u32 { return arena[s_order() + RS + c]; }
 fn tail(c: u32) -> u32 { return arena[s_front() + RS + c]; }
 fn size(c: u32) -> u32 { return arena[s_q() + RS + c]; }
 
+// The corners of `x` whose vertex the current evaluation (SERIAL) has not counted yet, stamped.
+fn stamp_corners(x: u32) -> u32 {
+    var nv = 0u;
+    for (var j = 0u; j < 3u; j++) {
+        let k = canon[3u * x + j];
+        if (wmark(k) != SERIAL) {
+            cstate[6u * p.t + k] = SERIAL;
+            nv += 1u;
+        }
+    }
+    return nv;
+}
+
 // Distinct vertices of cluster `a`, and of `a` and `b` together when `b` is not NONE.
 fn cluster_verts(a: u32, b: u32) -> u32 {
     SERIAL += 1u;
@@ -716,17 +729,27 @@ fn cluster_verts(a: u32, b: u32) -> u32 {
             x = head(b);
         }
         while (x != NONE) {
-            for (var j = 0u; j < 3u; j++) {
-                let k = canon[3u * x + j];
-                if (wmark(k) != SERIAL) {
-                    cstate[6u * p.t + k] = SERIAL;
-                    nv += 1u;
-                }
-            }
+            nv += stamp_corners(x);
             x = next_of(x);
         }
     }
     return nv;
+}
+
+// The non-empty clusters of the first `k`, smallest first (ties to the lower id), into the merge
+// order's section; returns how many.
+fn order_by_size(k: u32) -> u32 {
+    let OC = s_pockets() + RS;
+    var o = 0u;
+    for (var sz = 1u; sz <= p.max_t; sz++) {
+        for (var c = 0u; c < k; c++) {
+            if (size(c) == sz) {
+                arena[OC + o] = c;
+                o += 1u;
+            }
+        }
+    }
+    return o;
 }
 
 fn merge_neighbours() {
@@ -746,18 +769,9 @@ fn merge_neighbours() {
             set_next(arena[S + i], nx);
         }
     }
-    // Smallest first, ties to the lower id.
     let OC = s_pockets() + RS;
-    var o = 0u;
-    for (var sz = 1u; sz <= p.max_t; sz++) {
-        for (var c = 0u; c < k; c++) {
-            if (size(c) == sz) {
-                arena[OC + o] = c;
-                o += 1u;
-            }
-        }
-    }
-    for (var oi = 0u; oi < k; oi++) {
+    let o = order_by_size(k);
+    for (var oi = 0u; oi < o; oi++) {
         let a = arena[OC + oi];
         let sa = size(a);
         if (sa == 0u || sa >= p.max_t) { continue; }
@@ -864,37 +878,28 @@ fn planned(q: u32, np: u32) -> u32 {
 // word (growth no longer reads marks).
 fn target_of(x: u32) -> u32 { return cstate[3u * x]; }
 
+// After member x, the next of cluster b's members and then of a's members planned for b (a ==
+// NONE: b's alone); NONE at the end.
+fn next_joined(x: u32, b: u32, a: u32) -> u32 {
+    var y = next_of(x);
+    if (y == NONE && lab(x) == b && a != NONE) { y = head(a); }
+    while (y != NONE && lab(y) != b && target_of(y) != b) { y = next_of(y); }
+    return y;
+}
+
 // Centre and radius of cluster b together with the members of `a` planned for it (a == NONE:
 // b alone).
 fn centre_radius(b: u32, a: u32) -> vec4<u32> {
     var sum = vec3<u32>(0u);
     var n = 0u;
-    for (var side = 0u; side < 2u; side++) {
-        var x = head(b);
-        if (side == 1u) {
-            if (a == NONE) { break; }
-            x = head(a);
-        }
-        while (x != NONE) {
-            if (side == 0u || target_of(x) == b) {
-                sum += centre(x);
-                n += 1u;
-            }
-            x = next_of(x);
-        }
+    for (var x = head(b); x != NONE; x = next_joined(x, b, a)) {
+        sum += centre(x);
+        n += 1u;
     }
     let c = sum / max(n, 1u);
     var far = 0u;
-    for (var side = 0u; side < 2u; side++) {
-        var x = head(b);
-        if (side == 1u) {
-            if (a == NONE) { break; }
-            x = head(a);
-        }
-        while (x != NONE) {
-            if (side == 0u || target_of(x) == b) { far = max(far, distance2(centre(x), c)); }
-            x = next_of(x);
-        }
+    for (var x = head(b); x != NONE; x = next_joined(x, b, a)) {
+        far = max(far, distance2(centre(x), c));
     }
     return vec4<u32>(c, isqrt(far));
 }
@@ -919,16 +924,7 @@ fn pack_pieces() {
         set_centre_radius(c);
         tri[pk_word(7u, c)] = cluster_verts(c, NONE);
     }
-    // Smallest first, ties to the lower id.
-    var o = 0u;
-    for (var sz = 1u; sz <= p.max_t; sz++) {
-        for (var c = 0u; c < k; c++) {
-            if (size(c) == sz) {
-                arena[OC + o] = c;
-                o += 1u;
-            }
-        }
-    }
+    let o = order_by_size(k);
     for (var oi = 0u; oi < o; oi++) {
         let a = arena[OC + oi];
         // Made of whole pieces, with no neighbour in another cluster.
@@ -966,13 +962,7 @@ fn pack_pieces() {
                 if (piece(x) == q) {
                     pt += 1u;
                     sum += centre(x);
-                    for (var j = 0u; j < 3u; j++) {
-                        let kk = canon[3u * x + j];
-                        if (wmark(kk) != SERIAL) {
-                            cstate[6u * p.t + kk] = SERIAL;
-                            pv += 1u;
-                        }
-                    }
+                    pv += stamp_corners(x);
                 }
                 x = next_of(x);
             }
