@@ -490,7 +490,6 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         open = false;
     }
     let lc: Vec<Centre> = tris.iter().map(|&t| input.centres[t as usize]).collect();
-    let whole: Vec<bool> = (0..n).map(|i| closed[s.piece[i] as usize]).collect();
     let mut clusters = merge_neighbours(&mut s, &nbrs, &corners, n, c, mv, mt, &mut serial);
     pack_pieces(
         &mut s,
@@ -498,7 +497,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         &nbrs,
         &corners,
         &lc,
-        &whole,
+        &closed,
         mv,
         mt,
         &mut serial,
@@ -685,7 +684,8 @@ where
 /// Clusters go smallest first, in their order after the merges. Room is checked against the
 /// target's vertices plus the piece's as if they shared none, so a plan never overfills. A radius
 /// is the integer square root of the largest squared distance from a cluster's centre to a
-/// member's centroid cell (integers, so exact on every device).
+/// member's centroid cell (integers, so exact on every device). `closed[p]`: piece `p` has no
+/// edge leaving the region.
 ///
 /// Why: the growth packs pieces only into a cluster whose own piece ran out, so small pieces
 /// seeded among a large piece's clusters (the neurons' detached tetrahedra) end as clusters of
@@ -699,7 +699,7 @@ fn pack_pieces<N, I>(
     nbrs: &N,
     corners: &impl Fn(usize) -> [usize; 3],
     centres: &[Centre],
-    whole: &[bool],
+    closed: &[bool],
     mv: usize,
     mt: usize,
     serial: &mut u32,
@@ -737,10 +737,10 @@ fn pack_pieces<N, I>(
     order.sort_by_key(|&c| (cl.mem[c].len(), c));
     let (mut extra_t, mut extra_v) = (vec![0usize; k], vec![0usize; k]);
     for a in order {
-        let closed = cl.mem[a]
+        let whole_pieces = cl.mem[a]
             .iter()
-            .all(|&i| whole[i] && nbrs(i).all(|j| s.label[j] as usize == a));
-        if !closed {
+            .all(|&i| closed[s.piece[i] as usize] && nbrs(i).all(|j| s.label[j] as usize == a));
+        if !whole_pieces {
             continue;
         }
         let mut pieces: Vec<u32> = cl.mem[a].iter().map(|&i| s.piece[i]).collect();
@@ -1237,7 +1237,8 @@ mod tests {
                 s.label[t] = 2;
             }
         }
-        let whole: Vec<bool> = (0..n).map(|i| s.piece[i] != 0).collect();
+        // Piece 0 (the strips) is cut by the region; the tetrahedra are whole.
+        let closed = [false, true, true];
         let nbrs = |i: usize| adj[i].clone().into_iter();
         let corner = |i: usize| corners[i];
         let mut serial = 0;
@@ -1259,7 +1260,7 @@ mod tests {
             &nbrs,
             &corner,
             &centres,
-            &whole,
+            &closed,
             64,
             mt,
             &mut serial,
