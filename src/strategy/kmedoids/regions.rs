@@ -302,23 +302,36 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         input.limits.max_triangles as usize,
     );
     let mut s = State::new(n);
-    // Neighbours of local triangle `i` inside the region, as local indices.
-    let nbrs = |i: usize| {
-        input
-            .dual
-            .row(tris[i] as usize)
-            .iter()
-            .filter(move |&&x| input.region[x as usize] == r)
-            .map(|&x| input.local[x as usize] as usize)
+    // The region's dual graph, canonical corners and centres in local numbers, gathered once: the
+    // growth reads them for every frontier triangle at every step (the kernel reads the global
+    // arrays instead; the values are the same).
+    let mut local_dual = Csr {
+        offsets: Vec::with_capacity(n + 1),
+        items: Vec::with_capacity(3 * n),
     };
-    // Local canonical corners of local triangle `i`.
-    let corners = |i: usize| {
-        let t = tris[i] as usize;
-        [0, 1, 2].map(|j| {
-            let k = input.canon[3 * t + j];
-            (3 * input.local[(k / 3) as usize] + k % 3) as usize
+    local_dual.offsets.push(0);
+    for &t in tris {
+        let row = input.dual.row(t as usize).iter();
+        let inside = row.filter(|&&x| input.region[x as usize] == r);
+        local_dual
+            .items
+            .extend(inside.map(|&x| input.local[x as usize]));
+        local_dual.offsets.push(local_dual.items.len() as u32);
+    }
+    let local_corners: Vec<[usize; 3]> = tris
+        .iter()
+        .map(|&t| {
+            [0, 1, 2].map(|j| {
+                let k = input.canon[3 * t as usize + j];
+                (3 * input.local[(k / 3) as usize] + k % 3) as usize
+            })
         })
-    };
+        .collect();
+    let lc: Vec<Centre> = tris.iter().map(|&t| input.centres[t as usize]).collect();
+    // Neighbours of local triangle `i` inside the region, as local indices.
+    let nbrs = |i: usize| local_dual.row(i).iter().map(|&x| x as usize);
+    // Local canonical corners of local triangle `i`.
+    let corners = |i: usize| local_corners[i];
     // Pieces in reversed BFS order, the seed order.
     let mut order = Vec::with_capacity(n);
     let mut left = Vec::new();
@@ -338,8 +351,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         while head < order.len() {
             let u = order[head];
             head += 1;
-            let row = input.dual.row(tris[u] as usize);
-            whole &= row.iter().all(|&x| input.region[x as usize] == r);
+            whole &= local_dual.row(u).len() == input.dual.row(tris[u] as usize).len();
             for j in nbrs(u) {
                 if s.piece[j] == NONE {
                     s.piece[j] = p;
@@ -394,7 +406,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
                 centre: sum.map(|x| x / g),
             };
             let fits = |i: usize| nv + added(&s, i, c) <= mv;
-            match pack.nearest(&s.piece, &|i| input.centres[tris[i] as usize], &fits) {
+            match pack.nearest(&s.piece, &|i| lc[i], &fits) {
                 Some(i) => i,
                 None => {
                     c += 1;
@@ -417,7 +429,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         while grown.len() < mt {
             // The cluster's centre so far (integer division: exact on every device).
             let centre = if grown.is_empty() {
-                unpack(input.centres[tris[seed] as usize])
+                unpack(lc[seed])
             } else {
                 let g = grown.len() as u32;
                 sum.map(|x| x / g)
@@ -428,7 +440,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
                 if nv + a > mv {
                     continue;
                 }
-                let d2 = distance2(unpack(input.centres[tris[i] as usize]), centre);
+                let d2 = distance2(unpack(lc[i]), centre);
                 let key = (a, free, d2, s.hop[i], i);
                 if best.is_none_or(|(b, _)| key < b) {
                     best = Some((key, fi));
@@ -447,7 +459,7 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
                 }
             }
             grown.push(i);
-            for (x, q) in sum.iter_mut().zip(unpack(input.centres[tris[i] as usize])) {
+            for (x, q) in sum.iter_mut().zip(unpack(lc[i])) {
                 *x += q;
             }
             vcount.push(nv as u32);
@@ -489,7 +501,6 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         c += 1;
         open = false;
     }
-    let lc: Vec<Centre> = tris.iter().map(|&t| input.centres[t as usize]).collect();
     let mut clusters = merge_neighbours(&mut s, &nbrs, &corners, n, c, mv, mt, &mut serial);
     pack_pieces(
         &mut s,
