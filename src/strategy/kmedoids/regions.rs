@@ -181,12 +181,12 @@ pub fn canonical_corners(mesh: &Mesh, vt: &Csr, region: &[u32]) -> Vec<u32> {
         .flat_map_iter(|t| {
             let r = region[t];
             mesh.triangle(t).map(|v| {
+                // Rows are ascending: the first in the region is the lowest.
                 let u = vt
                     .row(v as usize)
                     .iter()
                     .copied()
-                    .filter(|&x| region[x as usize] == r)
-                    .min()
+                    .find(|&x| region[x as usize] == r)
                     .expect("a vertex's triangles include this one");
                 let i = mesh
                     .triangle(u as usize)
