@@ -1,6 +1,6 @@
 //! One cluster's induced subgraph of the dual graph, with local node numbers: the medoid (all
-//! members' distance sums at once), breadth-first distances, and floods from several seeds. Every
-//! k-medoids step that looks inside a cluster reads it.
+//! members' distance sums at once) and breadth-first distances. Every k-medoids step that looks
+//! inside a cluster reads it.
 
 use crate::common::Csr;
 
@@ -214,64 +214,22 @@ impl LocalGraph {
         }
         sum + (m - queue.len() as u64) * m
     }
-
-    /// BFS from the local `seeds` over the nodes whose `part` is `keep` (all nodes for `None`),
-    /// each node taking the lowest seed index among those at its distance (a level-synchronous
-    /// sweep in ascending node order, so the result is the same on every run). Returns per node
-    /// (seed index, distance), `u32::MAX` where unreached.
-    pub(crate) fn flood(
-        &self,
-        seeds: &[usize],
-        part: Option<(&[u32], u32)>,
-    ) -> (Vec<u32>, Vec<u32>) {
-        let n = self.len();
-        let (mut owner, mut dist) = (vec![u32::MAX; n], vec![u32::MAX; n]);
-        let allowed = |u: usize| part.is_none_or(|(p, k)| p[u] == k);
-        let mut frontier: Vec<usize> = Vec::new();
-        for (i, &s) in seeds.iter().enumerate() {
-            if owner[s] == u32::MAX {
-                owner[s] = i as u32;
-                dist[s] = 0;
-                frontier.push(s);
-            }
-        }
-        let mut d = 0;
-        while !frontier.is_empty() {
-            let mut next = Vec::new();
-            for &u in &frontier {
-                for &v in self.row(u) {
-                    let v = v as usize;
-                    if !allowed(v) {
-                        continue;
-                    }
-                    if dist[v] == u32::MAX {
-                        dist[v] = d + 1;
-                        owner[v] = owner[u];
-                        next.push(v);
-                    } else if dist[v] == d + 1 && owner[u] < owner[v] {
-                        owner[v] = owner[u];
-                    }
-                }
-            }
-            next.sort_unstable();
-            frontier = next;
-            d += 1;
-        }
-        (owner, dist)
-    }
 }
 
 /// Hop distance of every member of `sub` from member `at`. A cluster joined through a vertex has
 /// pieces `at` does not reach: each is numbered on after the previous one, from its lowest member.
 pub(crate) fn member_distances(sub: &LocalGraph, at: usize) -> Vec<u32> {
-    let mut d = sub.flood(&[at], None).1;
+    // A queue BFS: a level-by-level sweep with a list per level took twice as long here.
+    let (mut d, mut more, mut queue) = (vec![0; sub.len()], Vec::new(), Vec::new());
+    sub.bfs(at, &mut d, &mut queue);
     while let Some(u) = d.iter().position(|&x| x == u32::MAX) {
         let base = d
             .iter()
             .filter(|&&x| x != u32::MAX)
             .max()
             .map_or(0, |&x| x + 1);
-        let more = sub.flood(&[u], None).1;
+        more.resize(sub.len(), 0);
+        sub.bfs(u, &mut more, &mut queue);
         for (x, &y) in d.iter_mut().zip(&more) {
             if *x == u32::MAX && y != u32::MAX {
                 *x = base + y;

@@ -16,7 +16,7 @@
 //!
 //! The files, lowest first (a file reads only those above it in this list):
 //! - [`mod@assign`]: the flat multi-source BFS and member lists (CPU reference of `wgsl/assign.wgsl`);
-//! - `local_graph`: one cluster's induced subgraph: medoids, distances, floods;
+//! - `local_graph`: one cluster's induced subgraph: medoids and distances;
 //! - [`update`]: the medoid update with its cache (CPU reference of `wgsl/update.wgsl`);
 //! - [`split`]: the flat method's overflow statistics (CPU reference of `wgsl/split.wgsl`);
 //! - [`seed`]: capacity-aware seeding growth and its orphans;
