@@ -3,7 +3,7 @@
 //   init      canonical_corners, and the State words of grow_region set to their start values
 //             (per triangle)
 //   grow      grow_region with Packing::nearest (nearest_piece), absorb_pockets (shed_front),
-//             merge_neighbours and pack_pieces: one invocation per region
+//             merge_neighbours, pack_pieces and dissolve_clusters: one invocation per region
 //             (one per workgroup, or eight per workgroup in grow_rows),
 //             the same sequential steps over the same integer keys (regions share no word, so
 //             they run at once)
@@ -812,6 +812,7 @@ fn merge_neighbours() {
         arena[s_q() + RS + gone] = 0u;
     }
     pack_pieces();
+    dissolve_clusters();
     // Survivors renumbered in order, their members back in seq.
     var written = 0u;
     var nc = 0u;
@@ -1027,6 +1028,121 @@ fn pack_pieces() {
             set_centre_radius(b);
             tri[pk_word(7u, b)] = cluster_verts(b, NONE);
         }
+    }
+}
+
+// ---- dissolve_clusters (step 2d, in the same invocation) ---------------------------------------
+//
+// Scratch: the queue (circular, `max_t` words: a member is queued at most once at a time) in the
+// grown row; a member's queued flag in its first corner's mark word; the plan's added triangles
+// and vertices per target in seq and the cluster starts, as in pack_pieces, which leaves them
+// zero and every cluster's vertex count in `pk_verts`.
+
+// Distinct corners of `x` whose vertex no member of cluster `b` uses (moved members included).
+fn added_to(x: u32, b: u32) -> u32 {
+    var n = 0u;
+    for (var j = 0u; j < 3u; j++) {
+        let k = canon[3u * x + j];
+        if ((j > 0u && canon[3u * x] == k) || (j > 1u && canon[3u * x + 1u] == k)) { continue; }
+        let v = idx(3u * x + j);
+        var used = false;
+        for (var e = vt_off[v]; e < vt_off[v + 1u] && !used; e++) {
+            let y = vtn(e);
+            used = in_region(y) && lab(y) == b;
+        }
+        if (!used) { n += 1u; }
+    }
+    return n;
+}
+
+fn dissolve_clusters() {
+    let k = C;
+    let OC = s_pockets() + RS;
+    let Q = s_grown(R);
+    let o = order_by_size(k);
+    for (var oi = 0u; oi < o; oi++) {
+        let a = arena[OC + oi];
+        let sa = size(a);
+        if (sa == 0u) { continue; }
+        // The members with a neighbour in another cluster, ascending (insertion sort).
+        var qn = 0u;
+        var x = head(a);
+        while (x != NONE) {
+            cstate[3u * x] = 0u;
+            var outside = false;
+            for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
+                let y = nb(e);
+                if (in_region(y) && lab(y) != a) { outside = true; }
+            }
+            if (outside) {
+                var i = qn;
+                while (i > 0u && arena[Q + i - 1u] > x) {
+                    arena[Q + i] = arena[Q + i - 1u];
+                    i -= 1u;
+                }
+                arena[Q + i] = x;
+                cstate[3u * x] = 1u;
+                qn += 1u;
+            }
+            x = next_of(x);
+        }
+        var qh = 0u;
+        var moved = 0u;
+        while (qn > 0u) {
+            let m = arena[Q + qh];
+            qh = (qh + 1u) % p.max_t;
+            qn -= 1u;
+            cstate[3u * m] = 0u;
+            var best = NONE;
+            var best_add = 0u;
+            for (var e = dual_off[m]; e < dual_off[m + 1u]; e++) {
+                let y = nb(e);
+                if (!in_region(y)) { continue; }
+                let b = lab(y);
+                if (b == a || size(b) + extra_t(b) + 1u > p.max_t) { continue; }
+                let ad = added_to(m, b);
+                if (pk_verts(b) + extra_v(b) + ad > p.max_v) { continue; }
+                if (best == NONE || ad < best_add || (ad == best_add && b < best)) {
+                    best = b;
+                    best_add = ad;
+                }
+            }
+            if (best == NONE) { continue; }
+            set_lab(m, best);
+            arena[s_seq() + RS + best] += 1u;
+            arena[s_cstart() + RS + best] += best_add;
+            moved += 1u;
+            for (var e = dual_off[m]; e < dual_off[m + 1u]; e++) {
+                let y = nb(e);
+                if (in_region(y) && lab(y) == a && cstate[3u * y] == 0u) {
+                    arena[Q + (qh + qn) % p.max_t] = y;
+                    cstate[3u * y] = 1u;
+                    qn += 1u;
+                }
+            }
+        }
+        // All moved: into the targets' lists in a's list order; else every member back.
+        let done = moved == sa;
+        x = head(a);
+        while (x != NONE) {
+            let nx = next_of(x);
+            let b = lab(x);
+            if (b != a) {
+                if (done) {
+                    set_next(tail(b), x);
+                    set_next(x, NONE);
+                    arena[s_front() + RS + b] = x;
+                    arena[s_q() + RS + b] = size(b) + 1u;
+                    tri[pk_word(7u, b)] = pk_verts(b) + extra_v(b);
+                } else {
+                    set_lab(x, a);
+                }
+                arena[s_seq() + RS + b] = 0u;
+                arena[s_cstart() + RS + b] = 0u;
+            }
+            x = nx;
+        }
+        if (done) { arena[s_q() + RS + a] = 0u; }
     }
 }
 

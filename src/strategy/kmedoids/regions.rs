@@ -33,7 +33,12 @@
 //!      its pieces that have room, where the targets' bounding radii grow by no more, summed,
 //!      than its own (`pack_pieces`): the growth packs pieces only into a cluster whose own
 //!      piece ran out, so detached pieces seeded among a large piece's clusters would otherwise
-//!      stay meshlets of their own.
+//!      stay meshlets of their own;
+//!    - then a cluster whose members all find room in the clusters across its edges is dissolved
+//!      into them, smallest first, member by member from its border inwards
+//!      (`dissolve_clusters`): the merges move a cluster whole into one neighbour, while on
+//!      branching tubes a cluster between two part-filled ones often fits neither alone but
+//!      splits across both.
 //! 3. **Labels**: cluster `c` of region `r` is `base[r] + c`, regions in order.
 //! 4. **Medoids**: the paper's medoid of each cluster and its members' in-cluster hop distances
 //!    (one invocation per cluster on the GPU), which order the members when packing.
@@ -47,7 +52,8 @@
 //! nearest-medoid assignment, shape the clusters); where it differs from `kmedoids-parallel`:
 //! merges only inside a region (none across region borders), whole pieces packed during the
 //! growth (nearest within a window) and, after the merges, into the region's clusters with room
-//! under the radius rule (not nearest over all clusters), the orphan rules
+//! under the radius rule (not nearest over all clusters), clusters dissolved across their
+//! neighbours (which that method does not do), the orphan rules
 //! over pockets of the region only, and the running centroid in quantised integers. Every
 //! cluster is edge-connected except where small whole pieces are packed together. Determinism:
 //! regions share no state and every choice is a strict minimum over integer keys (the moves'
@@ -97,6 +103,7 @@ pub fn cluster(
     let input = RegionInput {
         mesh,
         dual,
+        vt,
         region: &region,
         local: &local,
         canon: &canon,
@@ -238,6 +245,8 @@ pub struct RegionInput<'a> {
     pub mesh: &'a Mesh,
     /// Its dual graph.
     pub dual: &'a Csr,
+    /// Its vertex -> triangles rows.
+    pub vt: &'a Csr,
     /// Region of each triangle.
     pub region: &'a [u32],
     /// [`local_index`].
@@ -513,6 +522,17 @@ pub fn grow_region(input: &RegionInput<'_>, r: u32, tris: &[u32]) -> (Vec<u32>, 
         mt,
         &mut serial,
     );
+    // Local triangles of the region using the vertex of local corner `kk`.
+    let users = |kk: usize| {
+        let v = input.mesh.indices[3 * tris[kk / 3] as usize + kk % 3];
+        input
+            .vt
+            .row(v as usize)
+            .iter()
+            .filter(move |&&y| input.region[y as usize] == r)
+            .map(|&y| input.local[y as usize] as usize)
+    };
+    dissolve_clusters(&mut s, &mut clusters, &nbrs, &corners, &users, mv, mt);
     let k = clusters.renumber(&mut s.label);
     (s.label, k)
 }
@@ -686,6 +706,116 @@ where
         cl.alive[gone] = false;
     }
     cl
+}
+
+/// Step 2d for one region: a cluster is dissolved into its neighbours when every member finds a
+/// neighbouring cluster with room. Clusters go smallest first (ties to the lower id), in their
+/// order after step 2c. A queue starts with the cluster's members that have a neighbour in another
+/// cluster, ascending; a member taken from it joins, of the clusters across its edges,
+/// the one it adds the fewest vertices to (then the lower id) among those it fits, counting the
+/// members already moved; a member that moves queues its neighbours still in the cluster. If the
+/// queue runs dry with a member left, nothing moves. The moved members join their targets' lists
+/// in the dissolved cluster's list order. Each target stays edge-connected (a member joins next
+/// to one of the target's).
+///
+/// Why: the merges move whole clusters, into one neighbour. On branching tubes (the neurons) a
+/// cluster between two part-filled ones often fits neither alone but splits across both: a
+/// sixteenth fewer meshlets on the first neuron, with no change on surfaces, whose clusters meet
+/// the vertex limit and so have no room for triangles that bring new vertices.
+#[allow(clippy::too_many_arguments)]
+fn dissolve_clusters<N, I, U, J>(
+    s: &mut State,
+    cl: &mut Clusters,
+    nbrs: &N,
+    corners: &impl Fn(usize) -> [usize; 3],
+    users: &U,
+    mv: usize,
+    mt: usize,
+) where
+    N: Fn(usize) -> I,
+    I: Iterator<Item = usize>,
+    U: Fn(usize) -> J,
+    J: Iterator<Item = usize>,
+{
+    let k = cl.alive.len();
+    let mut order: Vec<usize> = (0..k).filter(|&c| cl.alive[c]).collect();
+    order.sort_by_key(|&c| (cl.mem[c].len(), c));
+    // Triangles and vertices the current plan adds to each cluster.
+    let (mut extra_t, mut extra_v) = (vec![0usize; k], vec![0usize; k]);
+    let mut queued = vec![false; s.label.len()];
+    let mut queue = std::collections::VecDeque::new();
+    for a in order {
+        if !cl.alive[a] {
+            continue;
+        }
+        let a32 = a as u32;
+        let mut start: Vec<usize> = cl.mem[a]
+            .iter()
+            .copied()
+            .filter(|&x| nbrs(x).any(|y| s.label[y] != a32))
+            .collect();
+        start.sort_unstable();
+        for x in start {
+            queued[x] = true;
+            queue.push_back(x);
+        }
+        let mut moved = 0;
+        while let Some(x) = queue.pop_front() {
+            queued[x] = false;
+            let mut best: Option<(usize, u32)> = None;
+            for y in nbrs(x) {
+                let b = s.label[y];
+                if b == a32 || cl.mem[b as usize].len() + extra_t[b as usize] + 1 > mt {
+                    continue;
+                }
+                // Distinct corners whose vertex no member of b (moved ones included) uses.
+                let k3 = corners(x);
+                let added = (0..3)
+                    .filter(|&j| {
+                        !k3[..j].contains(&k3[j]) && !users(k3[j]).any(|u| s.label[u] == b)
+                    })
+                    .count();
+                if cl.nverts[b as usize] + extra_v[b as usize] + added > mv {
+                    continue;
+                }
+                if best.is_none_or(|key| (added, b) < key) {
+                    best = Some((added, b));
+                }
+            }
+            let Some((added, b)) = best else { continue };
+            s.label[x] = b;
+            extra_t[b as usize] += 1;
+            extra_v[b as usize] += added;
+            moved += 1;
+            for y in nbrs(x) {
+                if s.label[y] == a32 && !queued[y] {
+                    queued[y] = true;
+                    queue.push_back(y);
+                }
+            }
+        }
+        let members = std::mem::take(&mut cl.mem[a]);
+        let done = moved == members.len();
+        for &x in &members {
+            let b = s.label[x] as usize;
+            if b == a {
+                continue;
+            }
+            if done {
+                cl.mem[b].push(x);
+                cl.nverts[b] += extra_v[b];
+            } else {
+                s.label[x] = a32;
+            }
+            extra_t[b] = 0;
+            extra_v[b] = 0;
+        }
+        if done {
+            cl.alive[a] = false;
+        } else {
+            cl.mem[a] = members;
+        }
+    }
 }
 
 /// Step 2c for one region: a cluster made of whole pieces of the mesh (each piece without an
@@ -1304,6 +1434,41 @@ mod tests {
         let (labels, alive) = pack_two_tets(2, 400, [[350, 40, 0], [360, 40, 0]], 8);
         assert_eq!(alive, [true, true, true, true]);
         assert_eq!(&labels[16..24], &[2; 8]);
+    }
+
+    /// Step 2d on a strip of 12 triangles (triangle `t` has vertices `t, t + 1, t + 2` and
+    /// neighbours `t - 1` and `t + 1`) in three clusters of four; the labels and survivors after.
+    fn dissolve_strip(mv: usize, mt: usize) -> (Vec<u32>, Vec<bool>) {
+        let n = 12;
+        let mut s = State::new(n);
+        let corner = |i: usize| [i, i + 1, i + 2];
+        let nbrs = |i: usize| (i.saturating_sub(1)..(i + 2).min(n)).filter(move |&j| j != i);
+        let users = |v: usize| (0..n).filter(move |&t| corner(t).contains(&v));
+        let mut cl = Clusters {
+            mem: vec![Vec::new(); 3],
+            nverts: vec![6; 3],
+            alive: vec![true; 3],
+        };
+        for i in 0..n {
+            s.label[i] = (i / 4) as u32;
+            cl.mem[i / 4].push(i);
+        }
+        dissolve_clusters(&mut s, &mut cl, &nbrs, &corner, &users, mv, mt);
+        (s.label, cl.alive)
+    }
+
+    #[test]
+    fn a_cluster_dissolves_across_its_neighbours_when_every_member_finds_room() {
+        // Cluster 0 goes first: two members fit cluster 1, then triangle 1 has no cluster with
+        // room beside it, so all stay. Cluster 1 then splits: 4 and 5 into cluster 0 (5 next to
+        // the moved 4), 7 and 6 into cluster 2.
+        let (labels, alive) = dissolve_strip(64, 6);
+        assert_eq!(alive, [true, false, true]);
+        assert_eq!(labels, [0, 0, 0, 0, 0, 0, 2, 2, 2, 2, 2, 2]);
+        // Every move across adds a vertex to clusters already at the vertex limit: none moves.
+        let (labels, alive) = dissolve_strip(6, 126);
+        assert_eq!(alive, [true; 3]);
+        assert_eq!(labels, [0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2, 2]);
     }
 
     #[test]
