@@ -10,8 +10,8 @@
 //   settle         step 4 for the clusters the last round changed: BFS from the fixed medoid
 //                  over the new list (one invocation per cluster)
 //   candidates     step 1 (per triangle)
-//   propose        step 2, and step 3's per-target sums and greatest gain by atomics (per
-//                  triangle)
+//   propose        step 2 (the distance rule over `centres`), and step 3's per-target sums and
+//                  greatest gain by atomics (per triangle)
 //   pick_best      step 3: the lowest triangle id among the proposals of greatest gain
 //   accept         step 3: labels and distances of the accepted moves (per triangle)
 // After the last round tally, count_members (members only: `round` is NONE), scan and place run
@@ -21,7 +21,9 @@
 // The CPU keeps members in sorted lists; here a list is in slot order, which nothing depends on:
 // the BFS distances and the medoid (ties by triangle id) are functions of the member set.
 
-struct Params { t: u32, k: u32, max_v: u32, max_t: u32, round: u32, medoid_at: u32 }
+struct Params {
+    t: u32, k: u32, max_v: u32, max_t: u32, round: u32, medoid_at: u32, centres_at: u32, pad: u32
+}
 
 @group(0) @binding(0) var<uniform> p: Params;
 @group(0) @binding(1) var<storage, read> idx_a: array<u32>;
@@ -45,6 +47,8 @@ struct Params { t: u32, k: u32, max_v: u32, max_t: u32, round: u32, medoid_at: u
 @group(0) @binding(13) var<storage, read_write> state: array<atomic<u32>>;
 // The medoids, at `medoid_at`.
 @group(0) @binding(14) var<storage, read_write> info: array<u32>;
+// The triangles' packed centroid cells (x | y << 16, z) at `centres_at` (flat::packed_centres).
+@group(0) @binding(15) var<storage, read> centres: array<u32>;
 
 fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART]; }
 fn vtn(i: u32) -> u32 { if (i < PART) { return vt_a[i]; } return vt_b[i - PART]; }
@@ -163,6 +167,19 @@ fn candidates(@builtin(global_invocation_id) gid: vec3<u32>) {
     arena[s_cand() + x] = select(0u, 1u, moving);
 }
 
+// Squared distance from x's centroid cell to the cell of cluster c's medoid.
+fn medoid_distance2(x: u32, c: u32) -> u32 {
+    let m = info[p.medoid_at + c];
+    let a = centres[p.centres_at + 2u * x];
+    let b = centres[p.centres_at + 2u * m];
+    let d = vec3<u32>(
+        max(a & 0xffffu, b & 0xffffu) - min(a & 0xffffu, b & 0xffffu),
+        max(a >> 16u, b >> 16u) - min(a >> 16u, b >> 16u),
+        max(centres[p.centres_at + 2u * x + 1u], centres[p.centres_at + 2u * m + 1u])
+            - min(centres[p.centres_at + 2u * x + 1u], centres[p.centres_at + 2u * m + 1u]));
+    return d.x * d.x + d.y * d.y + d.z * d.z;
+}
+
 @compute @workgroup_size(64)
 fn propose(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = flat(gid);
@@ -171,13 +188,15 @@ fn propose(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (arena[s_cand() + x] == 0u) { return; }
     let a = labels[x];
     let d = dist[x];
-    // The nearest neighbour in another cluster that stays, then the lowest cluster.
+    // The nearest neighbour in another cluster that stays, then the lowest cluster, among the
+    // clusters whose medoid's cell is no farther from x's than its own medoid's.
     var best_d = NONE;
     var goal = NONE;
+    let own = medoid_distance2(x, a);
     for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
         let u = nb(e);
         let b = labels[u];
-        if (b != a && open(u) && arena[s_cand() + u] == 0u) {
+        if (b != a && open(u) && arena[s_cand() + u] == 0u && medoid_distance2(x, b) <= own) {
             let du = dist[u] + 1u;
             if (du < best_d || (du == best_d && b < goal)) {
                 best_d = du;

@@ -35,7 +35,7 @@ struct Params { t: u32, regions: u32, max_v: u32, max_t: u32, k: u32, pad: u32 }
 // position in the seed order, free neighbours while on the frontier (State::free).
 @group(0) @binding(11) var<storage, read_write> tri: array<u32>;
 // [0, 3T) per corner: the canonical corner; [3T, 5T) per triangle: its fine centroid cell, two
-// words (x | y << 16, z), from morton.wgsl (packed_centres).
+// words (x | y << 16, z), from morton.wgsl (flat::packed_centres).
 @group(0) @binding(12) var<storage, read_write> canon: array<u32>;
 // Per canonical corner, three sections of 3T: mark, first, wmark. Once `grow` is done, the
 // medoid kernel's scratch (9 words per member at 9x the cluster's member offset).

@@ -28,6 +28,10 @@ param_block! {
         round,
         /// Where the medoids start in `info`.
         medoid_at,
+        /// Where the centroid cells start in `centres`.
+        centres_at,
+        /// Unused.
+        pad,
     }
 }
 
@@ -62,6 +66,8 @@ binding_set! {
         state: ReadWrite,
         /// The medoids at `medoid_at`.
         info: ReadWrite,
+        /// The triangles' packed centroid cells (two words each) at `centres_at`.
+        centres: Read,
     }
 }
 
@@ -81,6 +87,11 @@ pub struct DeviceClusters<'a> {
     pub arena: &'a wgpu::Buffer,
     /// Scratch of at least 9 T words.
     pub cstate: &'a wgpu::Buffer,
+    /// The triangles' packed centroid cells (`strategy::kmedoids::flat::packed_centres`), two
+    /// words each from word `centres_at`: step 2's distance rule reads them.
+    pub centres: &'a wgpu::Buffer,
+    /// Where the cells start in `centres`.
+    pub centres_at: usize,
 }
 
 /// The moves of one clustering, bound and ready to record.
@@ -147,6 +158,7 @@ impl DeviceMoves {
                 cstate: c.cstate,
                 state: &state,
                 info: c.info,
+                centres: c.centres,
             },
         );
         let scan = Scan::new(gpu);
@@ -158,6 +170,8 @@ impl DeviceMoves {
             max_t: limits.max_triangles,
             round: 0,
             medoid_at: c.medoid_at as u32,
+            centres_at: c.centres_at as u32,
+            pad: 0,
         };
         Ok(Self {
             kernels,

@@ -261,6 +261,8 @@ pub fn cluster_regions(
                 k,
                 arena: &arena,
                 cstate: &cstate,
+                centres: &canon,
+                centres_at: 3 * t,
             };
             DeviceMoves::new(gpu, &adj, &clusters, limits, cfg.move_rounds)
         })

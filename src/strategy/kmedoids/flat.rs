@@ -267,6 +267,36 @@ pub fn add_component_medoids(dual: &Csr, labels: &[u32], medoids: &mut Vec<u32>)
     true
 }
 
+/// A packed centre: `[x | y << 16, z]`, 15 bits per axis.
+pub type Centre = [u32; 2];
+
+/// The three coordinates of a packed centre.
+pub(crate) fn unpack(c: Centre) -> [u32; 3] {
+    [c[0] & 0xffff, c[0] >> 16, c[1]]
+}
+
+/// Squared distance between two cells.
+pub(crate) fn distance2(a: [u32; 3], b: [u32; 3]) -> u32 {
+    (0..3).map(|j| a[j].abs_diff(b[j]).pow(2)).sum()
+}
+
+/// Each triangle's fine centroid cell in the Morton frame ([`MortonFrame::fine_cell`], 15 bits
+/// per axis along the box's longest side), packed as a [`Centre`]: the geometric term of
+/// `kmedoids-regions`' growth key and of the boundary moves' rule.
+/// Only `+`, `-` and `x` touch a triangle, so `wgsl/morton.wgsl` computes the same words.
+pub fn packed_centres(mesh: &Mesh) -> Vec<Centre> {
+    let (lo, hi) = mesh.bounding_box();
+    let frame = MortonFrame::new(lo, hi);
+    (0..mesh.triangle_count())
+        .into_par_iter()
+        .map(|t| {
+            let [a, b, c] = mesh.triangle(t).map(|v| mesh.position(v));
+            let [x, y, z] = frame.fine_cell(a, b, c);
+            [x | y << 16, z]
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::cluster;

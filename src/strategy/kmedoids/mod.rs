@@ -23,8 +23,8 @@
 //! - [`merge`]: merging neighbours and small pieces, renumbering;
 //! - [`capacity`]: the default's driver and its capacity-aware assignment (CPU reference of
 //!   `wgsl/capacity.wgsl`);
+//! - [`flat`]: the flat and paper drivers, the Morton frame and the centroid cells;
 //! - [`moves`]: boundary moves, the parallel method's medoid iteration;
-//! - [`flat`]: the flat and paper drivers;
 //! - [`coarse`]: the coarse regions of the two region-parallel methods (CPU reference of
 //!   `wgsl/coarse.wgsl`);
 //! - [`parallel`]: the region-parallel driver over the capacity-aware one;

@@ -10,9 +10,13 @@
 //!    distance + 1 is below its own.
 //! 2. **Proposals**: its target is the nearest such neighbour's cluster (then the lower id),
 //!    counting only neighbours that are not candidates themselves, so the one it attaches to
-//!    stays. Kept only if taking it out leaves every other member's distance as it was: each of
-//!    its neighbours one level further out has another parent in the cluster that is not a
-//!    candidate.
+//!    stays, and only clusters whose medoid's centroid cell is no farther from the triangle's
+//!    than its own medoid's (squared distances between
+//!    [`packed_centres`](super::flat::packed_centres) cells, integers on every device): by hop
+//!    distance alone triangles moved along long thin fans towards a medoid across them, and the
+//!    bounding spheres grew. Kept only if taking it out leaves every other member's distance as
+//!    it was: each of its neighbours one level further out has another parent in the cluster
+//!    that is not a candidate.
 //! 3. **Acceptance per target**: all of a cluster's proposals if their triangles and new vertices
 //!    (summed: an upper bound where two share a vertex) fit the limits at the sizes the round
 //!    began with, else the one of greatest gain (then the lowest triangle id) if it fits alone.
@@ -32,6 +36,7 @@
 
 use super::assign::{members, UNREACHED};
 use super::capacity::medoid_of;
+use super::flat::{distance2, unpack, Centre};
 use super::local_graph::LocalGraph;
 use super::mean;
 use crate::common::{sorted, Csr};
@@ -65,13 +70,15 @@ struct Proposal {
 
 /// Runs at most `max_rounds` rounds of steps 1-4 over `labels` and `distances` (hop distances to
 /// `medoids` inside each cluster, as the paper's medoid update gives them), then step 5: the
-/// paper's medoid of every cluster that changed, and its members' distances.
+/// paper's medoid of every cluster that changed, and its members' distances. `centres`: every
+/// triangle's centroid cell ([`packed_centres`](super::flat::packed_centres)).
 #[allow(clippy::too_many_arguments)]
 pub fn move_boundaries(
     mesh: &Mesh,
     dual: &Csr,
     vt: &Csr,
     limits: Limits,
+    centres: &[Centre],
     labels: &mut [u32],
     medoids: &mut [u32],
     distances: &mut [u32],
@@ -131,6 +138,13 @@ pub fn move_boundaries(
             })
             .collect();
         // Step 2. One that cannot fit alone is no demand on its target.
+        // Step 2's distance rule: b's medoid no farther from x's cell than x's own medoid.
+        let medoids_now: &[u32] = medoids;
+        let near = |x: u32, b: u32| {
+            let (a, cell) = (labels_now[x as usize], unpack(centres[x as usize]));
+            let from = |c: u32| distance2(cell, unpack(centres[medoids_now[c as usize] as usize]));
+            from(b) <= from(a)
+        };
         let fits_alone = |p: &Proposal| {
             let b = p.target as usize;
             (mem[b].len() as u32) < mt && vcount[b] + p.new_vertices <= mv
@@ -139,9 +153,12 @@ pub fn move_boundaries(
             .into_par_iter()
             .filter(|&x| candidate[x as usize])
             .filter_map(|x| {
-                propose(mesh, dual, vt, labels_now, dist_now, &candidate, &open, x)
-                    .filter(fits_alone)
-                    .map(|p| (x, p))
+                let allowed = |u: u32| open(u) && near(x, labels_now[u as usize]);
+                propose(
+                    mesh, dual, vt, labels_now, dist_now, &candidate, &allowed, x,
+                )
+                .filter(fits_alone)
+                .map(|p| (x, p))
             })
             .collect();
         // Step 3: per target, the summed demand and the best single proposal.
@@ -236,14 +253,14 @@ fn propose(
     labels: &[u32],
     distances: &[u32],
     candidate: &[bool],
-    open: &impl Fn(u32) -> bool,
+    allowed: &impl Fn(u32) -> bool,
     x: u32,
 ) -> Option<Proposal> {
     let (a, d) = (labels[x as usize], distances[x as usize]);
     let (distance, target) = dual
         .row(x as usize)
         .iter()
-        .filter(|&&u| labels[u as usize] != a && open(u) && !candidate[u as usize])
+        .filter(|&&u| labels[u as usize] != a && allowed(u) && !candidate[u as usize])
         .map(|&u| (distances[u as usize] + 1, labels[u as usize]))
         .min()?;
     if distance >= d {
@@ -300,6 +317,7 @@ fn bfs_distances(dual: &Csr, labels: &[u32], m: &[u32], root: u32) -> Vec<u32> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::flat::packed_centres;
     use super::super::{cluster, Config, Mode};
     use super::*;
     use crate::adjacency::{cluster_pieces, dual_graph, vertex_triangles};
@@ -360,18 +378,25 @@ mod tests {
             }
             md
         });
-        let run = |limits| {
+        let cells = packed_centres(&m);
+        let run = |limits, cells: &[Centre]| {
             let (mut l, mut md, mut d) = (labels.clone(), medoids, distances.clone());
-            let out = move_boundaries(&m, &dual, &vt, limits, &mut l, &mut md, &mut d, 4);
+            let out = move_boundaries(&m, &dual, &vt, limits, cells, &mut l, &mut md, &mut d, 4);
             (out, l, d)
         };
+        let room = Limits::new(256, 256).unwrap();
         // With room, triangles move and the objective falls.
-        let (out, _, d) = run(Limits::new(256, 256).unwrap());
+        let (out, _, d) = run(room, &cells);
         assert!(out.moved > 0 && out.changed == 2);
         assert!(d.iter().sum::<u32>() < distances.iter().sum::<u32>());
         // At the triangle limit, nothing moves.
-        let (out, l, d) = run(Limits::new(256, t / 2).unwrap());
+        let (out, l, d) = run(Limits::new(256, t / 2).unwrap(), &cells);
         assert_eq!((out.rounds, out.moved, out.changed), (0, 0, 0));
-        assert_eq!((l, d), (labels, distances));
+        assert_eq!((&l, &d), (&labels, &distances));
+        // Each half's cells far from the other's: no medoid across is nearer in space.
+        let apart: Vec<Centre> = labels.iter().map(|&c| [1000 * c, 0]).collect();
+        let (out, l, _) = run(room, &apart);
+        assert_eq!((out.rounds, out.moved), (0, 0));
+        assert_eq!(l, labels);
     }
 }

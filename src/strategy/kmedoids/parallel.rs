@@ -46,6 +46,7 @@
 use super::assign::{members, UNREACHED};
 use super::capacity::{self, medoid_of, Grown};
 use super::coarse::regions;
+use super::flat::packed_centres;
 use super::merge::renumber;
 use super::moves::move_boundaries;
 use super::{pack, Clustering, Config};
@@ -122,6 +123,7 @@ pub fn cluster(
         dual,
         vt,
         limits,
+        &packed_centres(mesh),
         &mut labels,
         &mut medoids,
         &mut distances,

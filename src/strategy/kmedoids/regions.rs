@@ -67,7 +67,7 @@
 use super::assign::{members, UNREACHED};
 use super::capacity::{medoid_of, Grown};
 use super::coarse::regions;
-use super::flat::MortonFrame;
+use super::flat::{distance2, packed_centres, unpack, Centre};
 use super::moves::{move_boundaries, Moves};
 use super::{pack, Clustering, Config};
 use crate::common::Csr;
@@ -131,6 +131,7 @@ pub fn cluster(
         dual,
         vt,
         limits,
+        &centres,
         &mut labels,
         &mut medoids,
         &mut distances,
@@ -202,35 +203,6 @@ pub fn canonical_corners(mesh: &Mesh, vt: &Csr, region: &[u32]) -> Vec<u32> {
                     .expect("the vertex is a corner");
                 3 * u + i as u32
             })
-        })
-        .collect()
-}
-
-/// A packed centre: `[x | y << 16, z]`, 15 bits per axis.
-pub type Centre = [u32; 2];
-
-/// The three coordinates of a packed centre.
-fn unpack(c: Centre) -> [u32; 3] {
-    [c[0] & 0xffff, c[0] >> 16, c[1]]
-}
-
-/// Squared distance between two cells.
-fn distance2(a: [u32; 3], b: [u32; 3]) -> u32 {
-    (0..3).map(|j| a[j].abs_diff(b[j]).pow(2)).sum()
-}
-
-/// Each triangle's fine centroid cell in the Morton frame ([`MortonFrame::fine_cell`], 15 bits
-/// per axis along the box's longest side), packed as a [`Centre`]: the growth's geometric key.
-/// Only `+`, `-` and `x` touch a triangle, so `wgsl/morton.wgsl` computes the same words.
-pub fn packed_centres(mesh: &Mesh) -> Vec<Centre> {
-    let (lo, hi) = mesh.bounding_box();
-    let frame = MortonFrame::new(lo, hi);
-    (0..mesh.triangle_count())
-        .into_par_iter()
-        .map(|t| {
-            let [a, b, c] = mesh.triangle(t).map(|v| mesh.position(v));
-            let [x, y, z] = frame.fine_cell(a, b, c);
-            [x | y << 16, z]
         })
         .collect()
 }
@@ -719,9 +691,9 @@ where
 /// to one of the target's).
 ///
 /// Why: the merges move whole clusters, into one neighbour. On branching tubes (the neurons) a
-/// cluster between two part-filled ones often fits neither alone but splits across both: a
-/// sixteenth fewer meshlets on the first neuron, with no change on surfaces, whose clusters meet
-/// the vertex limit and so have no room for triangles that bring new vertices.
+/// cluster between two part-filled ones often fits neither alone but splits across both. On
+/// surfaces it rarely acts: their clusters meet the vertex limit, so a triangle bringing a new
+/// vertex fits none of them.
 #[allow(clippy::too_many_arguments)]
 fn dissolve_clusters<N, I, U, J>(
     s: &mut State,
