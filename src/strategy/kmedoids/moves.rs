@@ -39,7 +39,7 @@ use super::capacity::medoid_of;
 use super::flat::{distance2, unpack, Centre};
 use super::local_graph::LocalGraph;
 use super::mean;
-use crate::common::{sorted, Csr};
+use crate::common::Csr;
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
 use rayon::prelude::*;
@@ -113,9 +113,10 @@ pub fn move_boundaries(
     let rows = members(labels, k);
     // Members per cluster, ascending, kept up to date by the moves.
     let mut mem: Vec<Vec<u32>> = (0..k).map(|c| rows.row(c).to_vec()).collect();
+    let labels_in: &[u32] = labels;
     let mut vcount: Vec<u32> = (0..k)
         .into_par_iter()
-        .map(|c| vertex_count(mesh, &mem[c]))
+        .map(|c| vertex_count(mesh, vt, labels_in, c as u32, &mem[c]))
         .collect();
     let mut changed = vec![false; k];
     for round in 0..max_rounds {
@@ -214,7 +215,7 @@ pub fn move_boundaries(
             .map(|c| {
                 let m = &mem[c];
                 let d = bfs_distances(dual, labels_now, m, medoids[c]);
-                (c, d, vertex_count(mesh, m))
+                (c, d, vertex_count(mesh, vt, labels_now, c as u32, m))
             })
             .collect();
         for (c, d, nv) in fresh {
@@ -299,9 +300,21 @@ fn propose(
     })
 }
 
-/// Distinct vertices of the triangles `m`.
-fn vertex_count(mesh: &Mesh, m: &[u32]) -> u32 {
-    sorted(m.iter().flat_map(|&x| mesh.triangle(x as usize)).collect()).len() as u32
+/// Distinct vertices of cluster `c`, whose members `labels` gives as `m`: each counted at the
+/// lowest member using it (vertex rows are ascending), with no list to sort.
+fn vertex_count(mesh: &Mesh, vt: &Csr, labels: &[u32], c: u32, m: &[u32]) -> u32 {
+    let lowest = |v: u32, x: u32| {
+        let row = vt.row(v as usize);
+        row.iter().find(|&&y| labels[y as usize] == c) == Some(&x)
+    };
+    m.iter()
+        .map(|&x| {
+            let corners = mesh.triangle(x as usize);
+            (0..3)
+                .filter(|&j| !corners[..j].contains(&corners[j]) && lowest(corners[j], x))
+                .count() as u32
+        })
+        .sum()
 }
 
 /// Hop distances from `root` inside the cluster whose members are `m` (ascending; the cluster is
