@@ -138,7 +138,6 @@ pub fn move_boundaries(
                     })
             })
             .collect();
-        // Step 2. One that cannot fit alone is no demand on its target.
         // Step 2's distance rule: b's medoid no farther from x's cell than x's own medoid.
         let medoids_now: &[u32] = medoids;
         let near = |x: u32, b: u32| {
@@ -146,6 +145,7 @@ pub fn move_boundaries(
             let from = |c: u32| distance2(cell, unpack(centres[medoids_now[c as usize] as usize]));
             from(b) <= from(a)
         };
+        // Step 2. One that cannot fit alone is no demand on its target.
         let fits_alone = |p: &Proposal| {
             let b = p.target as usize;
             (mem[b].len() as u32) < mt && vcount[b] + p.new_vertices <= mv
