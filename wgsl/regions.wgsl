@@ -705,6 +705,14 @@ fn head(c: u32) -> u32 { return arena[s_order() + RS + c]; }
 fn tail(c: u32) -> u32 { return arena[s_front() + RS + c]; }
 fn size(c: u32) -> u32 { return arena[s_q() + RS + c]; }
 
+// Member x onto the end of cluster c's list.
+fn append(c: u32, x: u32) {
+    set_next(tail(c), x);
+    set_next(x, NONE);
+    arena[s_front() + RS + c] = x;
+    arena[s_q() + RS + c] = size(c) + 1u;
+}
+
 // The corners of `x` whose vertex the current evaluation (SERIAL) has not counted yet, stamped.
 fn stamp_corners(x: u32) -> u32 {
     var nv = 0u;
@@ -1016,10 +1024,7 @@ fn pack_pieces() {
             let nx = next_of(x);
             let b = target_of(x);
             set_lab(x, b);
-            set_next(tail(b), x);
-            set_next(x, NONE);
-            arena[s_front() + RS + b] = x;
-            arena[s_q() + RS + b] = size(b) + 1u;
+            append(b, x);
             x = nx;
         }
         arena[s_q() + RS + a] = 0u;
@@ -1129,10 +1134,8 @@ fn dissolve_clusters() {
             let b = lab(x);
             if (b != a) {
                 if (done) {
-                    set_next(tail(b), x);
-                    set_next(x, NONE);
-                    arena[s_front() + RS + b] = x;
-                    arena[s_q() + RS + b] = size(b) + 1u;
+                    append(b, x);
+                    // Added once: extra_v(b) is zeroed below after b's first member.
                     tri[pk_word(7u, b)] = pk_verts(b) + extra_v(b);
                 } else {
                     set_lab(x, a);

@@ -140,10 +140,9 @@ pub fn move_boundaries(
             .collect();
         // Step 2's distance rule: b's medoid no farther from x's cell than x's own medoid.
         let medoids_now: &[u32] = medoids;
-        let near = |x: u32, b: u32| {
-            let (a, cell) = (labels_now[x as usize], unpack(centres[x as usize]));
-            let from = |c: u32| distance2(cell, unpack(centres[medoids_now[c as usize] as usize]));
-            from(b) <= from(a)
+        let from = |x: u32, c: u32| {
+            let medoid = medoids_now[c as usize] as usize;
+            distance2(unpack(centres[x as usize]), unpack(centres[medoid]))
         };
         // Step 2. One that cannot fit alone is no demand on its target.
         let fits_alone = |p: &Proposal| {
@@ -154,7 +153,8 @@ pub fn move_boundaries(
             .into_par_iter()
             .filter(|&x| candidate[x as usize])
             .filter_map(|x| {
-                let allowed = |u: u32| open(u) && near(x, labels_now[u as usize]);
+                let own = from(x, labels_now[x as usize]);
+                let allowed = |u: u32| open(u) && from(x, labels_now[u as usize]) <= own;
                 propose(
                     mesh, dual, vt, labels_now, dist_now, &candidate, &allowed, x,
                 )

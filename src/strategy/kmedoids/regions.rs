@@ -775,6 +775,7 @@ fn dissolve_clusters<N, I, U, J>(
             }
             if done {
                 cl.mem[b].push(x);
+                // Added once: extra_v[b] is zeroed below after b's first member.
                 cl.nverts[b] += extra_v[b];
             } else {
                 s.label[x] = a32;
