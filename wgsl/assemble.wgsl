@@ -5,13 +5,17 @@
 //   place                      triangle ids into their group's slots (any order within a group)
 //   sort_count                 per group: members sorted by (key, id) (each one's rank among
 //                              them, through a histogram of keys below 256), distinct vertices
-//                              counted
+//                              counted, local corners written (a vertex's local index is the
+//                              number of distinct vertices before its first use)
 //   scan(voff), scan(mindex)   group -> first vertex; non-empty group -> meshlet index
-//   write                      per group: meshlet record, vertices in first-use order, local corners
+//   write                      per triangle slot: the vertices its local corners name, and the
+//                              meshlet record at a group's first slot
 //
-// sort_count and write run one workgroup per group (a group fits the limits, so at most 256
-// triangles and 768 corners). The ranks decide the order inside a group whatever order place left
-// it in, and first use is the lowest corner holding a vertex: nothing depends on scheduling.
+// sort_count runs one workgroup per group (a group fits the limits, so at most 256 triangles and
+// 768 corners). The ranks decide the order inside a group whatever order place left it in, and
+// first use is the lowest corner holding a vertex: nothing depends on scheduling. write needs no
+// first-use pass of its own: every corner of a vertex carries the same local index, so the
+// corners that write one vertex slot write the same value.
 // Integers only. A group over the limits is counted in counters[0] (the host refuses the result;
 // the strategies that feed this never make one).
 
@@ -208,27 +212,31 @@ fn sort_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_i
         mindex[g] = 1u;
         if (d > p.max_v) { atomicAdd(&counters[0], 1u); }
     }
+    // The mask keeps a group over the limits (refused by the host) inside its own bytes.
+    for (var i = lid; i < 3u * n; i += 64u) {
+        let b = 3u * s + i;
+        atomicOr(&triangles[b / 4u], (rank[first[i]] & 0xffu) << (8u * (b % 4u)));
+    }
 }
 
 @compute @workgroup_size(64)
-fn write(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
-    let g = group(wid);
-    if (g >= p.g) { return; }
-    let n = group_size(g, lid);
-    if (n == 0u || n == NONE) { return; }
+fn write(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let j = flat(gid);
+    if (j >= p.t) { return; }
+    let x = members[j];
+    let g = owner[x];
     let s = atomicLoad(&toff[g]);
-    let d = first_uses(s, n, lid);
     let v0 = voff[g];
-    if (lid == 0u) {
+    if (j == s) {
         let m = 4u * mindex[g];
         meshlets[m] = v0;
         meshlets[m + 1u] = 3u * s;
-        meshlets[m + 2u] = d;
-        meshlets[m + 3u] = n;
+        meshlets[m + 2u] = voff[g + 1u] - v0;
+        meshlets[m + 3u] = atomicLoad(&toff[g + 1u]) - s;
     }
-    for (var i = lid; i < 3u * n; i += 64u) {
-        if (first[i] == i) { vertices[v0 + rank[i]] = cv[i]; }
-        let b = 3u * s + i;
-        atomicOr(&triangles[b / 4u], rank[first[i]] << (8u * (b % 4u)));
+    for (var c = 0u; c < 3u; c++) {
+        let b = 3u * j + c;
+        let local = (atomicLoad(&triangles[b / 4u]) >> (8u * (b % 4u))) & 0xffu;
+        vertices[v0 + local] = idx(3u * x + c);
     }
 }

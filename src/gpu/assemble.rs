@@ -210,7 +210,7 @@ impl Assembly {
         let vertices = gpu.zeros("meshlet vertices", vertex_count);
         let second = bind(&meshlets, &vertices);
         let mut b = Batch::new(gpu);
-        b.groups(&self.kernels, "write", &second, params, groups as u32);
+        b.threads(&self.kernels, "write", &second, params, t);
         kernel += b.run()?;
         Ok((
             DeviceMeshlets {
