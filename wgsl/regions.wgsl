@@ -92,10 +92,11 @@ fn init(@builtin(global_invocation_id) gid: vec3<u32>) {
     let r = region(t);
     for (var j = 0u; j < 3u; j++) {
         let v = idx(3u * t + j);
+        // The row ascends: its first triangle in the region is the least (t itself, at worst).
         var u = NONE;
         for (var e = vt_off[v]; e < vt_off[v + 1u]; e++) {
             let x = vtn(e);
-            if (region(x) == r) { u = min(u, x); }
+            if (region(x) == r) { u = x; break; }
         }
         var i = 0u;
         if (idx(3u * u) != v) { i = 1u; if (idx(3u * u + 1u) != v) { i = 2u; } }
