@@ -95,7 +95,59 @@ struct Reg {
     rayon: f64,
     /// Wall seconds, upload/kernel/readback, host round trips.
     gpu: Option<(f64, gpu::adjacency::Timing, u64)>,
+    /// Per-kernel profile of a second GPU run (the profiled meshes).
+    profile: Option<Profile>,
 }
+
+/// The CPU step each `kmedoids-regions` kernel mirrors (regions, growth, moves, assembly; the
+/// adjacency's and the prefix sums' are in [`STEPS`]).
+const REGION_STEPS: &[(&str, &str)] = &[
+    ("bbox_reduce", "regions: the box of the positions"),
+    ("keys", "regions: Morton keys"),
+    ("centre_cells", "regions: packed centroid cells"),
+    ("hist_count", "regions: Morton radix sort"),
+    ("scatter", "regions: Morton radix sort"),
+    ("pick", "regions: seeds"),
+    ("clear", "regions: BFS labels reset"),
+    ("seed", "regions: BFS sources"),
+    ("push", "regions: one BFS level"),
+    ("piece_init", "regions: pieces no seed reaches"),
+    ("piece_round", "regions: pieces no seed reaches"),
+    ("offsets_of", "regions: members sorted by region"),
+    ("init", "canonical corners, growth state"),
+    (
+        "grow_rows",
+        "grow, pack, absorb, merge, dissolve (one invocation per region)",
+    ),
+    (
+        "grow",
+        "grow, pack, absorb, merge, dissolve (one invocation per region)",
+    ),
+    ("relabel", "global labels"),
+    (
+        "medoid",
+        "medoids_and_distances (one invocation per cluster)",
+    ),
+    ("tally", "moves: per-cluster counters"),
+    ("count_members", "moves: members, vertices, connectivity"),
+    ("candidates", "moves step 1"),
+    ("propose", "moves step 2"),
+    ("pick_best", "moves step 3"),
+    ("accept", "moves step 3"),
+    ("settle", "moves: member lists"),
+    (
+        "new_medoids",
+        "moves step 5: medoids of the changed clusters",
+    ),
+    ("finish", "moves: objective"),
+    ("count", "assembly: triangles per cluster"),
+    ("place", "moves and assembly: members into their slots"),
+    (
+        "sort_count",
+        "assembly: order, distinct vertices, local corners",
+    ),
+    ("write", "assembly: vertex lists, meshlet records"),
+];
 
 /// One GPU strategy built three ways through `gpu::build`: meshlets read back, left on the
 /// device, and (where it can) from a mesh already on the device. Wall seconds each.
@@ -464,12 +516,28 @@ pub fn run(cfg: &Config) -> Result<()> {
             Some(Err(e)) => return Err(e.into()),
             None => (None, 0),
         };
+        let reg_profile = if reg_gpu.is_some() && profiled {
+            pb.set_message(format!(
+                "{name} ({t} triangles): kmedoids-regions, GPU profile"
+            ));
+            g.time_each_kernel(true);
+            let before = g.profile();
+            let r = gpu::regions::cluster_regions(&g, MeshSource::Host(m), cfg.limits, &capc, true);
+            g.time_each_kernel(false);
+            if r?.0.clustering.labels != reg_r.labels {
+                bail!("{name}: profiled GPU kmedoids-regions differs from the CPU's");
+            }
+            Some(g.profile().since(&before))
+        } else {
+            None
+        };
         let reg = Reg {
             meshlets: reg_r.meshlets.len(),
             regions: reg_regions,
             cpu1: reg_cpu1,
             rayon: reg_rayon,
             gpu: reg_gpu,
+            profile: reg_profile,
         };
         let mut resident = Vec::new();
         pb.set_message(format!("{name} ({t} triangles): builds left on the device"));
@@ -704,6 +772,58 @@ Kernel time per entry point (GPU timestamps around each dispatch, in a second ru
                 " {n} | {:.1} | {:.2} | {:.1} % |",
                 s * 1e3,
                 s * 1e3 / r.iterations.max(1) as f64,
+                100.0 * s / total.max(f64::MIN_POSITIVE)
+            )?;
+        }
+        writeln!(md, "{line}")?;
+    }
+    writeln!(md)?;
+    Ok(())
+}
+
+/// Kernel time per entry point of `kmedoids-regions` on the profiled meshes, largest first on
+/// the last; the growth kernel's share is what a CPU adapter cannot spread (one invocation runs
+/// a region's sequential growth).
+fn write_region_profile(md: &mut String, rows: &[Row]) -> Result<()> {
+    let profiled: Vec<(&Row, &Profile)> = rows
+        .iter()
+        .filter_map(|r| r.reg.profile.as_ref().map(|p| (r, p)))
+        .collect();
+    let Some(&(_, last)) = profiled.last() else {
+        return Ok(());
+    };
+    writeln!(md, "Kernel time per entry point of `kmedoids-regions` (GPU timestamps around each dispatch, in a second run checked against the CPU's labels; adjacency and assembly included), largest first on the last mesh. The growth runs one invocation per region (on a CPU adapter eight regions to a workgroup, side by side in its SIMD rows), so its parallelism is the region count.\n")?;
+    let mut head = String::from("| kernel | CPU step it mirrors |");
+    let mut rule = String::from("|---|---|");
+    for (r, _) in &profiled {
+        write!(head, " {} dispatches | ms | share |", r.mesh)?;
+        rule.push_str("---:|---:|---:|");
+    }
+    writeln!(md, "{head}\n{rule}")?;
+    let mut names: Vec<&str> = Vec::new();
+    for (_, p) in &profiled {
+        for k in p.per_kernel.keys() {
+            if !names.contains(k) {
+                names.push(k);
+            }
+        }
+    }
+    let time = |n: &str| last.per_kernel.get(n).map_or(0.0, |e| e.1);
+    names.sort_by(|a, b| time(b).total_cmp(&time(a)).then(a.cmp(b)));
+    for name in names {
+        let step = REGION_STEPS
+            .iter()
+            .chain(STEPS)
+            .find(|(k, _)| *k == name)
+            .map_or("", |(_, s)| s);
+        let mut line = format!("| `{name}` | {step} |");
+        for (_, p) in &profiled {
+            let total: f64 = p.per_kernel.values().map(|e| e.1).sum();
+            let (n, s) = p.per_kernel.get(name).copied().unwrap_or((0, 0.0));
+            write!(
+                line,
+                " {n} | {:.1} | {:.1} % |",
+                s * 1e3,
                 100.0 * s / total.max(f64::MIN_POSITIVE)
             )?;
         }
@@ -956,7 +1076,7 @@ fn write(
     }
     writeln!(md)?;
     writeln!(md, "## `kmedoids-regions`: every step on the GPU\n")?;
-    writeln!(md, "The region-parallel k-medoids whose per-region growth is a kernel (src/strategy/kmedoids/regions.rs, wgsl/regions.wgsl): one invocation per region grows, packs, absorbs pockets and merges its clusters; one per cluster finds the medoid; two rounds of boundary moves (wgsl/moves.wgsl: per-triangle maps and per-cluster atomics, then the medoid of each changed cluster again) are its medoid iteration, in the same submission; the assembly is `wgsl/assemble.wgsl`. The regions are kernels too (wgsl/coarse.wgsl with the Morton sort and the BFS): nothing a kernel reads comes back to the host, only control words (the box, the seeds, frontier sizes, one count per region, one medoid per cluster, the moves' counters); `round trips` counts the host's waits on the device in the whole run, the final readbacks included. The GPU run is checked identical to the CPU's (labels and meshlets); one thread checked identical to the pool. GPU wall time includes the adjacency kernels, uploads and readbacks of labels, distances and meshlets; pipeline compilation is warmed up before. `-`: left out, its state (nine words per triangle in one binding) past the adapter's binding size.\n")?;
+    writeln!(md, "The region-parallel k-medoids whose per-region growth is a kernel (src/strategy/kmedoids/regions.rs, wgsl/regions.wgsl): one invocation per region grows, packs, absorbs pockets and merges its clusters, then dissolves its smallest across their neighbours; one per cluster finds the medoid; two rounds of boundary moves (wgsl/moves.wgsl: per-triangle maps and per-cluster atomics, then the medoid of each changed cluster again) are its medoid iteration, in the same submission; the assembly is `wgsl/assemble.wgsl`. The regions are kernels too (wgsl/coarse.wgsl with the Morton sort and the BFS): nothing a kernel reads comes back to the host, only control words (the box, the seeds, frontier sizes, one count per region, one medoid per cluster, the moves' counters); `round trips` counts the host's waits on the device in the whole run, the final readbacks included. The GPU run is checked identical to the CPU's (labels and meshlets); one thread checked identical to the pool. GPU wall time includes the adjacency kernels, uploads and readbacks of labels, distances and meshlets; pipeline compilation is warmed up before. `-`: left out, its state (nine words per triangle in one binding) past the adapter's binding size.\n")?;
     writeln!(
         md,
         "| mesh | triangles | regions | meshlets | CPU 1 thread s | CPU rayon s | GPU s | upload s | kernel s | readback s | round trips | GPU / rayon | meshlets / kmedoids-parallel |"
@@ -988,6 +1108,7 @@ fn write(
         )?;
     }
     writeln!(md)?;
+    write_region_profile(&mut md, rows)?;
     writeln!(
         md,
         "## Meshlets left on the device (the library's GPU builds)\n"
