@@ -168,16 +168,11 @@ fn candidates(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 // Squared distance from x's centroid cell to the cell of cluster c's medoid.
+fn cell_of(x: u32) -> vec3<u32> {
+    return unpack_cell(centres[p.centres_at + 2u * x], centres[p.centres_at + 2u * x + 1u]);
+}
 fn medoid_distance2(x: u32, c: u32) -> u32 {
-    let m = info[p.medoid_at + c];
-    let a = centres[p.centres_at + 2u * x];
-    let b = centres[p.centres_at + 2u * m];
-    let d = vec3<u32>(
-        max(a & 0xffffu, b & 0xffffu) - min(a & 0xffffu, b & 0xffffu),
-        max(a >> 16u, b >> 16u) - min(a >> 16u, b >> 16u),
-        max(centres[p.centres_at + 2u * x + 1u], centres[p.centres_at + 2u * m + 1u])
-            - min(centres[p.centres_at + 2u * x + 1u], centres[p.centres_at + 2u * m + 1u]));
-    return d.x * d.x + d.y * d.y + d.z * d.z;
+    return cell_distance2(cell_of(x), cell_of(info[p.medoid_at + c]));
 }
 
 @compute @workgroup_size(64)

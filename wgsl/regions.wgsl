@@ -153,13 +153,7 @@ fn free_neighbours(x: u32) -> u32 {
 }
 
 fn centre(x: u32) -> vec3<u32> {
-    let w = canon[3u * p.t + 2u * x];
-    return vec3<u32>(w & 0xffffu, w >> 16u, canon[3u * p.t + 2u * x + 1u]);
-}
-
-fn distance2(a: vec3<u32>, b: vec3<u32>) -> u32 {
-    let e = max(a, b) - min(a, b);
-    return e.x * e.x + e.y * e.y + e.z * e.z;
+    return unpack_cell(canon[3u * p.t + 2u * x], canon[3u * p.t + 2u * x + 1u]);
 }
 
 // Strict order of the growth key (added vertices, free neighbours, squared distance to the
@@ -527,7 +521,7 @@ fn nearest_piece(np: u32, cursor: u32, nv: u32, cen: vec3<u32>) -> u32 {
             seed = arena[O + arena[PS + q]];
         }
         if ((arena[L + q] & CUT) != 0u || nv + added(seed) > p.max_v) { continue; }
-        let d = distance2(centre(seed), cen);
+        let d = cell_distance2(centre(seed), cen);
         if (best == NONE || d < best_d) {
             best = seed;
             best_d = d;
@@ -636,7 +630,7 @@ fn grow_one(r: u32) {
                 let x = arena[F + fi];
                 let a = added(x);
                 if (nv + a > p.max_v) { continue; }
-                let key = vec4<u32>(a, free_of(x), distance2(centre(x), cen), x);
+                let key = vec4<u32>(a, free_of(x), cell_distance2(centre(x), cen), x);
                 if (bi == NONE || key_less(key, hop(x), best, best_hop)) {
                     best = key;
                     best_hop = hop(x);
@@ -850,8 +844,7 @@ fn merge_neighbours() {
 
 fn pk_word(section: u32, c: u32) -> u32 { return section * p.t + items[RS + c]; }
 fn pk_centre(c: u32) -> vec3<u32> {
-    let w = tri[pk_word(3u, c)];
-    return vec3<u32>(w & 0xffffu, w >> 16u, tri[pk_word(4u, c)]);
+    return unpack_cell(tri[pk_word(3u, c)], tri[pk_word(4u, c)]);
 }
 fn pk_radius(c: u32) -> u32 { return tri[pk_word(6u, c)]; }
 fn pk_verts(c: u32) -> u32 { return tri[pk_word(7u, c)]; }
@@ -909,7 +902,7 @@ fn centre_radius(b: u32, a: u32) -> vec4<u32> {
     let c = sum / max(n, 1u);
     var far = 0u;
     for (var x = head(b); x != NONE; x = next_joined(x, b, a)) {
-        far = max(far, distance2(centre(x), c));
+        far = max(far, cell_distance2(centre(x), c));
     }
     return vec4<u32>(c, isqrt(far));
 }
@@ -984,7 +977,7 @@ fn pack_pieces() {
                     || pk_verts(b) + extra_v(b) + pv > p.max_v) {
                     continue;
                 }
-                let d = distance2(pk_centre(b), pc);
+                let d = cell_distance2(pk_centre(b), pc);
                 if (best == NONE || d < best_d) {
                     best = b;
                     best_d = d;
