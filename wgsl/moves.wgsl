@@ -7,8 +7,9 @@
 //                  that are not edge-connected (`movable`) and the objective before (per triangle)
 //   (scan.wgsl)    the member offsets, the counts scanned in place
 //   place          the member lists: cluster c's members from offset[c] (per triangle)
-//   settle         step 4 for the clusters the last round changed: BFS from the fixed medoid
-//                  over the new list (one invocation per cluster)
+//   settle         step 4 for the clusters that took a triangle last round (one that only gave
+//                  keeps its distances): BFS from the fixed medoid over the new list (one
+//                  invocation per cluster)
 //   candidates     step 1 (per triangle)
 //   propose        step 2 (the distance rule over `centres`), and step 3's per-target sums and
 //                  greatest gain by atomics (per triangle)
@@ -75,7 +76,8 @@ fn h_sum() -> u32 { return 7u * (p.k + 1u); }
 fn h_changed() -> u32 { return 7u * (p.k + 1u) + 2u; }
 fn h_moved(r: u32) -> u32 { return 7u * (p.k + 1u) + 3u + r; }
 
-// Cluster flags: changed in this round, in the last one, in any; not edge-connected.
+// Cluster flags: took a triangle in this round, in the last one; gave or took in any; not
+// edge-connected.
 const NOW: u32 = 1u;
 const LAST: u32 = 2u;
 const CHANGED: u32 = 4u;
@@ -253,7 +255,7 @@ fn accept(@builtin(global_invocation_id) gid: vec3<u32>) {
     let a = labels[x];
     labels[x] = b;
     dist[x] = arena[s_pdist() + x];
-    atomicOr(&state[c_flags(a)], NOW | CHANGED);
+    atomicOr(&state[c_flags(a)], CHANGED);
     atomicOr(&state[c_flags(b)], NOW | CHANGED);
     atomicAdd(&state[h_moved(p.round)], 1u);
 }

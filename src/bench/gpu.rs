@@ -722,58 +722,75 @@ fn write_profile(md: &mut String, rows: &[Row]) -> Result<()> {
             (k.seconds - k.timing.kernel).max(0.0)
         )?;
     }
-    let profiled: Vec<&Row> = rows.iter().filter(|r| r.profile.is_some()).collect();
+    let profiled: Vec<KernelColumn> = rows
+        .iter()
+        .filter_map(|r| {
+            r.profile
+                .as_ref()
+                .map(|p| (r.mesh.as_str(), p, Some(r.iterations)))
+        })
+        .collect();
     if profiled.is_empty() {
         return Ok(());
     }
     writeln!(md, "
 Kernel time per entry point (GPU timestamps around each dispatch, in a second run of the same clustering; adjacency included), largest first on the last mesh:
 ")?;
+    write_kernel_table(md, &profiled, STEPS)
+}
+
+/// One mesh's column group of a kernel-time table: its name, profile and, where the table shows
+/// time per iteration, its iterations.
+type KernelColumn<'a> = (&'a str, &'a Profile, Option<u32>);
+
+/// A row per entry point, largest first on the last mesh; per mesh its dispatches, ms, ms per
+/// iteration (where the column carries iterations) and share of the kernel time. `steps` names
+/// the CPU step each kernel mirrors.
+fn write_kernel_table(
+    md: &mut String,
+    meshes: &[KernelColumn],
+    steps: &[(&str, &str)],
+) -> Result<()> {
+    let Some(&(_, last, _)) = meshes.last() else {
+        return Ok(());
+    };
     let mut head = String::from("| kernel | CPU step it mirrors |");
     let mut rule = String::from("|---|---|");
-    for r in &profiled {
-        write!(
-            head,
-            " {} dispatches | ms | ms / iteration | share |",
-            r.mesh
-        )?;
-        rule.push_str("---:|---:|---:|---:|");
+    for &(mesh, _, iterations) in meshes {
+        write!(head, " {mesh} dispatches | ms |")?;
+        rule.push_str("---:|---:|");
+        if iterations.is_some() {
+            head.push_str(" ms / iteration |");
+            rule.push_str("---:|");
+        }
+        head.push_str(" share |");
+        rule.push_str("---:|");
     }
-    writeln!(
-        md,
-        "{head}
-{rule}"
-    )?;
-    let last = profiled
-        .last()
-        .and_then(|r| r.profile.as_ref())
-        .expect("profiled");
-    let mut names: Vec<&&str> = last.per_kernel.keys().collect();
-    for r in &profiled {
-        for k in r.profile.as_ref().expect("profiled").per_kernel.keys() {
-            if !names.contains(&k) {
+    writeln!(md, "{head}\n{rule}")?;
+    let mut names: Vec<&str> = Vec::new();
+    for (_, p, _) in meshes {
+        for k in p.per_kernel.keys() {
+            if !names.contains(k) {
                 names.push(k);
             }
         }
     }
-    names.sort_by(|a, b| {
-        let t = |n: &&&str| last.per_kernel.get(**n).map_or(0.0, |e| e.1);
-        t(b).total_cmp(&t(a)).then(a.cmp(b))
-    });
+    let time = |n: &str| last.per_kernel.get(n).map_or(0.0, |e| e.1);
+    names.sort_by(|a, b| time(b).total_cmp(&time(a)).then(a.cmp(b)));
     for name in names {
-        let step = STEPS.iter().find(|(k, _)| k == name).map_or("", |(_, s)| s);
+        let step = steps
+            .iter()
+            .find(|(k, _)| *k == name)
+            .map_or("", |(_, s)| s);
         let mut line = format!("| `{name}` | {step} |");
-        for r in &profiled {
-            let p = r.profile.as_ref().expect("profiled");
+        for &(_, p, iterations) in meshes {
             let total: f64 = p.per_kernel.values().map(|e| e.1).sum();
-            let (n, s) = p.per_kernel.get(*name).copied().unwrap_or((0, 0.0));
-            write!(
-                line,
-                " {n} | {:.1} | {:.2} | {:.1} % |",
-                s * 1e3,
-                s * 1e3 / r.iterations.max(1) as f64,
-                100.0 * s / total.max(f64::MIN_POSITIVE)
-            )?;
+            let (n, s) = p.per_kernel.get(name).copied().unwrap_or((0, 0.0));
+            write!(line, " {n} | {:.1} |", s * 1e3)?;
+            if let Some(it) = iterations {
+                write!(line, " {:.2} |", s * 1e3 / it.max(1) as f64)?;
+            }
+            write!(line, " {:.1} % |", 100.0 * s / total.max(f64::MIN_POSITIVE))?;
         }
         writeln!(md, "{line}")?;
     }
@@ -785,52 +802,16 @@ Kernel time per entry point (GPU timestamps around each dispatch, in a second ru
 /// the last; the growth kernel's share is what a CPU adapter cannot spread (one invocation runs
 /// a region's sequential growth).
 fn write_region_profile(md: &mut String, rows: &[Row]) -> Result<()> {
-    let profiled: Vec<(&Row, &Profile)> = rows
+    let profiled: Vec<KernelColumn> = rows
         .iter()
-        .filter_map(|r| r.reg.profile.as_ref().map(|p| (r, p)))
+        .filter_map(|r| r.reg.profile.as_ref().map(|p| (r.mesh.as_str(), p, None)))
         .collect();
-    let Some(&(_, last)) = profiled.last() else {
+    if profiled.is_empty() {
         return Ok(());
-    };
+    }
     writeln!(md, "Kernel time per entry point of `kmedoids-regions` (GPU timestamps around each dispatch, in a second run checked against the CPU's labels; adjacency and assembly included), largest first on the last mesh. The growth runs one invocation per region (on a CPU adapter eight regions to a workgroup, side by side in its SIMD rows), so its parallelism is the region count.\n")?;
-    let mut head = String::from("| kernel | CPU step it mirrors |");
-    let mut rule = String::from("|---|---|");
-    for (r, _) in &profiled {
-        write!(head, " {} dispatches | ms | share |", r.mesh)?;
-        rule.push_str("---:|---:|---:|");
-    }
-    writeln!(md, "{head}\n{rule}")?;
-    let mut names: Vec<&str> = Vec::new();
-    for (_, p) in &profiled {
-        for k in p.per_kernel.keys() {
-            if !names.contains(k) {
-                names.push(k);
-            }
-        }
-    }
-    let time = |n: &str| last.per_kernel.get(n).map_or(0.0, |e| e.1);
-    names.sort_by(|a, b| time(b).total_cmp(&time(a)).then(a.cmp(b)));
-    for name in names {
-        let step = REGION_STEPS
-            .iter()
-            .chain(STEPS)
-            .find(|(k, _)| *k == name)
-            .map_or("", |(_, s)| s);
-        let mut line = format!("| `{name}` | {step} |");
-        for (_, p) in &profiled {
-            let total: f64 = p.per_kernel.values().map(|e| e.1).sum();
-            let (n, s) = p.per_kernel.get(name).copied().unwrap_or((0, 0.0));
-            write!(
-                line,
-                " {n} | {:.1} | {:.1} % |",
-                s * 1e3,
-                100.0 * s / total.max(f64::MIN_POSITIVE)
-            )?;
-        }
-        writeln!(md, "{line}")?;
-    }
-    writeln!(md)?;
-    Ok(())
+    let steps: Vec<(&str, &str)> = REGION_STEPS.iter().chain(STEPS).copied().collect();
+    write_kernel_table(md, &profiled, &steps)
 }
 
 /// The physical limit per kernel on the largest profiled mesh (both methods' profiled runs):

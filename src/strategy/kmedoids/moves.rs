@@ -20,7 +20,8 @@
 //! 3. **Acceptance per target**: all of a cluster's proposals if their triangles and new vertices
 //!    (summed: an upper bound where two share a vertex) fit the limits at the sizes the round
 //!    began with, else the one of greatest gain (then the lowest triangle id) if it fits alone.
-//! 4. **Distances** of every cluster that changed, by BFS from its medoid.
+//! 4. **Distances** of every cluster that took a triangle, by BFS from its medoid (one that only
+//!    gave keeps its members' distances, by step 2's rule).
 //!
 //! Every accepted move lowers the sum of hop distances to the fixed medoids by its gain: sources
 //! keep their distances (step 2), targets can only get shorter paths, and the moved triangle sits
@@ -57,6 +58,9 @@ pub struct Moves {
     /// Mean hop distance to the medoid before the moves.
     pub objective_before: f64,
 }
+
+/// A vertex count not taken yet.
+const UNCOUNTED: u32 = u32::MAX;
 
 /// A proposal from step 2: the target cluster, the moving triangle's distance there, its gain and
 /// the vertices the target does not use yet.
@@ -113,11 +117,8 @@ pub fn move_boundaries(
     let rows = members(labels, k);
     // Members per cluster, ascending, kept up to date by the moves.
     let mut mem: Vec<Vec<u32>> = (0..k).map(|c| rows.row(c).to_vec()).collect();
-    let labels_in: &[u32] = labels;
-    let mut vcount: Vec<u32> = (0..k)
-        .into_par_iter()
-        .map(|c| vertex_count(mesh, vt, labels_in, c as u32, &mem[c]))
-        .collect();
+    // Vertex counts, taken only for clusters a proposal targets (most clusters are never one).
+    let mut vcount = vec![UNCOUNTED; k];
     let mut changed = vec![false; k];
     for round in 0..max_rounds {
         let labels_now: &[u32] = labels;
@@ -144,11 +145,7 @@ pub fn move_boundaries(
             let medoid = medoids_now[c as usize] as usize;
             distance2(unpack(centres[x as usize]), unpack(centres[medoid]))
         };
-        // Step 2. One that cannot fit alone is no demand on its target.
-        let fits_alone = |p: &Proposal| {
-            let b = p.target as usize;
-            (mem[b].len() as u32) < mt && vcount[b] + p.new_vertices <= mv
-        };
+        // Step 2.
         let proposals: Vec<(u32, Proposal)> = (0..t as u32)
             .into_par_iter()
             .filter(|&x| candidate[x as usize])
@@ -158,9 +155,31 @@ pub fn move_boundaries(
                 propose(
                     mesh, dual, vt, labels_now, dist_now, &candidate, &allowed, x,
                 )
-                .filter(fits_alone)
                 .map(|p| (x, p))
             })
+            .collect();
+        let mut targets: Vec<u32> = proposals
+            .iter()
+            .map(|(_, p)| p.target)
+            .filter(|&b| vcount[b as usize] == UNCOUNTED)
+            .collect();
+        targets.sort_unstable();
+        targets.dedup();
+        let counted: Vec<u32> = targets
+            .par_iter()
+            .map(|&b| vertex_count(mesh, vt, labels_now, b, &mem[b as usize]))
+            .collect();
+        for (&b, n) in targets.iter().zip(counted) {
+            vcount[b as usize] = n;
+        }
+        // One that cannot fit alone is no demand on its target.
+        let fits_alone = |p: &Proposal| {
+            let b = p.target as usize;
+            (mem[b].len() as u32) < mt && vcount[b] + p.new_vertices <= mv
+        };
+        let proposals: Vec<(u32, Proposal)> = proposals
+            .into_iter()
+            .filter(|(_, p)| fits_alone(p))
             .collect();
         // Step 3: per target, the summed demand and the best single proposal.
         let mut demand = vec![(0u32, 0u32); k];
@@ -175,6 +194,7 @@ pub fn move_boundaries(
             }
         }
         let mut changed_now = vec![false; k];
+        let mut took = vec![false; k];
         let mut moved = Vec::new();
         for &(x, p) in &proposals {
             let b = p.target as usize;
@@ -187,6 +207,7 @@ pub fn move_boundaries(
             distances[x as usize] = p.distance;
             changed_now[a] = true;
             changed_now[b] = true;
+            took[b] = true;
             moved.push((a, b, x));
         }
         if moved.is_empty() {
@@ -207,22 +228,30 @@ pub fn move_boundaries(
         if round + 1 == max_rounds {
             break;
         }
-        // Step 4 (step 5 does it for the last round).
+        // Step 4 (step 5 does it for the last round), for the clusters that took a triangle: one
+        // that only gave keeps its members' distances (step 2's rule).
         let labels_now: &[u32] = labels;
-        let fresh: Vec<(usize, Vec<u32>, u32)> = (0..k)
+        let fresh: Vec<(usize, Vec<u32>)> = (0..k)
             .into_par_iter()
-            .filter(|&c| changed_now[c])
-            .map(|c| {
-                let m = &mem[c];
-                let d = bfs_distances(dual, labels_now, m, medoids[c]);
-                (c, d, vertex_count(mesh, vt, labels_now, c as u32, m))
-            })
+            .filter(|&c| took[c])
+            .map(|c| (c, bfs_distances(dual, labels_now, &mem[c], medoids[c])))
             .collect();
-        for (c, d, nv) in fresh {
+        debug_assert!((0..k).filter(|&c| changed_now[c] && !took[c]).all(|c| {
+            let d = bfs_distances(dual, labels_now, &mem[c], medoids[c]);
+            mem[c]
+                .iter()
+                .zip(&d)
+                .all(|(&x, &h)| distances[x as usize] == h)
+        }));
+        for (c, d) in fresh {
             for (&x, &h) in mem[c].iter().zip(&d) {
                 distances[x as usize] = h;
             }
-            vcount[c] = nv;
+        }
+        for (c, &now) in changed_now.iter().enumerate() {
+            if now {
+                vcount[c] = UNCOUNTED;
+            }
         }
     }
     // Step 5.

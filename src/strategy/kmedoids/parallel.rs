@@ -17,10 +17,11 @@
 //! 2. **Clusters per region**, all regions at once: the capacity-aware method on the region's
 //!    triangles alone (growth, orphans, merges, re-assignment rounds where they pay). Regions
 //!    share no state, so the result does not depend on which thread runs which region.
-//! 3. **Border merges** ([`merge_borders`]): a cluster that did not fill (the growth ran into the
-//!    region's edge) proposes to the neighbouring cluster with which it shares the most vertices
-//!    among those whose union fits both limits (ties to the pair of lower ids); mutual proposals merge,
-//!    in rounds until none does. Each round is a map over the clusters and a map over the pairs.
+//! 3. **Border merges** ([`merge_borders`], where there are two regions or more): a cluster that
+//!    did not fill (the growth ran into the region's edge) proposes to the neighbouring cluster
+//!    with which it shares the most vertices among those whose union fits both limits (ties to
+//!    the pair of lower ids); mutual proposals merge, in rounds until none does. Each round is a
+//!    map over the clusters and a map over the pairs.
 //! 4. **Medoids**: the paper's medoid and the in-cluster hop distances of every cluster a merge
 //!    made (a parallel map; the others keep their region's).
 //! 5. **Boundary moves** ([`super::moves`]), the medoid iteration: border triangles move to a
@@ -100,7 +101,12 @@ pub fn cluster(
         iterations += run.iterations;
     }
     let initial_seconds = t0.elapsed().as_secs_f64();
-    let (rounds, merged) = merge_borders(mesh, dual, limits, &mut labels, &mut medoids);
+    // One region has no borders: its clusters already had the per-region method's merges.
+    let (rounds, merged) = if k_regions == 1 {
+        (0, vec![false; medoids.len()])
+    } else {
+        merge_borders(mesh, dual, limits, &mut labels, &mut medoids)
+    };
     // Step 4, for the merged clusters only: the others keep their region's medoid and distances.
     let mem = members(&labels, medoids.len());
     let fresh: Vec<(u32, u32, Vec<u32>)> = (0..medoids.len() as u32)
