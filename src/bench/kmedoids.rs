@@ -768,49 +768,33 @@ pub fn run(cfg: &Config) -> Result<()> {
             });
         }
     }
-    // The region methods' knob: region size, from many small regions to one per piece.
-    for (method, region) in [Method::Parallel, Method::Regions]
-        .into_iter()
-        .flat_map(|m| REGION_SWEEP.map(|r| (m, r)))
-    {
-        let kc = KConfig {
-            region_triangles: region,
-            ..method.config()
-        };
-        let (seconds, c, metrics) = run_one(sm, cfg.limits, method, kc, cfg.sweep_mesh())?;
-        sweep.push(SweepRow {
-            mode: method,
-            threshold: 0.0,
-            max_iterations: kc.max_iterations,
-            region: Some(region),
-            moves: None,
-            seconds,
-            c,
-            metrics,
-            pareto: false,
-        });
-    }
-    // Their other knob: rounds of boundary moves, at the default region size.
-    for (method, rounds) in [Method::Parallel, Method::Regions]
-        .into_iter()
-        .flat_map(|m| MOVE_SWEEP.map(|r| (m, r)))
-    {
-        let kc = KConfig {
-            move_rounds: rounds,
-            ..method.config()
-        };
-        let (seconds, c, metrics) = run_one(sm, cfg.limits, method, kc, cfg.sweep_mesh())?;
-        sweep.push(SweepRow {
-            mode: method,
-            threshold: 0.0,
-            max_iterations: kc.max_iterations,
-            region: None,
-            moves: Some(rounds),
-            seconds,
-            c,
-            metrics,
-            pareto: false,
-        });
+    // The region methods' knobs, each at the other's default: region size (from many small
+    // regions to one per piece), then rounds of boundary moves.
+    let regions = REGION_SWEEP.map(|r| (Some(r), None));
+    let moves = MOVE_SWEEP.map(|m| (None, Some(m)));
+    for knob in [&regions[..], &moves[..]] {
+        for method in [Method::Parallel, Method::Regions] {
+            for &(region, moves) in knob {
+                let base = method.config();
+                let kc = KConfig {
+                    region_triangles: region.unwrap_or(base.region_triangles),
+                    move_rounds: moves.unwrap_or(base.move_rounds),
+                    ..base
+                };
+                let (seconds, c, metrics) = run_one(sm, cfg.limits, method, kc, cfg.sweep_mesh())?;
+                sweep.push(SweepRow {
+                    mode: method,
+                    threshold: 0.0,
+                    max_iterations: kc.max_iterations,
+                    region,
+                    moves,
+                    seconds,
+                    c,
+                    metrics,
+                    pareto: false,
+                });
+            }
+        }
     }
 
     let out = |f: &str| cfg.common.out.join(cfg.tag.name(f));
