@@ -134,7 +134,10 @@ const REGION_STEPS: &[(&str, &str)] = &[
     ("propose", "moves step 2"),
     ("pick_best", "moves step 3"),
     ("accept", "moves step 3"),
-    ("settle", "moves: member lists"),
+    (
+        "settle",
+        "moves step 4: distances where a cluster took a triangle",
+    ),
     (
         "new_medoids",
         "moves step 5: medoids of the changed clusters",

@@ -49,7 +49,8 @@ pub struct Config {
     #[arg(long, default_value_t = 1_000_000)]
     pub one_thread_max: usize,
     /// Timed runs of `kmedoids`, `kmedoids-parallel`, `kmedoids-regions` and meshoptimizer,
-    /// interleaved, per mesh under 2 M triangles (the median is reported); one run above.
+    /// interleaved, per mesh under 2 M triangles (the median is reported); one run above. Small
+    /// meshes get more rounds, until the rounds add up to half a second (at most 31).
     #[arg(long, default_value_t = 3)]
     pub runs: usize,
     /// Mesh (file stem) for the iteration/threshold sweep.
@@ -568,6 +569,11 @@ fn corpus(cfg: &Config, dir: &std::path::Path) -> Result<Vec<(String, mesh::Mesh
     Ok(out)
 }
 
+/// Interleaved timing rounds on a small mesh repeat until they add up to this long.
+const MIN_ROUND_TIME: Duration = Duration::from_millis(500);
+/// At most this many interleaved timing rounds on a small mesh.
+const MAX_ROUNDS: usize = 31;
+
 /// Median seconds of `f` over `n` runs.
 fn timed<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
     let mut times = Vec::new();
@@ -616,7 +622,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     for (name, m) in &inputs {
         let t = m.triangle_count();
         let scaled = name.contains(' ');
-        let reps = if t < 2_000_000 { cfg.runs } else { 1 };
+        let reps = if t < 2_000_000 { cfg.runs.max(1) } else { 1 };
         // meshoptimizer and the capacity-aware methods interleaved, each on the pool and (up to
         // `one_thread_max`) on one thread, so that machine noise hits them alike: the targets
         // compare their times and their scaling.
@@ -636,7 +642,15 @@ pub fn run(cfg: &Config) -> Result<()> {
                     out: None,
                 })
                 .collect();
-        for _ in 0..reps.max(1) {
+        // A run of a few milliseconds is at the mercy of one scheduler hiccup: on small meshes
+        // more rounds keep the medians, and so the time targets, from following the noise.
+        let min_time = cfg.common.or_smoke(MIN_ROUND_TIME.as_secs_f64(), 0.0);
+        let started = Instant::now();
+        let mut rounds = 0;
+        while rounds < reps
+            || (t < 2_000_000 && rounds < MAX_ROUNDS && started.elapsed().as_secs_f64() < min_time)
+        {
+            rounds += 1;
             let (s, out) = timed(1, || meshopt.build(m, cfg.limits));
             mo_times.push(s);
             mo_out = Some(out);
@@ -923,8 +937,9 @@ pub fn run(cfg: &Config) -> Result<()> {
          round and the mesh re-clustered (the default before; what the GPU kernels run). `kmedoids-paper`: one \
          cluster added and everything re-run per overflow, as the paper does; when its budget of {} s runs out \
          it finishes the fast way (marked; not run on the subdivided dragons). Seconds: rayon pool, median of {} \
-         runs of `kmedoids`, `kmedoids-parallel` and `kmedoids-regions` interleaved with meshoptimizer's \
-         `build_meshlets` under 2 M triangles, else one run; one run of the others. `1 thread s`: on a one-thread pool (up to {} triangles), \
+         or more runs of `kmedoids`, `kmedoids-parallel` and `kmedoids-regions` interleaved with meshoptimizer's \
+         `build_meshlets` under 2 M triangles (rounds of all four repeat until they add up to {} s, at most {}: \
+         a run of a few milliseconds follows the machine's noise), else one run; one run of the others. `1 thread s`: on a one-thread pool (up to {} triangles), \
          the median of as many runs, each right after the pool run it is compared with, for those three methods; one run for the \
          others; its output was checked identical to the pool's. Mean hops: the k-medoids objective (hop distance of a \
          triangle to its medoid inside its cluster). Radius: mean bounding-sphere radius over meshoptimizer's. \
@@ -934,6 +949,8 @@ pub fn run(cfg: &Config) -> Result<()> {
         KConfig::default().region_triangles,
         cfg.paper_budget().as_secs_f64(),
         cfg.runs,
+        MIN_ROUND_TIME.as_secs_f64(),
+        MAX_ROUNDS,
         cfg.one_thread_max
     );
     let _ = writeln!(s, "{}\n", runs_table().markdown(&runs));
