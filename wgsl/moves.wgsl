@@ -169,10 +169,11 @@ fn candidates(@builtin(global_invocation_id) gid: vec3<u32>) {
     arena[s_cand() + x] = select(0u, 1u, moving);
 }
 
-// Squared distance from x's centroid cell to the cell of cluster c's medoid.
+// Triangle x's centroid cell.
 fn cell_of(x: u32) -> vec3<u32> {
     return unpack_cell(centres[p.centres_at + 2u * x], centres[p.centres_at + 2u * x + 1u]);
 }
+// Squared distance from x's centroid cell to the cell of cluster c's medoid.
 fn medoid_distance2(x: u32, c: u32) -> u32 {
     return cell_distance2(cell_of(x), cell_of(info[p.medoid_at + c]));
 }

@@ -16,7 +16,6 @@ fn group(wid: vec3<u32>) -> u32 { return wid.x + wid.y * 65535u; }
 // Step of a grid-stride loop over a @workgroup_size(64) dispatch (few workgroups on a CPU adapter).
 fn stride(nwg: vec3<u32>) -> u32 { return nwg.x * nwg.y * 64u; }
 
-
 // A packed centroid cell (x | y << 16, z): its coordinates, and the squared distance between two
 // (kmedoids::flat::{unpack, distance2}; regions.wgsl's growth key, moves.wgsl's distance rule).
 fn unpack_cell(xy: u32, z: u32) -> vec3<u32> { return vec3<u32>(xy & 0xffffu, xy >> 16u, z); }
