@@ -99,6 +99,17 @@ fn every_bench_writes_its_tables_in_smoke_mode() {
                 );
                 // A table: a header row followed by its separator row.
                 let lines: Vec<&str> = text.lines().collect();
+                // Every profiled kernel names the CPU step it mirrors.
+                if bench == "gpu" {
+                    let blank: Vec<&&str> = lines
+                        .iter()
+                        .filter(|l| l.starts_with("| `") && l.contains("` |  |"))
+                        .collect();
+                    assert!(
+                        blank.is_empty(),
+                        "bench gpu: kernels without a CPU step: {blank:?}"
+                    );
+                }
                 assert!(
                     lines.windows(2).any(|w| w[0].starts_with('|')
                         && ["|-", "| -", "|:"].iter().any(|s| w[1].starts_with(s))),

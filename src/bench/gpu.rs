@@ -99,15 +99,12 @@ struct Reg {
     profile: Option<Profile>,
 }
 
-/// The CPU step each `kmedoids-regions` kernel mirrors (regions, growth, moves, assembly; the
-/// adjacency's and the prefix sums' are in [`STEPS`]).
+/// The CPU step each `kmedoids-regions` kernel mirrors (regions, growth, moves; the adjacency's,
+/// the Morton order's, the prefix sums' and the assembly's are in [`STEPS`]). Read first, so a name two modules share
+/// (`place`) takes its regions meaning here.
 const REGION_STEPS: &[(&str, &str)] = &[
-    ("bbox_reduce", "regions: the box of the positions"),
-    ("keys", "regions: Morton keys"),
     ("centre_cells", "regions: packed centroid cells"),
-    ("hist_count", "regions: Morton radix sort"),
-    ("scatter", "regions: Morton radix sort"),
-    ("pick", "regions: seeds"),
+    ("pick", "regions: seeds at the middle of each Morton run"),
     ("clear", "regions: BFS labels reset"),
     ("seed", "regions: BFS sources"),
     ("push", "regions: one BFS level"),
@@ -143,13 +140,7 @@ const REGION_STEPS: &[(&str, &str)] = &[
         "moves step 5: medoids of the changed clusters",
     ),
     ("finish", "moves: objective"),
-    ("count", "assembly: triangles per cluster"),
     ("place", "moves and assembly: members into their slots"),
-    (
-        "sort_count",
-        "assembly: order, distinct vertices, local corners",
-    ),
-    ("write", "assembly: vertex lists, meshlet records"),
 ];
 
 /// One GPU strategy built three ways through `gpu::build`: meshlets read back, left on the
@@ -240,6 +231,11 @@ const PROFILED: &[&str] = &["stanford_bunny", "stanford_dragon_vrip"];
 
 /// What each k-medoids kernel does, as the CPU step it mirrors.
 const STEPS: &[(&str, &str)] = &[
+    ("bbox_reduce", "Morton order: the box of the positions"),
+    ("keys", "Morton order: keys"),
+    ("hist_count", "Morton order: radix sort"),
+    ("scatter", "Morton order: radix sort"),
+    ("pick", "seeds: one per run of the Morton order"),
     ("vt_count", "adjacency: vertex -> triangle counts"),
     ("vt_scatter", "adjacency: vertex -> triangle rows"),
     ("vt_sort", "adjacency: sort each row"),
@@ -267,10 +263,19 @@ const STEPS: &[(&str, &str)] = &[
     ("update", "update: all-pairs BFS in each changed cluster"),
     ("mark_clear", "update: sort the new medoids"),
     ("mark", "update: sort the new medoids"),
-    ("place", "update: sort the new medoids"),
+    (
+        "place",
+        "update: sort the new medoids; assembly: members into their slots",
+    ),
     ("remember", "update: remember each triangle's medoid"),
     ("stats", "split: distinct vertices, farthest member"),
     ("dist_partial", "objective"),
+    ("count", "assembly: triangles per cluster"),
+    (
+        "sort_count",
+        "assembly: order, distinct vertices, local corners",
+    ),
+    ("write", "assembly: vertex lists, meshlet records"),
 ];
 
 /// One strategy's meshlets on one mesh, for the parallel-grower comparison.

@@ -583,8 +583,46 @@ pub trait BindingSet<'a> {
 }
 
 /// Declares a [`BindingSet`]: `binding_set! { /// doc\n pub struct X { /// doc\n a: Read, b: ReadWrite } }`
-/// makes a struct of `&wgpu::Buffer` fields.
+/// makes a struct of `&wgpu::Buffer` fields. Written `pub struct X { adjacency; /// doc\n a: Read }`,
+/// the set opens with the eight read-only buffers of a [`adjacency::DeviceAdjacency`] (indices,
+/// vertex -> triangle rows, dual graph, as `idx_a`, `idx_b`, `vt_off`, `vt_a`, `vt_b`, `dual_off`,
+/// `dual_a`, `dual_b`) from its `adj` field.
 macro_rules! binding_set {
+    ($(#[$m:meta])* pub struct $name:ident { adjacency; $($(#[$fm:meta])* $field:ident: $access:ident),* $(,)? }) => {
+        $(#[$m])*
+        pub struct $name<'a> {
+            /// The mesh's adjacency on the device: bindings 1-8.
+            pub adj: &'a $crate::gpu::adjacency::DeviceAdjacency,
+            $($(#[$fm])* pub $field: &'a wgpu::Buffer,)*
+        }
+        impl<'a> $crate::gpu::BindingSet<'a> for $name<'a> {
+            const LAYOUT: &'static [(&'static str, $crate::gpu::Access)] = &[
+                ("idx_a", $crate::gpu::Access::Read),
+                ("idx_b", $crate::gpu::Access::Read),
+                ("vt_off", $crate::gpu::Access::Read),
+                ("vt_a", $crate::gpu::Access::Read),
+                ("vt_b", $crate::gpu::Access::Read),
+                ("dual_off", $crate::gpu::Access::Read),
+                ("dual_a", $crate::gpu::Access::Read),
+                ("dual_b", $crate::gpu::Access::Read),
+                $((stringify!($field), $crate::gpu::Access::$access)),*
+            ];
+            fn buffers(&self) -> Vec<&'a wgpu::Buffer> {
+                let a = self.adj;
+                vec![
+                    &a.indices.a,
+                    &a.indices.b,
+                    &a.vt_offsets,
+                    &a.vt_items.a,
+                    &a.vt_items.b,
+                    &a.dual_offsets,
+                    &a.dual_items.a,
+                    &a.dual_items.b,
+                    $(self.$field),*
+                ]
+            }
+        }
+    };
     ($(#[$m:meta])* pub struct $name:ident { $($(#[$fm:meta])* $field:ident: $access:ident),* $(,)? }) => {
         $(#[$m])*
         pub struct $name<'a> { $($(#[$fm])* pub $field: &'a wgpu::Buffer,)* }

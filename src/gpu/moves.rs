@@ -38,22 +38,7 @@ param_block! {
 binding_set! {
     /// The storage buffers of `wgsl/moves.wgsl`, in binding order.
     pub struct Buffers {
-        /// Index buffer, first part.
-        idx_a: Read,
-        /// Index buffer, second part.
-        idx_b: Read,
-        /// Vertex -> triangle row starts.
-        vt_off: Read,
-        /// Vertex -> triangle items, first part.
-        vt_a: Read,
-        /// Vertex -> triangle items, second part.
-        vt_b: Read,
-        /// Dual-graph row starts.
-        dual_off: Read,
-        /// Dual-graph items, first part.
-        dual_a: Read,
-        /// Dual-graph items, second part.
-        dual_b: Read,
+        adjacency;
         /// Cluster of each triangle.
         labels: ReadWrite,
         /// Hop distance to the medoid.
@@ -144,14 +129,7 @@ impl DeviceMoves {
         let bind = kernels.bind(
             gpu,
             &Buffers {
-                idx_a: &adj.indices.a,
-                idx_b: &adj.indices.b,
-                vt_off: &adj.vt_offsets,
-                vt_a: &adj.vt_items.a,
-                vt_b: &adj.vt_items.b,
-                dual_off: &adj.dual_offsets,
-                dual_a: &adj.dual_items.a,
-                dual_b: &adj.dual_items.b,
+                adj,
                 labels: c.labels,
                 dist: c.dist,
                 arena: c.arena,
