@@ -100,8 +100,8 @@ struct Reg {
 }
 
 /// The CPU step each `kmedoids-regions` kernel mirrors (regions, growth, moves; the adjacency's,
-/// the Morton order's, the prefix sums' and the assembly's are in [`STEPS`]). Read first, so a name two modules share
-/// (`place`) takes its regions meaning here.
+/// the Morton order's, the prefix sums' and the assembly's are in [`STEPS`]). Read first, so a
+/// name two modules share (`place`) takes its regions meaning here.
 const REGION_STEPS: &[(&str, &str)] = &[
     ("centre_cells", "regions: packed centroid cells"),
     ("pick", "regions: seeds at the middle of each Morton run"),

@@ -622,7 +622,15 @@ pub fn run(cfg: &Config) -> Result<()> {
     for (name, m) in &inputs {
         let t = m.triangle_count();
         let scaled = name.contains(' ');
-        let reps = if t < 2_000_000 { cfg.runs.max(1) } else { 1 };
+        // Under 2 M triangles, interleaved rounds: `runs` of them, and on small meshes more, until
+        // they add up to MIN_ROUND_TIME (a run of a few milliseconds is at the mercy of one
+        // scheduler hiccup, and the medians, so the time targets, would follow the noise).
+        let (reps, min_time) = if t < 2_000_000 {
+            let min_time = cfg.common.or_smoke(MIN_ROUND_TIME.as_secs_f64(), 0.0);
+            (cfg.runs.max(1), min_time)
+        } else {
+            (1, 0.0)
+        };
         // meshoptimizer and the capacity-aware methods interleaved, each on the pool and (up to
         // `one_thread_max`) on one thread, so that machine noise hits them alike: the targets
         // compare their times and their scaling.
@@ -642,14 +650,9 @@ pub fn run(cfg: &Config) -> Result<()> {
                     out: None,
                 })
                 .collect();
-        // A run of a few milliseconds is at the mercy of one scheduler hiccup: on small meshes
-        // more rounds keep the medians, and so the time targets, from following the noise.
-        let min_time = cfg.common.or_smoke(MIN_ROUND_TIME.as_secs_f64(), 0.0);
         let started = Instant::now();
         let mut rounds = 0;
-        while rounds < reps
-            || (t < 2_000_000 && rounds < MAX_ROUNDS && started.elapsed().as_secs_f64() < min_time)
-        {
+        while rounds < reps || (rounds < MAX_ROUNDS && started.elapsed().as_secs_f64() < min_time) {
             rounds += 1;
             let (s, out) = timed(1, || meshopt.build(m, cfg.limits));
             mo_times.push(s);
