@@ -1,7 +1,7 @@
 //! Meshlets built on the GPU and drawn from the buffers the build left there, with no readback in
 //! between, on a device the application owns (as an engine would hold it).
 //!
-//! `kmedoids-regions` and `kmedoids-flat` build from the application's vertex and index buffers
+//! `kmedoids-parallel` and `kmedoids-flat` build from the application's vertex and index buffers
 //! (`gpu::build::build_on_device`: nothing of the mesh is read on the host), `bsphere-parallel`
 //! from the host mesh (`gpu::build::build_resident`: its setup, the seed grid, runs on the
 //! host); all three leave the
@@ -128,7 +128,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         triangles: mesh.triangle_count(),
     };
     let opts = Options::default();
-    for name in ["kmedoids-regions", "kmedoids-flat", "bsphere-parallel"] {
+    for name in ["kmedoids-parallel", "kmedoids-flat", "bsphere-parallel"] {
         let built = if name == "bsphere-parallel" {
             // Its setup (quantised positions and the seed grid) runs on the host, from `mesh`.
             build_resident(&gpu, name, &mesh, &positions, limits, &opts)?

@@ -385,7 +385,7 @@ fn parity_and_render_print_json() {
             "adjacency",
             "k-medoids",
             "k-medoids (capacity-aware, the default)",
-            "kmedoids-regions",
+            "kmedoids-parallel",
             "capacity-aware assignment",
             "bounds",
             "parallel grower",
@@ -573,7 +573,7 @@ fn render_lod_runs_end_to_end() {
 fn building_on_the_gpu_writes_the_cpu_files_byte_for_byte() {
     let dir = common::scratch("device");
     let orders: [&[&str]; 2] = [&[], &["--local-order", "--meshlet-order", "triangles"]];
-    for s in ["kmedoids-flat", "bsphere-parallel", "kmedoids-regions"] {
+    for s in ["kmedoids-flat", "bsphere-parallel", "kmedoids-parallel"] {
         for (i, order) in orders.iter().enumerate() {
             for (what, ext) in [("build", "mlt"), ("export", "glb")] {
                 let file = |device: &str| dir.join(format!("{s}-{i}-{device}.{ext}"));
@@ -608,7 +608,7 @@ fn stats_on_the_gpu_keeps_the_names_and_reports_build_and_setup_time() {
         .collect();
     assert_eq!(
         names,
-        ["bsphere-parallel", "kmedoids-flat", "kmedoids-regions"]
+        ["bsphere-parallel", "kmedoids-flat", "kmedoids-parallel"]
     );
     for r in rows {
         assert_eq!(r["device"], "gpu", "{r}");
@@ -683,7 +683,7 @@ fn kmedoids_regions_and_moves_knobs_reach_their_methods() {
         rows
     };
     let meshlets = |regions: &str| {
-        let rows = rows("kmedoids,kmedoids-parallel", "--kmedoids-regions", regions);
+        let rows = rows("kmedoids,kmedoids-tiled", "--kmedoids-regions", regions);
         let n = |i: usize| rows[i]["metrics"]["meshlets"].as_u64().unwrap();
         (n(0), n(1))
     };
@@ -694,10 +694,10 @@ fn kmedoids_regions_and_moves_knobs_reach_their_methods() {
     assert_eq!((whole, seq_again), (seq, seq));
     // Many regions: part-filled clusters at their borders, a few more meshlets.
     assert!(cut > whole, "{cut} vs {whole}");
-    // `--kmedoids-moves` reaches it and `kmedoids-regions`: other clusters, the same counts.
+    // `--kmedoids-moves` reaches it and `kmedoids-parallel`: other clusters, the same counts.
     let metrics = |moves: &str| {
         let rows = rows(
-            "kmedoids-parallel,kmedoids-regions",
+            "kmedoids-tiled,kmedoids-parallel",
             "--kmedoids-moves",
             moves,
         );

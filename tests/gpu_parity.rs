@@ -141,7 +141,7 @@ fn detached_pieces_join_the_clusters_beside_them() {
     let limits = Limits::new(64, 84).unwrap();
     assert_parity(&gpu, "tube with tetrahedra", &m, limits);
     let opts = meshletlab::strategy::Options::default();
-    let out = meshletlab::strategy::by_name("kmedoids-regions", &opts)
+    let out = meshletlab::strategy::by_name("kmedoids-parallel", &opts)
         .unwrap()
         .build(&m, limits);
     meshletlab::meshlet::validate(&m, &out, limits).unwrap();
@@ -273,7 +273,7 @@ fn a_second_build_on_one_device_builds_no_pipeline() {
     let limits = Limits::DEFAULT;
     let opts = meshletlab::strategy::Options::default();
     let mut families = Vec::new();
-    for name in ["kmedoids-regions", "kmedoids-flat", "bsphere-parallel"] {
+    for name in ["kmedoids-parallel", "kmedoids-flat", "bsphere-parallel"] {
         let first = meshletlab::gpu::build::build(&gpu, name, &m, limits, &opts).unwrap();
         let n = gpu.kernel_families();
         let again = meshletlab::gpu::build::build(&gpu, name, &m, limits, &opts).unwrap();
@@ -440,7 +440,7 @@ fn an_engines_own_device_runs_the_kernels_and_a_short_one_is_refused() {
     let mesh = generate::knot_tube(90, 10, 5);
     let limits = Limits::new(64, 126).unwrap();
     let opts = meshletlab::strategy::Options::default();
-    for name in ["kmedoids-flat", "bsphere-parallel", "kmedoids-regions"] {
+    for name in ["kmedoids-flat", "bsphere-parallel", "kmedoids-parallel"] {
         let cpu = meshletlab::strategy::by_name(name, &opts)
             .unwrap()
             .build(&mesh, limits);
@@ -543,7 +543,7 @@ fn device_cones_are_conservative_and_cull() {
     }
 }
 
-/// An engine's vertex and index buffers build `kmedoids-flat` and `kmedoids-regions` meshlets on
+/// An engine's vertex and index buffers build `kmedoids-flat` and `kmedoids-parallel` meshlets on
 /// the device with nothing of the mesh read on the host, equal to the CPU's; the meshlets and
 /// spheres stay on the device until read. A strategy whose setup needs the host mesh is refused
 /// by name.
@@ -575,14 +575,14 @@ fn a_mesh_already_on_the_device_builds_the_cpu_meshlets() {
             ..Default::default()
         };
         for o in [&opts, &small] {
-            let cpu = meshletlab::strategy::by_name("kmedoids-regions", o)
+            let cpu = meshletlab::strategy::by_name("kmedoids-parallel", o)
                 .unwrap()
                 .build(&m, limits);
-            let built = build_on_device(&gpu, "kmedoids-regions", on_device, limits, o).unwrap();
+            let built = build_on_device(&gpu, "kmedoids-parallel", on_device, limits, o).unwrap();
             assert_eq!(
                 built.meshlets.read(&gpu).unwrap(),
                 cpu,
-                "kmedoids-regions at {limits}, {} per region",
+                "kmedoids-parallel at {limits}, {} per region",
                 o.kmedoids.region_triangles
             );
         }

@@ -62,11 +62,11 @@ fn stress_meshes_give_the_same_meshlets_on_any_thread_count() {
     }
 }
 
-/// `kmedoids-parallel` with small regions, so every stress mesh is cut into several (the default
+/// `kmedoids-tiled` with small regions, so every stress mesh is cut into several (the default
 /// region holds a whole stress mesh): valid at every preset, edge-connected clusters wherever the
 /// mesh is, and the same on 1 and many threads.
 #[test]
-fn kmedoids_parallel_with_many_regions_on_every_stress_mesh() {
+fn kmedoids_tiled_with_many_regions_on_every_stress_mesh() {
     use meshletlab::adjacency::{cluster_pieces, dual_graph, vertex_triangles};
     use meshletlab::strategy::kmedoids::{cluster, coarse::regions, Config, Mode};
     let cfg = Config {
@@ -78,8 +78,8 @@ fn kmedoids_parallel_with_many_regions_on_every_stress_mesh() {
         let dual = dual_graph(&g.mesh, &vertex_triangles(&g.mesh));
         assert!(regions(&g.mesh, &dual, 1024).1 >= 3, "{}", g.name);
         for limits in Limits::PRESETS {
-            let a = one.install(|| cluster(&g.mesh, limits, Mode::Parallel, &cfg));
-            let b = many.install(|| cluster(&g.mesh, limits, Mode::Parallel, &cfg));
+            let a = one.install(|| cluster(&g.mesh, limits, Mode::Tiled, &cfg));
+            let b = many.install(|| cluster(&g.mesh, limits, Mode::Tiled, &cfg));
             assert_eq!(a.meshlets, b.meshlets, "{} {limits}", g.name);
             assert_eq!(
                 (&a.labels, &a.medoids, &a.distances),

@@ -1,4 +1,4 @@
-// Boundary moves, the medoid iteration of kmedoids-regions on the device, mirroring
+// Boundary moves, the medoid iteration of kmedoids-parallel on the device, mirroring
 // src/strategy/kmedoids/moves.rs (driver: src/gpu/moves.rs). Each round runs
 //   tally          the per-cluster sums set to zero, "changed" moved to "changed last round"
 //                  (per cluster)

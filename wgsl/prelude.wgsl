@@ -4,7 +4,7 @@
 // Elements per part of a split array (gpu::PART, 2^25 u32 = 128 MiB: lavapipe's binding limit).
 const PART: u32 = 33554432u;
 // Largest coordinate of a fine centroid cell, 15 bits per axis (kmedoids::flat::FINE_MAX): the
-// cells kmedoids-regions' growth key measures distances in (morton.wgsl writes, regions.wgsl reads).
+// cells kmedoids-parallel's growth key measures distances in (morton.wgsl writes, regions.wgsl reads).
 const FINE_MAX: u32 = 32767u;
 // "No index": an unassigned label, an unreached distance, a padded neighbour slot.
 const NONE: u32 = 0xffffffffu;

@@ -1,4 +1,4 @@
-// kmedoids-regions on the device, mirroring src/strategy/kmedoids/regions.rs step by step
+// kmedoids-parallel on the device, mirroring src/strategy/kmedoids/regions.rs step by step
 // (driver: src/gpu/regions.rs):
 //   init      canonical_corners, and the State words of grow_region set to their start values
 //             (per triangle)

@@ -79,15 +79,15 @@ struct Row {
     grow: Vec<GrowRow>,
     /// The capacity-aware default `kmedoids`.
     cap: Cap,
-    /// `kmedoids-parallel` (no GPU path): meshlets, one thread and rayon seconds.
+    /// `kmedoids-tiled` (no GPU path): meshlets, one thread and rayon seconds.
     par: (usize, Option<f64>, f64),
-    /// `kmedoids-regions`.
+    /// `kmedoids-parallel`.
     reg: Reg,
     /// The library's GPU builds, per GPU strategy that ran here.
     resident: Vec<Resident>,
 }
 
-/// `kmedoids-regions` on one mesh: CPU one thread and rayon, and the GPU (checked identical).
+/// `kmedoids-parallel` on one mesh: CPU one thread and rayon, and the GPU (checked identical).
 struct Reg {
     meshlets: usize,
     regions: usize,
@@ -99,7 +99,7 @@ struct Reg {
     profile: Option<Profile>,
 }
 
-/// The CPU step each `kmedoids-regions` kernel mirrors (regions, growth, moves; the adjacency's,
+/// The CPU step each `kmedoids-parallel` kernel mirrors (regions, growth, moves; the adjacency's,
 /// the Morton order's, the prefix sums' and the assembly's are in [`STEPS`]). Read first, so a
 /// name two modules share (`place`) takes its regions meaning here.
 const REGION_STEPS: &[(&str, &str)] = &[
@@ -478,25 +478,25 @@ pub fn run(cfg: &Config) -> Result<()> {
             rayon: cap_rayon,
             gpu: cap_gpu,
         };
-        pb.set_message(format!("{name} ({t} triangles): kmedoids-parallel"));
-        let (par_r, par_rayon) = secs(|| cluster(m, cfg.limits, Mode::Parallel, &capc));
+        pb.set_message(format!("{name} ({t} triangles): kmedoids-tiled"));
+        let (par_r, par_rayon) = secs(|| cluster(m, cfg.limits, Mode::Tiled, &capc));
         let par_cpu1 = (t <= cfg.one_thread_max)
-            .then(|| secs(|| one.install(|| cluster(m, cfg.limits, Mode::Parallel, &capc))))
+            .then(|| secs(|| one.install(|| cluster(m, cfg.limits, Mode::Tiled, &capc))))
             .map(|(one_r, s)| {
                 if one_r.meshlets != par_r.meshlets {
-                    bail!("{name}: kmedoids-parallel differs on one thread");
+                    bail!("{name}: kmedoids-tiled differs on one thread");
                 }
                 Ok(s)
             })
             .transpose()?;
         let par = (par_r.meshlets.len(), par_cpu1, par_rayon);
-        pb.set_message(format!("{name} ({t} triangles): kmedoids-regions"));
+        pb.set_message(format!("{name} ({t} triangles): kmedoids-parallel"));
         let (reg_r, reg_rayon) = secs(|| cluster(m, cfg.limits, Mode::Regions, &capc));
         let reg_cpu1 = (t <= cfg.one_thread_max)
             .then(|| secs(|| one.install(|| cluster(m, cfg.limits, Mode::Regions, &capc))))
             .map(|(one_r, s)| {
                 if one_r.meshlets != reg_r.meshlets {
-                    bail!("{name}: kmedoids-regions differs on one thread");
+                    bail!("{name}: kmedoids-parallel differs on one thread");
                 }
                 Ok(s)
             })
@@ -511,13 +511,13 @@ pub fn run(cfg: &Config) -> Result<()> {
         let (reg_gpu, reg_regions) = match reg_run {
             Some(Ok((r, _))) => {
                 if r.clustering.labels != reg_r.labels || r.clustering.meshlets != reg_r.meshlets {
-                    bail!("{name}: GPU kmedoids-regions differs from the CPU's");
+                    bail!("{name}: GPU kmedoids-parallel differs from the CPU's");
                 }
                 (Some((r.seconds, r.timing, trips)), r.regions)
             }
             Some(Err(gpu::GpuError::TooLarge { what, len, max })) => {
                 say(format!(
-                    "{name}: kmedoids-regions GPU left out: {what} {len} > {max}"
+                    "{name}: kmedoids-parallel GPU left out: {what} {len} > {max}"
                 ));
                 (None, 0)
             }
@@ -526,14 +526,14 @@ pub fn run(cfg: &Config) -> Result<()> {
         };
         let reg_profile = if reg_gpu.is_some() && profiled {
             pb.set_message(format!(
-                "{name} ({t} triangles): kmedoids-regions, GPU profile"
+                "{name} ({t} triangles): kmedoids-parallel, GPU profile"
             ));
             g.time_each_kernel(true);
             let before = g.profile();
             let r = gpu::regions::cluster_regions(&g, MeshSource::Host(m), cfg.limits, &capc, true);
             g.time_each_kernel(false);
             if r?.0.clustering.labels != reg_r.labels {
-                bail!("{name}: profiled GPU kmedoids-regions differs from the CPU's");
+                bail!("{name}: profiled GPU kmedoids-parallel differs from the CPU's");
             }
             Some(g.profile().since(&before))
         } else {
@@ -552,7 +552,7 @@ pub fn run(cfg: &Config) -> Result<()> {
         if reg.gpu.is_some() {
             resident.push(resident_builds(
                 &g,
-                "kmedoids-regions",
+                "kmedoids-parallel",
                 m,
                 cfg.limits,
                 &reg_r.meshlets,
@@ -806,7 +806,7 @@ fn write_kernel_table(
     Ok(())
 }
 
-/// Kernel time per entry point of `kmedoids-regions` on the profiled meshes, largest first on
+/// Kernel time per entry point of `kmedoids-parallel` on the profiled meshes, largest first on
 /// the last; the growth kernel's share is what a CPU adapter cannot spread (one invocation runs
 /// a region's sequential growth).
 fn write_region_profile(md: &mut String, rows: &[Row]) -> Result<()> {
@@ -817,7 +817,7 @@ fn write_region_profile(md: &mut String, rows: &[Row]) -> Result<()> {
     if profiled.is_empty() {
         return Ok(());
     }
-    writeln!(md, "Kernel time per entry point of `kmedoids-regions` (GPU timestamps around each dispatch, in a second run checked against the CPU's labels; adjacency and assembly included), largest first on the last mesh. The growth runs one invocation per region (on a CPU adapter eight regions to a workgroup, side by side in its SIMD rows), so its parallelism is the region count.\n")?;
+    writeln!(md, "Kernel time per entry point of `kmedoids-parallel` (GPU timestamps around each dispatch, in a second run checked against the CPU's labels; adjacency and assembly included), largest first on the last mesh. The growth runs one invocation per region (on a CPU adapter eight regions to a workgroup, side by side in its SIMD rows), so its parallelism is the region count.\n")?;
     let steps: Vec<(&str, &str)> = REGION_STEPS.iter().chain(STEPS).copied().collect();
     write_kernel_table(md, &profiled, &steps)
 }
@@ -1041,9 +1041,9 @@ fn write(
     writeln!(md)?;
     writeln!(
         md,
-        "## `kmedoids-parallel` (CPU only), whole run including adjacency\n"
+        "## `kmedoids-tiled` (CPU only), whole run including adjacency\n"
     )?;
-    writeln!(md, "The capacity-aware method on regions of the mesh at once, border clusters merged in matching rounds (src/strategy/kmedoids/parallel.rs). It has no GPU path: the per-region growth is host code; `kmedoids-regions` (next table) is its kernel-shaped counterpart. One thread checked identical to the pool.\n")?;
+    writeln!(md, "The capacity-aware method on regions of the mesh at once, border clusters merged in matching rounds (src/strategy/kmedoids/tiled.rs). It has no GPU path: the per-region growth is host code; `kmedoids-parallel` (next table) is its kernel-shaped counterpart. One thread checked identical to the pool.\n")?;
     writeln!(
         md,
         "| mesh | triangles | meshlets | CPU 1 thread s | CPU rayon s | 1 thread / rayon | rayon / kmedoids rayon |"
@@ -1064,11 +1064,11 @@ fn write(
         )?;
     }
     writeln!(md)?;
-    writeln!(md, "## `kmedoids-regions`: every step on the GPU\n")?;
+    writeln!(md, "## `kmedoids-parallel`: every step on the GPU\n")?;
     writeln!(md, "The region-parallel k-medoids whose per-region growth is a kernel (src/strategy/kmedoids/regions.rs, wgsl/regions.wgsl): one invocation per region grows, packs, absorbs pockets and merges its clusters, then dissolves its smallest across their neighbours; one per cluster finds the medoid; two rounds of boundary moves (wgsl/moves.wgsl: per-triangle maps and per-cluster atomics, then the medoid of each changed cluster again) are its medoid iteration, in the same submission; the assembly is `wgsl/assemble.wgsl`. The regions are kernels too (wgsl/coarse.wgsl with the Morton sort and the BFS): nothing a kernel reads comes back to the host, only control words (the box, the seeds, frontier sizes, one count per region, one medoid per cluster, the moves' counters); `round trips` counts the host's waits on the device in the whole run, the final readbacks included. The GPU run is checked identical to the CPU's (labels and meshlets); one thread checked identical to the pool. GPU wall time includes the adjacency kernels, uploads and readbacks of labels, distances and meshlets; pipeline compilation is warmed up before. `-`: left out, its state (nine words per triangle in one binding) past the adapter's binding size.\n")?;
     writeln!(
         md,
-        "| mesh | triangles | regions | meshlets | CPU 1 thread s | CPU rayon s | GPU s | upload s | kernel s | readback s | round trips | GPU / rayon | meshlets / kmedoids-parallel |"
+        "| mesh | triangles | regions | meshlets | CPU 1 thread s | CPU rayon s | GPU s | upload s | kernel s | readback s | round trips | GPU / rayon | meshlets / kmedoids-tiled |"
     )?;
     writeln!(
         md,
@@ -1102,7 +1102,7 @@ fn write(
         md,
         "## Meshlets left on the device (the library's GPU builds)\n"
     )?;
-    writeln!(md, "Wall seconds of `gpu::build`'s entry points, each checked equal to the CPU build: `build` reads the meshlets back (the `--device gpu` path; its readback apart), `build_resident` leaves them and their culling bounds (sphere and cone, the split task layout) in device buffers (assembled by `wgsl/assemble.wgsl`), `build_on_device` also takes the mesh from position and index buffers already on the device (`kmedoids-flat` and `kmedoids-regions`: seeds and regions from kernels; `bsphere-parallel` quantises on the host, hence `-`). Device creation and pipeline compilation are not in these times (a warm-up build runs first).\n")?;
+    writeln!(md, "Wall seconds of `gpu::build`'s entry points, each checked equal to the CPU build: `build` reads the meshlets back (the `--device gpu` path; its readback apart), `build_resident` leaves them and their culling bounds (sphere and cone, the split task layout) in device buffers (assembled by `wgsl/assemble.wgsl`), `build_on_device` also takes the mesh from position and index buffers already on the device (`kmedoids-flat` and `kmedoids-parallel`: seeds and regions from kernels; `bsphere-parallel` quantises on the host, hence `-`). Device creation and pipeline compilation are not in these times (a warm-up build runs first).\n")?;
     writeln!(md, "| mesh | triangles | strategy | build s | of which readback s | build_resident s | build_on_device s |")?;
     writeln!(md, "|---|---:|---|---:|---:|---:|---:|")?;
     for r in rows {
@@ -1254,23 +1254,23 @@ fn write(
                 points: pts(&|r| r.cap.gpu.map(|g| g.0)),
             },
             Series {
-                label: "kmedoids-parallel CPU 1 thread".into(),
+                label: "kmedoids-tiled CPU 1 thread".into(),
                 points: pts(&|r| r.par.1),
             },
             Series {
-                label: "kmedoids-parallel CPU rayon".into(),
+                label: "kmedoids-tiled CPU rayon".into(),
                 points: pts(&|r| Some(r.par.2)),
             },
             Series {
-                label: "kmedoids-regions CPU 1 thread".into(),
+                label: "kmedoids-parallel CPU 1 thread".into(),
                 points: pts(&|r| r.reg.cpu1),
             },
             Series {
-                label: "kmedoids-regions CPU rayon".into(),
+                label: "kmedoids-parallel CPU rayon".into(),
                 points: pts(&|r| Some(r.reg.rayon)),
             },
             Series {
-                label: format!("kmedoids-regions GPU ({})", g.info.name),
+                label: format!("kmedoids-parallel GPU ({})", g.info.name),
                 points: pts(&|r| r.reg.gpu.map(|x| x.0)),
             },
             Series {

@@ -48,7 +48,7 @@ pub struct Config {
     /// Above this many triangles the one-thread runs are left out (they double a long run).
     #[arg(long, default_value_t = 1_000_000)]
     pub one_thread_max: usize,
-    /// Timed runs of `kmedoids`, `kmedoids-parallel`, `kmedoids-regions` and meshoptimizer,
+    /// Timed runs of `kmedoids`, `kmedoids-tiled`, `kmedoids-parallel` and meshoptimizer,
     /// interleaved, per mesh under 2 M triangles (the median is reported); one run above. Small
     /// meshes get more rounds, until the rounds add up to half a second (at most 31).
     #[arg(long, default_value_t = 3)]
@@ -80,7 +80,7 @@ struct SweepRow {
     max_iterations: u32,
     /// Triangles per region (the region methods' sweep).
     region: Option<u32>,
-    /// Rounds of boundary moves (`kmedoids-parallel`'s second sweep).
+    /// Rounds of boundary moves (`kmedoids-tiled`'s second sweep).
     moves: Option<u32>,
     seconds: f64,
     c: Clustering,
@@ -128,9 +128,9 @@ enum Method {
     Flat,
     /// `kmedoids-paper`.
     Paper,
+    /// `kmedoids-tiled`.
+    Tiled,
     /// `kmedoids-parallel`.
-    Parallel,
-    /// `kmedoids-regions`.
     Regions,
 }
 
@@ -141,8 +141,8 @@ impl Method {
             Method::Hops => "kmedoids, grow hops",
             Method::Flat => "kmedoids-flat",
             Method::Paper => "kmedoids-paper",
-            Method::Parallel => "kmedoids-parallel",
-            Method::Regions => "kmedoids-regions",
+            Method::Tiled => "kmedoids-tiled",
+            Method::Regions => "kmedoids-parallel",
         }
     }
 
@@ -151,7 +151,7 @@ impl Method {
             Method::Default | Method::Hops => Mode::Capacity,
             Method::Flat => Mode::Flat,
             Method::Paper => Mode::Paper,
-            Method::Parallel => Mode::Parallel,
+            Method::Tiled => Mode::Tiled,
             Method::Regions => Mode::Regions,
         }
     }
@@ -382,7 +382,7 @@ struct Interleaved {
     out: Option<Clustering>,
 }
 
-/// One mesh's verdict on the `kmedoids-parallel` targets (held to `kmedoids-regions` too).
+/// One mesh's verdict on the `kmedoids-tiled` targets (held to `kmedoids-parallel` too).
 struct ParallelVerdict {
     mesh: String,
     method: &'static str,
@@ -392,7 +392,7 @@ struct ParallelVerdict {
     count_meshopt: f64,
     count_sequential: f64,
     objective_sequential: f64,
-    /// The same before the method's medoid iteration (`kmedoids-parallel`'s boundary moves).
+    /// The same before the method's medoid iteration (`kmedoids-tiled`'s boundary moves).
     objective_before: f64,
     radius: f64,
     time: f64,
@@ -600,7 +600,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     let inputs = corpus(cfg, &meshes)?;
     let mut modes = vec![
         Method::Default,
-        Method::Parallel,
+        Method::Tiled,
         Method::Regions,
         Method::Hops,
         Method::Flat,
@@ -635,21 +635,20 @@ pub fn run(cfg: &Config) -> Result<()> {
         // `one_thread_max`) on one thread, so that machine noise hits them alike: the targets
         // compare their times and their scaling.
         pb.set_message(format!(
-            "{name} / meshopt, kmedoids, kmedoids-parallel, kmedoids-regions"
+            "{name} / meshopt, kmedoids, kmedoids-tiled, kmedoids-parallel"
         ));
         let mut mo_times = Vec::new();
         let mut mo_out = None;
-        let mut interleaved: Vec<Interleaved> =
-            [Method::Default, Method::Parallel, Method::Regions]
-                .into_iter()
-                .filter(|&x| x != Method::Regions || modes.contains(&x))
-                .map(|method| Interleaved {
-                    method,
-                    times: Vec::new(),
-                    times_1t: Vec::new(),
-                    out: None,
-                })
-                .collect();
+        let mut interleaved: Vec<Interleaved> = [Method::Default, Method::Tiled, Method::Regions]
+            .into_iter()
+            .filter(|&x| x != Method::Regions || modes.contains(&x))
+            .map(|method| Interleaved {
+                method,
+                times: Vec::new(),
+                times_1t: Vec::new(),
+                out: None,
+            })
+            .collect();
         let started = Instant::now();
         let mut rounds = 0;
         while rounds < reps || (rounds < MAX_ROUNDS && started.elapsed().as_secs_f64() < min_time) {
@@ -790,7 +789,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     let regions = REGION_SWEEP.map(|r| (Some(r), None));
     let moves = MOVE_SWEEP.map(|m| (None, Some(m)));
     for knob in [&regions[..], &moves[..]] {
-        for method in [Method::Parallel, Method::Regions] {
+        for method in [Method::Tiled, Method::Regions] {
             for &(region, moves) in knob {
                 let base = method.config();
                 let kc = KConfig {
@@ -840,7 +839,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             ("move rounds", &MOVE_SWEEP[..], false),
         ];
         for (knob, values, by_region) in knobs {
-            for m in [Method::Parallel, Method::Regions] {
+            for m in [Method::Tiled, Method::Regions] {
                 out.push(plot::Series {
                     label: format!(
                         "{} ({knob} {}..{})",
@@ -929,10 +928,10 @@ pub fn run(cfg: &Config) -> Result<()> {
          capacity-aware \
          re-assignment from the paper's medoids kept while it helps, tried only where at least a third of \
          the clusters hold at most half the triangle limit (src/strategy/kmedoids/capacity.rs). \
-         `kmedoids-parallel`: the same method on regions of about {} triangles at once (a coarse \
+         `kmedoids-tiled`: the same method on regions of about {} triangles at once (a coarse \
          multi-source BFS from seeds spread in Morton order; small pieces join the nearest region), then the \
          clusters that did not fill merged with a neighbour across region borders in rounds of mutual \
-         proposals (src/strategy/kmedoids/parallel.rs); its iterations are the regions' re-assignment rounds, \
+         proposals (src/strategy/kmedoids/tiled.rs); its iterations are the regions' re-assignment rounds, \
          its splits the merge rounds that merged. \
          `kmedoids, grow hops`: the same with `--kmedoids-grow hops` (fewest hops from the seed first: fewer \
          meshlets, larger spheres). \
@@ -940,7 +939,7 @@ pub fn run(cfg: &Config) -> Result<()> {
          round and the mesh re-clustered (the default before; what the GPU kernels run). `kmedoids-paper`: one \
          cluster added and everything re-run per overflow, as the paper does; when its budget of {} s runs out \
          it finishes the fast way (marked; not run on the subdivided dragons). Seconds: rayon pool, median of {} \
-         or more runs of `kmedoids`, `kmedoids-parallel` and `kmedoids-regions` interleaved with meshoptimizer's \
+         or more runs of `kmedoids`, `kmedoids-tiled` and `kmedoids-parallel` interleaved with meshoptimizer's \
          `build_meshlets` under 2 M triangles (rounds of all four repeat until they add up to {} s, at most {}: \
          a run of a few milliseconds follows the machine's noise), else one run; one run of the others. `1 thread s`: on a one-thread pool (up to {} triangles), \
          the median of as many runs, each right after the pool run it is compared with, for those three methods; one run for the \
@@ -966,7 +965,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     let _ = writeln!(s, "{}\n", verdict_table().markdown(&verdicts(&runs)));
     let _ = writeln!(
         s,
-        "## Targets, `kmedoids-parallel` and `kmedoids-regions` per mesh\n"
+        "## Targets, `kmedoids-tiled` and `kmedoids-parallel` per mesh\n"
     );
     let _ = writeln!(
         s,
@@ -975,14 +974,14 @@ pub fn run(cfg: &Config) -> Result<()> {
          stress meshes are held to this one alone: their meshoptimizer ratio is shown unmarked). Time: <= 1.5x meshoptimizer's. Threads: one-thread time \
          over the pool's (>= 1.6 on the dragon with two threads; `-` where the one-thread run was left out). \
          The objective before its iteration: the mean hop distance before the boundary moves of \
-         `kmedoids-parallel` and `kmedoids-regions` (the same as after for the methods without one). Pool: {} threads.\n",
+         `kmedoids-tiled` and `kmedoids-parallel` (the same as after for the methods without one). Pool: {} threads.\n",
         rayon::current_num_threads()
     );
     let _ = writeln!(
         s,
         "{}\n",
         parallel_table().markdown(
-            &[Method::Parallel, Method::Regions]
+            &[Method::Tiled, Method::Regions]
                 .into_iter()
                 .flat_map(|m| parallel_verdicts(&runs, m))
                 .collect::<Vec<_>>()
@@ -1032,7 +1031,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     );
     let _ = writeln!(
         s,
-        "`kmedoids-parallel` and `kmedoids-regions`: triangles per region (`region`), from many small \
+        "`kmedoids-tiled` and `kmedoids-parallel`: triangles per region (`region`), from many small \
          regions to few; both also their rounds of boundary moves (`move rounds`, their medoid \
          iteration: the objective falls with each, the count stays). `kmedoids` and its `hops` growth: their most capacity-aware re-assignment rounds (no effect where \
          too few clusters are light for a round to run: `iterations run` says how many ran); `kmedoids-flat`: the iteration limit and \

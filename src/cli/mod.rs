@@ -66,11 +66,11 @@ pub struct StrategyArgs {
     /// centroid: smaller spheres) or `hops` (fewest hops from its seed: fewer meshlets).
     #[arg(long, default_value = "centre", value_parser = clap::value_parser!(strategy::kmedoids::Grow))]
     pub kmedoids_grow: strategy::kmedoids::Grow,
-    /// kmedoids-parallel: triangles per region (each region is clustered on its own, all at once;
+    /// kmedoids-tiled: triangles per region (each region is clustered on its own, all at once;
     /// smaller regions give more parallel work and a few more meshlets at their borders).
     #[arg(long, default_value_t = strategy::kmedoids::DEFAULT_REGION_TRIANGLES, value_parser = clap::value_parser!(u32).range(1..))]
     pub kmedoids_regions: u32,
-    /// kmedoids-parallel, kmedoids-regions: most rounds of boundary moves (triangles moved to a
+    /// kmedoids-tiled, kmedoids-parallel: most rounds of boundary moves (triangles moved to a
     /// neighbouring cluster whose medoid is nearer, within the limits; 0 turns them off).
     #[arg(long, default_value_t = strategy::kmedoids::DEFAULT_MOVE_ROUNDS)]
     pub kmedoids_moves: u32,

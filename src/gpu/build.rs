@@ -4,7 +4,7 @@
 //!
 //! A strategy qualifies when the GPU runs all of it and the host only orders the work between
 //! kernels: `bsphere-parallel` ([`super::grow`]), `kmedoids-flat` ([`super::kmedoids`]'s flat
-//! driver) and `kmedoids-regions` ([`super::regions`]). The default `kmedoids` does not: its
+//! driver) and `kmedoids-parallel` ([`super::regions`]). The default `kmedoids` does not: its
 //! seeding growth, merges and packing are sequential host code, so a GPU run of it would mostly
 //! measure the host. The ordering post-passes
 //! (`--local-order`, `--meshlet-order`) run on the host after the build, exactly as after a CPU
@@ -25,7 +25,7 @@ use std::time::Instant;
 pub const GPU_STRATEGIES: [Kind; 3] = [
     Kind::BsphereParallel,
     Kind::KmedoidsFlat,
-    Kind::KmedoidsRegions,
+    Kind::KmedoidsParallel,
 ];
 
 /// One GPU build.
@@ -128,7 +128,7 @@ fn with_bounds(
 
 /// The strategies [`build_on_device`] runs: those whose setup reads no mesh data on the host.
 /// `bsphere-parallel` is not one: its quantised positions and grid are computed on the host.
-pub const DEVICE_INPUT_STRATEGIES: [Kind; 2] = [Kind::KmedoidsFlat, Kind::KmedoidsRegions];
+pub const DEVICE_INPUT_STRATEGIES: [Kind; 2] = [Kind::KmedoidsFlat, Kind::KmedoidsParallel];
 
 /// [`build_resident`] from a mesh already on the device (an engine's vertex and index buffers):
 /// nothing of the mesh is read on the host, and nothing of the result comes back unless the
@@ -146,7 +146,7 @@ pub fn build_on_device(
     let kind = gpu_kind(name)?;
     if !DEVICE_INPUT_STRATEGIES.contains(&kind) {
         return Err(GpuError::Unsupported(
-            "only kmedoids-flat and kmedoids-regions build from a mesh on the device: bsphere-parallel's setup runs on the host (use build_resident)",
+            "only kmedoids-flat and kmedoids-parallel build from a mesh on the device: bsphere-parallel's setup runs on the host (use build_resident)",
         ));
     }
     let t0 = Instant::now();
@@ -154,7 +154,7 @@ pub fn build_on_device(
     with_bounds(gpu, mesh.positions, meshlets, timing, t0)
 }
 
-/// Runs `kmedoids-regions` or `kmedoids-flat` (`kind`) from `source`, its meshlets left on the
+/// Runs `kmedoids-parallel` or `kmedoids-flat` (`kind`) from `source`, its meshlets left on the
 /// device.
 fn run_kmedoids(
     gpu: &Gpu,
@@ -164,7 +164,7 @@ fn run_kmedoids(
     opts: &Options,
 ) -> Result<(DeviceMeshlets, Timing), GpuError> {
     let cfg = &opts.kmedoids;
-    Ok(if kind == Kind::KmedoidsRegions {
+    Ok(if kind == Kind::KmedoidsParallel {
         let (r, d) = super::regions::cluster_regions(gpu, source, limits, cfg, false)?;
         (d, r.timing)
     } else {
@@ -183,7 +183,7 @@ fn run_strategy(
     opts: &Options,
 ) -> Result<(DeviceMeshlets, Timing), GpuError> {
     Ok(match kind {
-        Kind::KmedoidsFlat | Kind::KmedoidsRegions => {
+        Kind::KmedoidsFlat | Kind::KmedoidsParallel => {
             run_kmedoids(gpu, kind, MeshSource::Host(mesh), limits, opts)?
         }
         Kind::BsphereParallel => {
@@ -201,7 +201,7 @@ pub fn warm_up(gpu: &Gpu, name: &str, limits: Limits, opts: &Options) -> Result<
     let t0 = Instant::now();
     let mesh = crate::mesh::generate::terrain(24, 1);
     build(gpu, name, &mesh, limits, opts)?;
-    if gpu_kind(name)? == Kind::KmedoidsRegions {
+    if gpu_kind(name)? == Kind::KmedoidsParallel {
         // One region takes `grow`, several take `grow_rows` on a CPU adapter; lavapipe compiles a
         // pipeline on its first dispatch, so both run here (the mesh is 1152 triangles).
         let mut regions = *opts;
@@ -219,10 +219,13 @@ mod tests {
     fn only_whole_gpu_strategies_are_accepted_and_the_error_names_the_strategy() {
         assert_eq!(gpu_kind("kmedoids-flat").unwrap(), Kind::KmedoidsFlat);
         assert_eq!(gpu_kind("bsphere-parallel").unwrap(), Kind::BsphereParallel);
-        assert_eq!(gpu_kind("kmedoids-regions").unwrap(), Kind::KmedoidsRegions);
+        assert_eq!(
+            gpu_kind("kmedoids-parallel").unwrap(),
+            Kind::KmedoidsParallel
+        );
         for name in [
             "kmedoids",
-            "kmedoids-parallel",
+            "kmedoids-tiled",
             "meshopt",
             "kmedoids-flat+refine",
             "nope",

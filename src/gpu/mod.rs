@@ -10,9 +10,9 @@
 //! | [`adjacency`] | `adjacency.wgsl` | `crate::adjacency` (and `mesh::edges`) |
 //! | [`kmedoids`] (`cluster_flat`, `cluster_capacity`) | `assign.wgsl`, `update.wgsl`, `split.wgsl` | `strategy::kmedoids::{assign, update, split}`, driven as `strategy::kmedoids::flat` |
 //! | [`morton`] | `morton.wgsl` | `strategy::kmedoids::flat::{morton_order, initial_medoids}` (the flat method's seeds), `strategy::kmedoids::flat::packed_centres` |
-//! | [`coarse`] | `coarse.wgsl` (with `morton.wgsl`, `assign.wgsl`) | `strategy::kmedoids::coarse` (the regions of `kmedoids-parallel` and `kmedoids-regions`) |
-//! | [`regions`] | `regions.wgsl` (with `medoid.wgsl`) | `strategy::kmedoids::regions` (`kmedoids-regions`) |
-//! | [`moves`] | `moves.wgsl` (with `medoid.wgsl`) | `strategy::kmedoids::moves` (the medoid iteration of `kmedoids-regions`) |
+//! | [`coarse`] | `coarse.wgsl` (with `morton.wgsl`, `assign.wgsl`) | `strategy::kmedoids::coarse` (the regions of `kmedoids-tiled` and `kmedoids-parallel`) |
+//! | [`regions`] | `regions.wgsl` (with `medoid.wgsl`) | `strategy::kmedoids::regions` (`kmedoids-parallel`) |
+//! | [`moves`] | `moves.wgsl` (with `medoid.wgsl`) | `strategy::kmedoids::moves` (the medoid iteration of `kmedoids-parallel`) |
 //! | [`capacity`] | `capacity.wgsl` | `strategy::kmedoids::capacity::assign_capacity` |
 //! | [`grow`] | `grow.wgsl` | `strategy::grow` (`bsphere-parallel`) |
 //! | [`assemble`] | `assemble.wgsl` | `meshlet::assemble` (meshlets from a clustering) |

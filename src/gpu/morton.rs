@@ -1,7 +1,7 @@
 //! The Morton order on the device (`wgsl/morton.wgsl`): the positions' box, Morton keys of the
 //! triangles, a stable radix sort, and the triangles at the ranks the seeds take
 //! ([`crate::strategy::kmedoids::flat::initial_medoids`], [`crate::strategy::kmedoids::coarse`]);
-//! also each triangle's centroid cell packed as `kmedoids-regions` keys it
+//! also each triangle's centroid cell packed as `kmedoids-parallel` keys it
 //! ([`crate::strategy::kmedoids::flat::packed_centres`]), and the radix sort alone for other
 //! keys ([`PairSort`]). The CPU reference is [`crate::strategy::kmedoids::flat::morton_order`];
 //! the order, the seeds and the cells are identical.

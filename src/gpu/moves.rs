@@ -1,5 +1,5 @@
 //! The boundary moves on the device (`wgsl/moves.wgsl`, with the shared medoid of
-//! `wgsl/medoid.wgsl`): the medoid iteration of `kmedoids-regions`. The CPU reference is
+//! `wgsl/medoid.wgsl`): the medoid iteration of `kmedoids-parallel`. The CPU reference is
 //! [`crate::strategy::kmedoids::moves`]; labels, distances, medoids and the counters of
 //! [`Moves`] are identical.
 //!

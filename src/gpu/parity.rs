@@ -90,7 +90,7 @@ pub enum Family {
     Flat,
     /// The capacity-aware k-medoids (host growth, GPU adjacency and medoid updates).
     Capacity,
-    /// `kmedoids-regions`, at the default region size and at 1024-triangle regions.
+    /// `kmedoids-parallel`, at the default region size and at 1024-triangle regions.
     Regions,
     /// The capacity-aware assignment alone, from the capacity-aware run's medoids.
     Assignment,
@@ -121,7 +121,7 @@ pub struct Parity {
     /// One entry per kernel family run.
     pub checks: Vec<Check>,
     /// The CPU k-medoids meshlets whose spheres were compared: the flat method's, or when it was
-    /// skipped `kmedoids-regions`' (empty when the bounds were skipped).
+    /// skipped `kmedoids-parallel`'s (empty when the bounds were skipped).
     pub meshlets: Meshlets,
     /// Their spheres from the GPU kernel.
     pub gpu_spheres: Vec<SphereF32>,
@@ -331,7 +331,7 @@ fn check_capacity(
     Ok((c_cpu.medoids, check))
 }
 
-/// kmedoids-regions, at the default region size and at small regions (many per mesh, so the
+/// kmedoids-parallel, at the default region size and at small regions (many per mesh, so the
 /// per-region invocations and the bases between them are exercised): one check; returns the CPU's
 /// meshlets at the default size.
 fn check_regions(
@@ -381,7 +381,7 @@ fn check_regions(
     }
     let check = check(
             Family::Regions,
-        "kmedoids-regions: medoids, labels, distances, objective before the moves, their rounds, meshlets (default and 1024-triangle regions)",
+        "kmedoids-parallel: medoids, labels, distances, objective before the moves, their rounds, meshlets (default and 1024-triangle regions)",
         cpu_total,
         gpu_total,
         diffs,

@@ -1,4 +1,4 @@
-//! `kmedoids-regions` on the device (`wgsl/regions.wgsl`); the CPU reference is
+//! `kmedoids-parallel` on the device (`wgsl/regions.wgsl`); the CPU reference is
 //! [`crate::strategy::kmedoids::regions`], and labels, distances, medoids and meshlets are
 //! identical.
 //!
@@ -68,7 +68,7 @@ binding_set! {
     }
 }
 
-/// A GPU `kmedoids-regions` run.
+/// A GPU `kmedoids-parallel` run.
 pub struct GpuRegions {
     /// The result, equal to the CPU's (empty labels, distances and meshlets when not read back).
     pub clustering: Clustering,
@@ -91,7 +91,7 @@ fn fits(gpu: &Gpu, what: &'static str, len: usize) -> Result<(), GpuError> {
     Ok(())
 }
 
-/// Runs `kmedoids-regions` on `gpu` over a mesh on the host or already on the device; with
+/// Runs `kmedoids-parallel` on `gpu` over a mesh on the host or already on the device; with
 /// `read_back` the labels, distances and meshlets come back to the host, else only the medoids
 /// (one word per cluster) do, and the meshlets stay on the device.
 pub fn cluster_regions(

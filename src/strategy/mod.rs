@@ -140,8 +140,8 @@ pub const NAMES: &[&str] = &[
     "kmedoids",
     "kmedoids-flat",
     "kmedoids-paper",
+    "kmedoids-tiled",
     "kmedoids-parallel",
-    "kmedoids-regions",
     "compact",
     "meshopt",
     "meshopt-scan",
@@ -281,11 +281,11 @@ pub enum Kind {
     KmedoidsFlat,
     /// [`KMedoids`] as the paper runs it (slow by design): `kmedoids-paper`.
     KmedoidsPaper,
-    /// [`KMedoids`], capacity-aware on regions at once with border merges: `kmedoids-parallel`.
-    KmedoidsParallel,
+    /// [`KMedoids`], capacity-aware on regions at once with border merges: `kmedoids-tiled`.
+    KmedoidsTiled,
     /// [`KMedoids`] on regions at once, grown by integer keys (the same on the GPU):
-    /// `kmedoids-regions`.
-    KmedoidsRegions,
+    /// `kmedoids-parallel`.
+    KmedoidsParallel,
     /// [`Compact`]: `compact`.
     Compact,
     /// [`Meshopt`] (meshoptimizer's `build_meshlets`): `meshopt`.
@@ -314,8 +314,8 @@ impl Kind {
         Kind::Kmedoids,
         Kind::KmedoidsFlat,
         Kind::KmedoidsPaper,
+        Kind::KmedoidsTiled,
         Kind::KmedoidsParallel,
-        Kind::KmedoidsRegions,
         Kind::Compact,
         Kind::Meshopt,
         Kind::MeshoptScan,
@@ -361,8 +361,8 @@ impl Kind {
             Kind::Kmedoids => Box::new(kmedoids(kmedoids::Mode::Capacity)),
             Kind::KmedoidsFlat => Box::new(kmedoids(kmedoids::Mode::Flat)),
             Kind::KmedoidsPaper => Box::new(kmedoids(kmedoids::Mode::Paper)),
-            Kind::KmedoidsParallel => Box::new(kmedoids(kmedoids::Mode::Parallel)),
-            Kind::KmedoidsRegions => Box::new(kmedoids(kmedoids::Mode::Regions)),
+            Kind::KmedoidsTiled => Box::new(kmedoids(kmedoids::Mode::Tiled)),
+            Kind::KmedoidsParallel => Box::new(kmedoids(kmedoids::Mode::Regions)),
             Kind::Compact => Box::new(Compact),
             Kind::Meshopt => Box::new(Meshopt {
                 cone_weight: opts.cone_weight,

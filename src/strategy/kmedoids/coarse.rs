@@ -1,4 +1,4 @@
-//! The coarse regions that `kmedoids-parallel` and `kmedoids-regions` cluster at once (CPU
+//! The coarse regions that `kmedoids-tiled` and `kmedoids-parallel` cluster at once (CPU
 //! reference of `wgsl/coarse.wgsl`, driven on the GPU by `gpu::coarse`).
 //!
 //! The flat method's seeding and assignment ([`super::flat`], [`mod@super::assign`]) at a coarse

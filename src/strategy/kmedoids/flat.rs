@@ -40,7 +40,7 @@ pub fn cluster_size(limits: Limits, mode: Mode) -> usize {
         Mode::Paper => limits.max_triangles as usize,
         // A closed 64-vertex patch holds about 1.5 x 64 triangles (Euler: T ~ 2V minus the
         // boundary), so starting at that size leaves far fewer clusters to split.
-        Mode::Flat | Mode::Capacity | Mode::Parallel | Mode::Regions => (limits.max_triangles
+        Mode::Flat | Mode::Capacity | Mode::Tiled | Mode::Regions => (limits.max_triangles
             as usize)
             .min(3 * limits.max_vertices as usize / 2)
             .max(1),
@@ -177,7 +177,7 @@ pub struct MortonFrame {
 }
 
 /// The largest coordinate of a fine centroid cell ([`MortonFrame::fine_cell`], 15 bits per axis):
-/// `kmedoids-regions`' growth key. The Morton cells (10 bits) are as large as a triangle of a mesh
+/// `kmedoids-parallel`'s growth key. The Morton cells (10 bits) are as large as a triangle of a mesh
 /// of some million triangles, and ties in the key then leave clusters less round, so more of
 /// them (the bit counts measured are in `docs/gpu-clustering.md`); 15 bits is the most whose
 /// squared distances still fit a `u32` (three squares of `2^15 - 1` stay under `2^32`).
@@ -282,7 +282,7 @@ pub(crate) fn distance2(a: [u32; 3], b: [u32; 3]) -> u32 {
 
 /// Each triangle's fine centroid cell in the Morton frame ([`MortonFrame::fine_cell`], 15 bits
 /// per axis along the box's longest side), packed as a [`Centre`]: the geometric term of
-/// `kmedoids-regions`' growth key and of the boundary moves' rule.
+/// `kmedoids-parallel`'s growth key and of the boundary moves' rule.
 /// Only `+`, `-` and `x` touch a triangle, so `wgsl/morton.wgsl` computes the same words.
 pub fn packed_centres(mesh: &Mesh) -> Vec<Centre> {
     let (lo, hi) = mesh.bounding_box();

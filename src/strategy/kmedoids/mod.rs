@@ -10,8 +10,8 @@
 //! |---|---|---|---|
 //! | [`Mode::Capacity`] (the default) | `kmedoids` | [`capacity`]: clusters grow to the limits, nothing is split | `gpu::kmedoids::cluster_capacity` |
 //! | [`Mode::Flat`] | `kmedoids-flat` | [`flat`]: nearest-medoid assignment, overflows split a fraction at a time | `gpu::kmedoids::cluster_flat` |
-//! | [`Mode::Parallel`] | `kmedoids-parallel` | [`parallel`]: the capacity-aware method on many regions at once, border clusters merged in matching rounds | (none yet: the per-region growth is host code) |
-//! | [`Mode::Regions`] | `kmedoids-regions` | [`regions`]: regions at once, each grown by integer keys a kernel runs | `gpu::regions` |
+//! | [`Mode::Tiled`] | `kmedoids-tiled` | [`tiled`]: the capacity-aware method on many regions at once, border clusters merged in matching rounds | (none yet: the per-region growth is host code) |
+//! | [`Mode::Regions`] | `kmedoids-parallel` | [`regions`]: regions at once, each grown by integer keys a kernel runs | `gpu::regions` |
 //! | [`Mode::Paper`] | `kmedoids-paper` | [`flat`]: one cluster added and everything re-run per overflow | (none: slow by design) |
 //!
 //! The files, lowest first (a file reads only those above it in this list):
@@ -27,7 +27,7 @@
 //! - [`moves`]: boundary moves, the parallel method's medoid iteration;
 //! - [`coarse`]: the coarse regions of the two region-parallel methods (CPU reference of
 //!   `wgsl/coarse.wgsl`);
-//! - [`parallel`]: the region-parallel driver over the capacity-aware one;
+//! - [`tiled`]: the region-parallel driver over the capacity-aware one;
 //! - [`regions`]: the region-parallel driver with a kernel-shaped grower (CPU reference of
 //!   `wgsl/regions.wgsl`);
 //! - this file: the strategy, its settings, [`cluster`] and [`pack`].
@@ -44,10 +44,10 @@ pub mod flat;
 mod local_graph;
 pub mod merge;
 pub mod moves;
-pub mod parallel;
 pub mod regions;
 pub mod seed;
 pub mod split;
+pub mod tiled;
 pub mod update;
 
 pub use assign::{assign, members, UNREACHED};
@@ -72,10 +72,10 @@ pub enum Mode {
     /// comparison: `kmedoids-paper`).
     Paper,
     /// The capacity-aware method on regions of the mesh at once, then border merges
-    /// ([`parallel`], `kmedoids-parallel`).
-    Parallel,
+    /// ([`tiled`], `kmedoids-tiled`).
+    Tiled,
     /// Regions at once, each grown by integer keys one GPU invocation runs
-    /// ([`regions`], `kmedoids-regions`).
+    /// ([`regions`], `kmedoids-parallel`).
     Regions,
 }
 
@@ -86,18 +86,18 @@ impl Mode {
             Mode::Capacity => "kmedoids",
             Mode::Flat => "kmedoids-flat",
             Mode::Paper => "kmedoids-paper",
-            Mode::Parallel => "kmedoids-parallel",
-            Mode::Regions => "kmedoids-regions",
+            Mode::Tiled => "kmedoids-tiled",
+            Mode::Regions => "kmedoids-parallel",
         }
     }
 }
 
-/// Triangles per region of `kmedoids-parallel` by default: on the shared meshes, regions of this
+/// Triangles per region of `kmedoids-tiled` by default: on the shared meshes, regions of this
 /// size cost about a percent of meshlets over one region per mesh while leaving dozens of regions
 /// from a million triangles up (the region-size sweep of `meshletlab bench kmedoids`).
 pub const DEFAULT_REGION_TRIANGLES: u32 = 16384;
 
-/// Rounds of boundary moves of `kmedoids-parallel` and `kmedoids-regions` by default: two take
+/// Rounds of boundary moves of `kmedoids-tiled` and `kmedoids-parallel` by default: two take
 /// their objective (mean hop distance to the medoid) below the sequential method's on the shared
 /// meshes, where the later rounds gain less for the same cost (the sweep of
 /// `meshletlab bench kmedoids`).
@@ -165,7 +165,7 @@ impl Strategy for KMedoids {
             Mode::Flat => "k-medoids on the triangle dual graph (hop distance), overflowing clusters split a fraction at a time",
             Mode::Paper => "k-medoids as the paper runs it: one cluster added and everything re-run per overflow",
             Mode::Capacity => "k-medoids whose clusters grow to the limits and take triangles only while they have room",
-            Mode::Parallel => "the capacity-aware k-medoids on regions of the mesh at once, border clusters merged in parallel rounds",
+            Mode::Tiled => "the capacity-aware k-medoids on regions of the mesh at once, border clusters merged in parallel rounds",
             Mode::Regions => "k-medoids on regions of the mesh at once, each grown by integer keys (the same on the GPU, one invocation per region)",
         }
     }
@@ -195,7 +195,7 @@ pub fn cluster(mesh: &Mesh, limits: Limits, mode: Mode, cfg: &Config) -> Cluster
             Clustering::from_grown(mesh, limits, g, t0.elapsed().as_secs_f64())
         }
         Mode::Flat | Mode::Paper => flat::cluster(mesh, &dual, limits, mode, cfg, t0),
-        Mode::Parallel => parallel::cluster(mesh, &dual, &vt, limits, cfg, t0),
+        Mode::Tiled => tiled::cluster(mesh, &dual, &vt, limits, cfg, t0),
         Mode::Regions => regions::cluster(mesh, &dual, &vt, limits, cfg, t0),
     }
 }
@@ -238,7 +238,7 @@ impl Clustering {
         Self::grown(g, meshlets, seconds)
     }
 
-    /// Grown clusters (capacity-aware or `kmedoids-regions`, CPU or GPU) and their meshlets:
+    /// Grown clusters (capacity-aware or `kmedoids-parallel`, CPU or GPU) and their meshlets:
     /// no initial clustering and no splits, so the objective is that of the result.
     pub fn grown(g: capacity::Grown, meshlets: Meshlets, seconds: f64) -> Self {
         Clustering {

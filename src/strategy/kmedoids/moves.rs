@@ -1,4 +1,4 @@
-//! Boundary moves: the medoid iteration of `kmedoids-parallel` and `kmedoids-regions`,
+//! Boundary moves: the medoid iteration of `kmedoids-tiled` and `kmedoids-parallel`,
 //! data-parallel and within the limits (the CPU reference of `wgsl/moves.wgsl`).
 //!
 //! The paper's iteration (section 3) re-assigns every triangle to its nearest medoid and moves
@@ -377,7 +377,7 @@ mod tests {
                     move_rounds: rounds,
                     ..Config::default()
                 };
-                cluster(&m, limits, Mode::Parallel, &cfg)
+                cluster(&m, limits, Mode::Tiled, &cfg)
             };
             let (before, after) = (run(0), run(4));
             assert!(after.iterations > before.iterations, "no round moved");

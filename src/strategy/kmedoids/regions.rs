@@ -1,7 +1,7 @@
-//! `kmedoids-regions`: the region-parallel k-medoids with a grower one GPU invocation runs per
+//! `kmedoids-parallel`: the region-parallel k-medoids with a grower one GPU invocation runs per
 //! region (CPU reference of `wgsl/regions.wgsl`, driven on the GPU by `gpu::regions`).
 //!
-//! [`super::parallel`] runs the capacity-aware method per region; its growth keys divide (the
+//! [`super::tiled`] (`kmedoids-tiled`) runs the capacity-aware method per region; its growth keys divide (the
 //! running centroid) and its merges and piece packing sort and allocate, so no kernel runs it.
 //! This method keeps the regions and replaces the per-region step with a grower made of integer
 //! keys, linear scans and fixed arrays, which a kernel runs line for line:
@@ -42,14 +42,14 @@
 //! 3. **Labels**: cluster `c` of region `r` is `base[r] + c`, regions in order.
 //! 4. **Medoids**: the paper's medoid of each cluster and its members' in-cluster hop distances
 //!    (one invocation per cluster on the GPU), which order the members when packing.
-//! 5. **Medoid iteration**: [`super::moves`]' boundary moves, as in `kmedoids-parallel`
+//! 5. **Medoid iteration**: [`super::moves`]' boundary moves, as in `kmedoids-tiled`
 //!    (`wgsl/moves.wgsl` on the GPU): border triangles move to a neighbouring cluster whose
 //!    medoid is nearer while the limits hold, then changed clusters take the paper's medoid
 //!    again. The objective falls and the count stays.
 //!
 //! Where it differs from the paper (section 3): k comes out of the growth, nothing is split, and
 //! the iteration moves only border triangles, within the limits (the growth keys, not
-//! nearest-medoid assignment, shape the clusters); where it differs from `kmedoids-parallel`:
+//! nearest-medoid assignment, shape the clusters); where it differs from `kmedoids-tiled`:
 //! merges only inside a region (none across region borders), whole pieces packed during the
 //! growth (nearest within a window) and, after the merges, into the region's clusters with room
 //! under the radius rule (not nearest over all clusters), clusters dissolved across their

@@ -1,4 +1,4 @@
-//! `kmedoids-parallel`: the capacity-aware method run on many regions of the mesh at once, then
+//! `kmedoids-tiled`: the capacity-aware method run on many regions of the mesh at once, then
 //! the light clusters on region borders merged in matching rounds.
 //!
 //! The capacity-aware method ([`super::capacity`]) grows one cluster at a time, each into the
@@ -41,7 +41,7 @@
 //! rounds depend on the input alone.
 //!
 //! No GPU path: step 2 is the sequential code. [`super::regions`] keeps steps 1 and 4 and
-//! replaces step 2 with a grower a kernel runs (`kmedoids-regions`); `docs/gpu-clustering.md`
+//! replaces step 2 with a grower a kernel runs (`kmedoids-parallel`); `docs/gpu-clustering.md`
 //! says which of this method's steps that grower still lacks.
 
 use super::assign::{members, UNREACHED};
@@ -298,7 +298,7 @@ mod tests {
             region_triangles: 300,
             ..Config::default()
         };
-        let run = |n| crate::test_pool(n).install(|| cluster(&m, limits, Mode::Parallel, &cfg));
+        let run = |n| crate::test_pool(n).install(|| cluster(&m, limits, Mode::Tiled, &cfg));
         let (a, b) = (run(1), run(4));
         assert_eq!(
             (&a.medoids, &a.labels, &a.distances, a.iterations, a.splits),
