@@ -382,7 +382,7 @@ struct Interleaved {
     out: Option<Clustering>,
 }
 
-/// One mesh's verdict on the `kmedoids-tiled` targets (held to `kmedoids-parallel` too).
+/// One mesh's verdict on the region-parallel targets (`kmedoids-parallel` and `kmedoids-tiled`).
 struct ParallelVerdict {
     mesh: String,
     method: &'static str,
