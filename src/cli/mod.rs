@@ -66,11 +66,12 @@ pub struct StrategyArgs {
     /// centroid: smaller spheres) or `hops` (fewest hops from its seed: fewer meshlets).
     #[arg(long, default_value = "centre", value_parser = clap::value_parser!(strategy::kmedoids::Grow))]
     pub kmedoids_grow: strategy::kmedoids::Grow,
-    /// kmedoids-tiled: triangles per region (each region is clustered on its own, all at once;
-    /// smaller regions give more parallel work and a few more meshlets at their borders).
+    /// kmedoids-parallel, kmedoids-tiled: triangles per region (each region is clustered on
+    /// its own, all at once; smaller regions give more parallel work and a few more meshlets at
+    /// their borders).
     #[arg(long, default_value_t = strategy::kmedoids::DEFAULT_REGION_TRIANGLES, value_parser = clap::value_parser!(u32).range(1..))]
     pub kmedoids_regions: u32,
-    /// kmedoids-tiled, kmedoids-parallel: most rounds of boundary moves (triangles moved to a
+    /// kmedoids-parallel, kmedoids-tiled: most rounds of boundary moves (triangles moved to a
     /// neighbouring cluster whose medoid is nearer, within the limits; 0 turns them off).
     #[arg(long, default_value_t = strategy::kmedoids::DEFAULT_MOVE_ROUNDS)]
     pub kmedoids_moves: u32,
