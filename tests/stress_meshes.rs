@@ -62,11 +62,11 @@ fn stress_meshes_give_the_same_meshlets_on_any_thread_count() {
     }
 }
 
-/// `kmedoids-tiled` with small regions, so every stress mesh is cut into several (the default
-/// region holds a whole stress mesh): valid at every preset, edge-connected clusters wherever the
-/// mesh is, and the same on 1 and many threads.
+/// The two region methods, `kmedoids-parallel` and `kmedoids-tiled`, with small regions, so every
+/// stress mesh is cut into several (the default region holds a whole stress mesh): valid at every
+/// preset, edge-connected clusters wherever the mesh is, and the same on 1 and many threads.
 #[test]
-fn kmedoids_tiled_with_many_regions_on_every_stress_mesh() {
+fn region_methods_with_many_regions_on_every_stress_mesh() {
     use meshletlab::adjacency::{cluster_pieces, dual_graph, vertex_triangles};
     use meshletlab::strategy::kmedoids::{cluster, coarse::regions, Config, Mode};
     let cfg = Config {
@@ -77,23 +77,27 @@ fn kmedoids_tiled_with_many_regions_on_every_stress_mesh() {
     for g in stress_set(3) {
         let dual = dual_graph(&g.mesh, &vertex_triangles(&g.mesh));
         assert!(regions(&g.mesh, &dual, 1024).1 >= 3, "{}", g.name);
-        for limits in Limits::PRESETS {
-            let a = one.install(|| cluster(&g.mesh, limits, Mode::Tiled, &cfg));
-            let b = many.install(|| cluster(&g.mesh, limits, Mode::Tiled, &cfg));
-            assert_eq!(a.meshlets, b.meshlets, "{} {limits}", g.name);
+        for (limits, mode) in Limits::PRESETS
+            .into_iter()
+            .flat_map(|l| [(l, Mode::Regions), (l, Mode::Tiled)])
+        {
+            let what = format!("{} {} {limits}", g.name, mode.name());
+            let a = one.install(|| cluster(&g.mesh, limits, mode, &cfg));
+            let b = many.install(|| cluster(&g.mesh, limits, mode, &cfg));
+            assert_eq!(a.meshlets, b.meshlets, "{what}");
             assert_eq!(
                 (&a.labels, &a.medoids, &a.distances),
-                (&b.labels, &b.medoids, &b.distances)
+                (&b.labels, &b.medoids, &b.distances),
+                "{what}"
             );
-            validate(&g.mesh, &a.meshlets, limits)
-                .unwrap_or_else(|e| panic!("{} {limits}: {e}", g.name));
+            validate(&g.mesh, &a.meshlets, limits).unwrap_or_else(|e| panic!("{what}: {e}"));
             // Every cluster fits, so packing made one meshlet of each.
-            assert_eq!(a.meshlets.len(), a.medoids.len(), "{} {limits}", g.name);
+            assert_eq!(a.meshlets.len(), a.medoids.len(), "{what}");
             for (c, (own, mesh)) in cluster_pieces(&dual, &a.labels, a.medoids.len())
                 .into_iter()
                 .enumerate()
             {
-                assert_eq!(own, mesh, "{} {limits}: cluster {c} is split", g.name);
+                assert_eq!(own, mesh, "{what}: cluster {c} is split");
             }
         }
     }
