@@ -80,7 +80,7 @@ struct SweepRow {
     max_iterations: u32,
     /// Triangles per region (the region methods' sweep).
     region: Option<u32>,
-    /// Rounds of boundary moves (`kmedoids-tiled`'s second sweep).
+    /// Rounds of boundary moves (the region methods' second sweep).
     moves: Option<u32>,
     seconds: f64,
     c: Clustering,
@@ -392,7 +392,7 @@ struct ParallelVerdict {
     count_meshopt: f64,
     count_sequential: f64,
     objective_sequential: f64,
-    /// The same before the method's medoid iteration (`kmedoids-tiled`'s boundary moves).
+    /// The same before the method's medoid iteration (the boundary moves).
     objective_before: f64,
     radius: f64,
     time: f64,

@@ -177,8 +177,8 @@ pub struct MortonFrame {
 }
 
 /// The largest coordinate of a fine centroid cell ([`MortonFrame::fine_cell`], 15 bits per axis):
-/// `kmedoids-parallel`'s growth key. The Morton cells (10 bits) are as large as a triangle of a mesh
-/// of some million triangles, and ties in the key then leave clusters less round, so more of
+/// `kmedoids-parallel`'s growth key. The Morton cells (10 bits) are as large as a triangle of a
+/// mesh of some million triangles, and ties in the key then leave clusters less round, so more of
 /// them (the bit counts measured are in `docs/gpu-clustering.md`); 15 bits is the most whose
 /// squared distances still fit a `u32` (three squares of `2^15 - 1` stay under `2^32`).
 /// `wgsl/prelude.wgsl` holds the same value.

@@ -10,7 +10,7 @@
 //! |---|---|---|---|
 //! | [`Mode::Capacity`] (the default) | `kmedoids` | [`capacity`]: clusters grow to the limits, nothing is split | `gpu::kmedoids::cluster_capacity` |
 //! | [`Mode::Flat`] | `kmedoids-flat` | [`flat`]: nearest-medoid assignment, overflows split a fraction at a time | `gpu::kmedoids::cluster_flat` |
-//! | [`Mode::Tiled`] | `kmedoids-tiled` | [`tiled`]: the capacity-aware method on many regions at once, border clusters merged in matching rounds | (none yet: the per-region growth is host code) |
+//! | [`Mode::Tiled`] | `kmedoids-tiled` | [`tiled`]: the capacity-aware method on many regions at once, border clusters merged in matching rounds | (none: the per-region growth is host code) |
 //! | [`Mode::Regions`] | `kmedoids-parallel` | [`regions`]: regions at once, each grown by integer keys a kernel runs | `gpu::regions` |
 //! | [`Mode::Paper`] | `kmedoids-paper` | [`flat`]: one cluster added and everything re-run per overflow | (none: slow by design) |
 //!
@@ -92,7 +92,7 @@ impl Mode {
     }
 }
 
-/// Triangles per region of `kmedoids-tiled` by default: on the shared meshes, regions of this
+/// Triangles per region of `kmedoids-parallel` and `kmedoids-tiled` by default: on the shared meshes, regions of this
 /// size cost about a percent of meshlets over one region per mesh while leaving dozens of regions
 /// from a million triangles up (the region-size sweep of `meshletlab bench kmedoids`).
 pub const DEFAULT_REGION_TRIANGLES: u32 = 16384;
@@ -189,8 +189,8 @@ pub fn cluster(mesh: &Mesh, limits: Limits, mode: Mode, cfg: &Config) -> Cluster
     if rayon::current_thread_index().is_none() {
         // Called from outside the pool: run the whole method on a pool thread. Otherwise each
         // parallel step hands its work over from this thread and sleeps until it is done, a
-        // wake-up per step that made the median run on a small one-region mesh (the first
-        // neuron) about 15 % slower. The output does not depend on where it runs.
+        // wake-up per step that shows on small meshes, whose runs take milliseconds. The output
+        // does not depend on where it runs.
         return rayon::scope(|_| cluster_on_pool(mesh, limits, mode, cfg));
     }
     cluster_on_pool(mesh, limits, mode, cfg)

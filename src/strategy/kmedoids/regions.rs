@@ -1,8 +1,9 @@
 //! `kmedoids-parallel`: the region-parallel k-medoids with a grower one GPU invocation runs per
 //! region (CPU reference of `wgsl/regions.wgsl`, driven on the GPU by `gpu::regions`).
 //!
-//! [`super::tiled`] (`kmedoids-tiled`) runs the capacity-aware method per region; its growth keys divide (the
-//! running centroid) and its merges and piece packing sort and allocate, so no kernel runs it.
+//! [`super::tiled`] (`kmedoids-tiled`) runs the capacity-aware method per region; its growth
+//! keys divide (the running centroid) and its merges and piece packing sort and allocate, so no
+//! kernel runs it.
 //! This method keeps the regions and replaces the per-region step with a grower made of integer
 //! keys, linear scans and fixed arrays, which a kernel runs line for line:
 //!
