@@ -3,7 +3,8 @@
 //! bindings, flags and counter slots the shaders share with `render::pass`), and writes the list
 //! of modules (`shaders.rs`, included by src/render/mod.rs). Without glslangValidator the build still
 //! succeeds, with empty shader files: the render commands then say how to get it, and everything
-//! else works.
+//! else works. It also writes `kmedoids_parallel_layout.wgsl`: the constants and storage sections
+//! that `kmedoids-parallel`'s CPU reference, GPU driver and kernel share, as WGSL.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -18,6 +19,22 @@ mod interface;
 #[path = "src/compress/laced/layout.rs"]
 #[allow(dead_code)] // Only the GLSL rendering is used here; the codec uses the rest.
 mod laced_layout;
+
+// kmedoids-parallel's shared constants and storage sections, emitted as WGSL for its kernel.
+#[path = "src/strategy/kmedoids/parallel/layout.rs"]
+#[allow(dead_code)] // Only the WGSL text is used here.
+mod kmedoids_parallel_layout;
+
+/// Writes `kmedoids_parallel_layout.wgsl` (put in front of `wgsl/kmedoids_parallel.wgsl` by the
+/// `wgsl!` macro) into `out`.
+fn write_kmedoids_parallel_layout(out: &Path) {
+    println!("cargo:rerun-if-changed=src/strategy/kmedoids/parallel/layout.rs");
+    std::fs::write(
+        out.join("kmedoids_parallel_layout.wgsl"),
+        kmedoids_parallel_layout::wgsl(),
+    )
+    .expect("write kmedoids_parallel_layout.wgsl");
+}
 
 /// Writes `laced_layout.glsl` (laced wires' record layout as GLSL constants, from the table the
 /// encoder and decoder read) into `out`, which is on glslangValidator's include path.
@@ -34,6 +51,7 @@ fn main() {
     println!("cargo:rustc-env=MESHLETLAB_OPT_LEVEL={opt}");
     println!("cargo:rerun-if-changed=glsl");
     println!("cargo:rerun-if-changed=src/render/interface.rs");
+    write_kmedoids_parallel_layout(&out);
     // Only the `render` feature includes the shaders.
     if std::env::var_os("CARGO_FEATURE_RENDER").is_none() {
         return;

@@ -1,12 +1,12 @@
 //! Run k-medoids on the GPU (wgpu; lavapipe where there is no GPU) beside the CPU reference and
-//! compare, for the flat method (`kmedoids-flat`: every step on the GPU) and the capacity-aware
-//! default (`kmedoids`: adjacency and medoid updates on the GPU, the growth on the host): medoids,
+//! compare, for the two methods with a GPU path, every step a kernel: `kmedoids-parallel` (the
+//! region-parallel method) and `kmedoids-flat` (the plain data-parallel baseline). Medoids,
 //! labels, distances and meshlets agree exactly, because the kernels use only exactly-rounded
 //! integer and f32 +, -, x.
 //!
 //!     cargo run --example gpu_kmedoids --features gpu -- [MESH]
 
-use meshletlab::gpu::{kmedoids as gpu_kmedoids, Gpu};
+use meshletlab::gpu::{kmedoids_flat, kmedoids_parallel, source::MeshSource, Gpu};
 use meshletlab::mesh;
 use meshletlab::meshlet::{validate, Limits};
 use meshletlab::strategy::kmedoids;
@@ -25,7 +25,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let t = Instant::now();
     let cpu = kmedoids::cluster(&mesh, limits, kmedoids::Mode::Flat, &cfg);
     let cpu_s = t.elapsed().as_secs_f64();
-    let run = gpu_kmedoids::cluster_flat(&gpu, &mesh, limits, &cfg)?;
+    let run = kmedoids_flat::cluster(&gpu, &mesh, limits, &cfg.flat)?;
     let g = &run.clustering;
     validate(&mesh, &g.meshlets, limits)?;
 
@@ -34,7 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     assert_eq!(g.distances, cpu.distances, "distances");
     assert_eq!(g.meshlets, cpu.meshlets, "meshlets");
     println!(
-        "{} triangles -> {} meshlets in {} iterations and {} splits; CPU {:.1} ms, GPU {:.1} ms ({} BFS levels); identical",
+        "kmedoids-flat: {} triangles -> {} meshlets in {} iterations and {} splits; CPU {:.1} ms, GPU {:.1} ms ({} BFS levels); identical",
         mesh.triangle_count(),
         g.meshlets.len(),
         g.iterations,
@@ -45,19 +45,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
 
     let t = Instant::now();
-    let cpu = kmedoids::cluster(&mesh, limits, kmedoids::Mode::Capacity, &cfg);
+    let cpu = kmedoids::cluster(&mesh, limits, kmedoids::Mode::Parallel, &cfg);
     let cpu_s = t.elapsed().as_secs_f64();
-    let run = gpu_kmedoids::cluster_capacity(&gpu, &mesh, limits, &cfg)?;
+    let source = MeshSource::Host(&mesh);
+    let (run, _) = kmedoids_parallel::cluster(&gpu, source, limits, &cfg.parallel, true)?;
     let g = &run.clustering;
     validate(&mesh, &g.meshlets, limits)?;
-    assert_eq!(g.medoids, cpu.medoids, "capacity medoids");
-    assert_eq!(g.labels, cpu.labels, "capacity labels");
-    assert_eq!(g.distances, cpu.distances, "capacity distances");
-    assert_eq!(g.meshlets, cpu.meshlets, "capacity meshlets");
+    assert_eq!(g.medoids, cpu.medoids, "kmedoids-parallel medoids");
+    assert_eq!(g.labels, cpu.labels, "kmedoids-parallel labels");
+    assert_eq!(g.distances, cpu.distances, "kmedoids-parallel distances");
+    assert_eq!(g.meshlets, cpu.meshlets, "kmedoids-parallel meshlets");
     println!(
-        "capacity-aware: {} meshlets, {} medoid updates on the GPU; CPU {:.1} ms, GPU {:.1} ms; identical",
+        "kmedoids-parallel: {} meshlets from {} regions; CPU {:.1} ms, GPU {:.1} ms; identical",
         g.meshlets.len(),
-        run.updates,
+        run.regions,
         cpu_s * 1e3,
         run.seconds * 1e3,
     );

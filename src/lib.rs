@@ -32,11 +32,10 @@
 //! |---|---|---|
 //! | speed, the usual choice | [`Kind::Meshopt`](strategy::Kind::Meshopt) (`meshopt`, meshoptimizer 1.3) | the reference point |
 //! | fewest meshlets at interactive build times | [`Kind::Partition`](strategy::Kind::Partition) (`partition`): meshoptimizer's meshlets re-partitioned and packed | a few times meshoptimizer's time |
-//! | smallest spheres at meshoptimizer's count | [`Kind::Kmedoids`](strategy::Kind::Kmedoids) (`kmedoids`, capacity-aware k-medoids) | about meshoptimizer's time |
-//! | k-medoids on the GPU, whole | [`Kind::KmedoidsParallel`](strategy::Kind::KmedoidsParallel) (`kmedoids-parallel`): regions at once (found by kernels too), each grown by one GPU invocation; from an engine's own buffers by `gpu::build::build_on_device` | within about a percent of `kmedoids`' count on surfaces and fewer on meshes of many small pieces, with somewhat larger spheres; identical on the CPU and the GPU |
-//! | k-medoids spheres on many cores | [`Kind::KmedoidsTiled`](strategy::Kind::KmedoidsTiled) (`kmedoids-tiled`): `kmedoids` on regions at once | about a percent more meshlets than `kmedoids`; faster than it from a few hundred thousand triangles with several cores |
+//! | smallest spheres at meshoptimizer's count | [`Kind::Kmedoids`](strategy::Kind::Kmedoids) (`kmedoids`, the sequential capacity-aware k-medoids, CPU) | about meshoptimizer's time |
+//! | k-medoids on many cores or on the GPU | [`Kind::KmedoidsParallel`](strategy::Kind::KmedoidsParallel) (`kmedoids-parallel`): regions at once, every step a kernel, identical on the CPU (rayon) and the GPU; from an engine's own buffers by `gpu::build::build_on_device` | about `kmedoids`' count, somewhat larger spheres (`results/kmedoids.md`) |
 //! | fewest meshlets, offline | `meshopt+refine` or `meshopt+refine-max` ([`strategy::Kind::refined`]) | tens of times meshoptimizer's time |
-//! | clustering on the GPU | `kmedoids-flat` (every step a kernel, `gpu::build::build`; on an engine's own device through `gpu::Gpu::from_device`; meshlets and their culling bounds left in device buffers by `gpu::build::build_resident`, from an engine's own vertex and index buffers by `gpu::build::build_on_device`) | more meshlets |
+//! | the plain data-parallel k-medoids, the GPU baseline | `kmedoids-flat` (every step a kernel, `gpu::build::build`; on an engine's own device through `gpu::Gpu::from_device`; meshlets and their culling bounds left in device buffers by `gpu::build::build_resident`, from an engine's own vertex and index buffers by `gpu::build::build_on_device`) | more meshlets |
 //! | the JCGT paper's strategies, for comparison | `greedy`, `bsphere`, `kmedoids-paper`, `nvidia` | |
 //!
 //! # After building

@@ -214,11 +214,26 @@ fn help_explains_commands() {
 #[test]
 fn help_lists_every_strategy_and_generated_mesh_with_its_summary() {
     let out = ok(&["--help"]);
-    let opts = meshletlab::strategy::Options::default();
     for k in meshletlab::strategy::Kind::ALL {
-        let line = format!("{:<17} {}", k.name(), k.strategy(&opts).summary());
+        let line = format!("{:<17} {}", k.name(), k.summary());
         assert!(out.contains(&line), "--help lacks `{line}`:\n{out}");
     }
+    // Exactly the four k-medoids methods, one name each.
+    let kmedoids: Vec<&str> = out
+        .lines()
+        .filter_map(|l| l.strip_prefix("  ")?.split_whitespace().next())
+        .filter(|n| n.starts_with("kmedoids"))
+        .collect();
+    assert_eq!(
+        kmedoids,
+        [
+            "kmedoids",
+            "kmedoids-parallel",
+            "kmedoids-flat",
+            "kmedoids-paper"
+        ],
+        "{out}"
+    );
     for name in meshletlab::mesh::generate::NAMES {
         assert!(out.contains(name), "--help lacks gen:{name}:\n{out}");
     }
@@ -384,9 +399,7 @@ fn parity_and_render_print_json() {
         [
             "adjacency",
             "k-medoids",
-            "k-medoids (capacity-aware, the default)",
             "kmedoids-parallel",
-            "capacity-aware assignment",
             "bounds",
             "parallel grower",
             "LOD selection"
@@ -412,29 +425,30 @@ fn parity_and_render_print_json() {
         names(&v),
         [
             "adjacency",
-            "flat",
-            "capacity",
-            "regions",
-            "assignment",
+            "kmedoids-flat",
+            "kmedoids-parallel",
             "bounds",
             "grower",
             "lod"
         ]
     );
-    let skipped: serde_json::Value =
-        serde_json::from_str(&ok(&["parity", "-q", m, "--json", "--skip", "flat,grower"])).unwrap();
+    let skip = [
+        "parity",
+        "-q",
+        m,
+        "--json",
+        "--skip",
+        "kmedoids-flat,grower",
+    ];
+    let skipped: serde_json::Value = serde_json::from_str(&ok(&skip)).unwrap();
     assert_eq!(
         names(&skipped),
-        [
-            "adjacency",
-            "capacity",
-            "regions",
-            "assignment",
-            "bounds",
-            "lod"
-        ]
+        ["adjacency", "kmedoids-parallel", "bounds", "lod"]
     );
-    assert_eq!(skipped["skipped"], serde_json::json!(["flat", "grower"]));
+    assert_eq!(
+        skipped["skipped"],
+        serde_json::json!(["kmedoids-flat", "grower"])
+    );
     assert_eq!(skipped["identical"], true);
     let png = dir.join("f.png");
     let v: serde_json::Value = serde_json::from_str(&ok(&[
@@ -683,24 +697,20 @@ fn kmedoids_regions_and_moves_knobs_reach_their_methods() {
         rows
     };
     let meshlets = |regions: &str| {
-        let rows = rows("kmedoids,kmedoids-tiled", "--kmedoids-regions", regions);
+        let rows = rows("kmedoids,kmedoids-parallel", "--kmedoids-regions", regions);
         let n = |i: usize| rows[i]["metrics"]["meshlets"].as_u64().unwrap();
         (n(0), n(1))
     };
     let (seq, whole) = meshlets("65536");
     let (seq_again, cut) = meshlets("1024");
-    // One region is the sequential method's clusters (its boundary moves keep the count); the
-    // knob does not touch `kmedoids`.
-    assert_eq!((whole, seq_again), (seq, seq));
+    // The knob does not touch `kmedoids`.
+    assert_eq!(seq_again, seq);
     // Many regions: part-filled clusters at their borders, a few more meshlets.
     assert!(cut > whole, "{cut} vs {whole}");
-    // `--kmedoids-moves` reaches it and `kmedoids-parallel`: other clusters, the same counts.
+    // `--kmedoids-moves` reaches `kmedoids-parallel` (other clusters, the same count), not
+    // `kmedoids`.
     let metrics = |moves: &str| {
-        let rows = rows(
-            "kmedoids-tiled,kmedoids-parallel",
-            "--kmedoids-moves",
-            moves,
-        );
+        let rows = rows("kmedoids,kmedoids-parallel", "--kmedoids-moves", moves);
         let m = |i: usize| {
             let m = &rows[i]["metrics"];
             (
@@ -710,10 +720,10 @@ fn kmedoids_regions_and_moves_knobs_reach_their_methods() {
         };
         [m(0), m(1)]
     };
-    for ((n0, r0), (n2, r2)) in metrics("0").into_iter().zip(metrics("2")) {
-        assert_eq!(n0, n2);
-        assert_ne!(r0, r2);
-    }
+    let ([s0, p0], [s2, p2]) = (metrics("0"), metrics("2"));
+    assert_eq!(s0, s2);
+    assert_eq!(p0.0, p2.0);
+    assert_ne!(p0.1, p2.1);
     let out = cli(&[
         "stats",
         "-q",

@@ -41,28 +41,6 @@ fn strip(quads: u32) -> Mesh {
     m
 }
 
-/// The capacity-aware assignment from `medoids` on the CPU and on the GPU (claim stamps from
-/// `top`), compared label by label; returns the CPU's labels and the GPU's counters.
-fn assign_both(
-    gpu: &Gpu,
-    mesh: &Mesh,
-    limits: Limits,
-    medoids: &[u32],
-    top: u32,
-    what: &str,
-) -> (Vec<u32>, meshletlab::gpu::capacity::AssignStats) {
-    let dual =
-        meshletlab::adjacency::dual_graph(mesh, &meshletlab::adjacency::vertex_triangles(mesh));
-    let mut cpu = vec![meshletlab::common::NONE; mesh.triangle_count()];
-    meshletlab::strategy::kmedoids::capacity::assign_capacity(
-        mesh, &dual, limits, medoids, &mut cpu,
-    );
-    let (g, stats) =
-        meshletlab::gpu::capacity::assign_with_stamps(gpu, mesh, limits, medoids, top).unwrap();
-    same_labels(&g, &cpu, what);
-    (cpu, stats)
-}
-
 fn assert_parity(gpu: &Gpu, name: &str, mesh: &Mesh, limits: Limits) {
     for c in parity::run(gpu, mesh, limits).unwrap().checks {
         assert!(
@@ -78,7 +56,7 @@ fn assert_parity(gpu: &Gpu, name: &str, mesh: &Mesh, limits: Limits) {
 /// grower are left out: they took about two thirds of this test's time there, and both are
 /// compared on the seven smaller shared meshes, the stress meshes and the generated ones.
 const LARGE: usize = 300_000;
-const SLOW_ON_LARGE: &[Family] = &[Family::Flat, Family::Grower];
+const SLOW_ON_LARGE: &[Family] = &[Family::KmedoidsFlat, Family::Grower];
 
 #[test]
 fn every_shared_mesh_gives_identical_results() {
@@ -202,7 +180,7 @@ fn deep_assignment_spans_several_submissions() {
     let gpu = gpu();
     assert_parity(&gpu, "strip", &m, limits);
     // The GPU run itself needed the extra submissions, and still agrees with the CPU.
-    let g = meshletlab::gpu::kmedoids::cluster_flat(&gpu, &m, limits, &Default::default()).unwrap();
+    let g = meshletlab::gpu::kmedoids_flat::cluster(&gpu, &m, limits, &Default::default()).unwrap();
     assert!(
         g.deep_submissions > 0,
         "no assignment went deeper than one submission records"
@@ -294,8 +272,8 @@ fn same_output_on_every_run() {
     let gpu = gpu();
     let m = generate::knot_tube(160, 12, 5);
     let cfg = Default::default();
-    let a = meshletlab::gpu::kmedoids::cluster_flat(&gpu, &m, Limits::DEFAULT, &cfg).unwrap();
-    let b = meshletlab::gpu::kmedoids::cluster_flat(&gpu, &m, Limits::DEFAULT, &cfg).unwrap();
+    let a = meshletlab::gpu::kmedoids_flat::cluster(&gpu, &m, Limits::DEFAULT, &cfg).unwrap();
+    let b = meshletlab::gpu::kmedoids_flat::cluster(&gpu, &m, Limits::DEFAULT, &cfg).unwrap();
     assert_eq!(a.clustering.labels, b.clustering.labels);
     assert_eq!(a.clustering.meshlets, b.clustering.meshlets);
     assert!(a.timing.kernel > 0.0);
@@ -325,95 +303,6 @@ fn copy_kernel_copies_and_measures_a_bandwidth() {
     assert!(b.seconds > 0.0 && b.per_second().is_finite());
 }
 
-#[test]
-fn capacity_assignment_matches_on_wide_fans_and_conflict_chains() {
-    use meshletlab::gpu::capacity::{self, TOP};
-    let gpu = gpu();
-    // A book of 300 pages on one edge: each page's dual row holds the other 299, more candidates
-    // than a walk sorts in registers (its minimum-search path). Medoids on neighbouring pages
-    // all want the same lowest pages, so each walk settles one more cluster: a conflict chain
-    // as deep as the medoid list, beyond the walks one submission records.
-    let pages = 300u32;
-    let mut book = Mesh {
-        positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],
-        indices: Vec::new(),
-    };
-    for k in 0..pages {
-        let a = k as f32 * std::f32::consts::TAU / pages as f32;
-        book.positions.push([0.5, a.cos(), a.sin()]);
-        book.indices.extend([0, 1, 2 + k]);
-    }
-    let mut deep = false;
-    for (medoids, limits) in [
-        (vec![0u32, 150], Limits::DEFAULT),
-        (vec![3, 7, 11, 200], Limits::new(64, 84).unwrap()),
-        ((10..22).collect::<Vec<u32>>(), Limits::new(8, 6).unwrap()),
-    ] {
-        let what = format!("book, medoids {medoids:?}, limits {limits:?}");
-        let (cpu, stats) = assign_both(&gpu, &book, limits, &medoids, TOP, &what);
-        assert!(cpu.iter().filter(|&&l| l != u32::MAX).count() > medoids.len());
-        deep |= stats.extra > 0;
-    }
-    assert!(
-        deep,
-        "no level needed more walks than one submission records"
-    );
-    // A degenerate medoid (one vertex twice): the CPU's vertex list holds its three corners, so
-    // one vertex less fits than the distinct count says; a strip of triangles after it.
-    let degenerate = Mesh {
-        positions: (0..8).map(|i| [i as f32, (i % 2) as f32, 0.0]).collect(),
-        indices: vec![0, 0, 1, 0, 1, 2, 1, 2, 3, 2, 3, 4, 3, 4, 5, 4, 5, 6],
-    };
-    for max_v in [3, 4, 5, 6] {
-        let limits = Limits::new(max_v, 8).unwrap();
-        let what = format!("degenerate medoid, {max_v} vertices");
-        let (cpu, _) = assign_both(&gpu, &degenerate, limits, &[0], TOP, &what);
-        // The vertex limit decides how far the cluster reaches: 1, 2, 3, 4 triangles.
-        let taken = cpu.iter().filter(|&&l| l == 0).count();
-        assert_eq!(taken, max_v as usize - 2, "CPU at {max_v} vertices");
-    }
-    // Medoids must be distinct: two clusters seeding one triangle is refused, not raced.
-    assert!(capacity::assign(&gpu, &book, Limits::DEFAULT, &[3, 3]).is_err());
-    // A strip (its dual graph a path) with medoids 200 triangles apart: about 100 levels of three
-    // walks, more than the claim stamps last, so the stamps start again mid-assignment.
-    let limits = Limits::new(256, 256).unwrap();
-    let medoids: Vec<u32> = (0..10).map(|i| 100 + 200 * i).collect();
-    let (_, stats) = assign_both(&gpu, &strip(1000), limits, &medoids, TOP, "strip");
-    assert!(stats.walks > 130, "only {} walks: no restamp", stats.walks);
-    // Generated meshes with random medoids and small limits: many contested levels.
-    let mut rng = 0x9e37_79b9_7f4a_7c15u64;
-    for g in generate::stress_set(3) {
-        let t = g.mesh.triangle_count() as u64;
-        for limits in [Limits::new(8, 6).unwrap(), Limits::DEFAULT] {
-            let mut medoids: Vec<u32> = (0..t / 20)
-                .map(|_| {
-                    rng ^= rng << 13;
-                    rng ^= rng >> 7;
-                    rng ^= rng << 17;
-                    (rng % t) as u32
-                })
-                .collect();
-            medoids.sort_unstable();
-            medoids.dedup();
-            let what = format!("{}, limits {limits:?}", g.name);
-            let (_, stats) = assign_both(&gpu, &g.mesh, limits, &medoids, TOP, &what);
-            assert!(stats.contested > 0, "{}: no level was contested", g.name);
-            // Stamps that run out every other walk: restarts in the middle of contested levels.
-            assign_both(
-                &gpu,
-                &g.mesh,
-                limits,
-                &medoids,
-                1,
-                &format!("{what}, restamped"),
-            );
-        }
-    }
-}
-
-/// The library on a device the caller made (as an engine would pass its own): refused with the
-/// short limit named when requested with wgpu's defaults, and the same meshlets as the CPU when
-/// requested with `Gpu::required_limits`.
 #[test]
 fn an_engines_own_device_runs_the_kernels_and_a_short_one_is_refused() {
     // The engine's adapter; here the one `Gpu::new` would open.
@@ -476,7 +365,11 @@ fn the_morton_order_and_the_seeds_match_the_cpu() {
             indices: &indices,
         };
         let order = pick(&gpu, input(), &[0], true).unwrap().order.unwrap();
-        same_labels(&order, &flat::morton_order(m), name);
+        same_labels(
+            &order,
+            &meshletlab::strategy::kmedoids::morton::morton_order(m),
+            name,
+        );
         for per in [1, 96, 1000] {
             let (seeds, _) = initial_medoids(&gpu, input(), per).unwrap();
             assert_eq!(
@@ -569,7 +462,10 @@ fn a_mesh_already_on_the_device_builds_the_cpu_meshlets() {
         // Small regions too, so the coarse regions' BFS and sort run (one region takes neither).
         let small = meshletlab::strategy::Options {
             kmedoids: meshletlab::strategy::kmedoids::Config {
-                region_triangles: 300,
+                parallel: meshletlab::strategy::kmedoids::parallel::Config {
+                    region_triangles: 300,
+                    ..Default::default()
+                },
                 ..Default::default()
             },
             ..Default::default()
@@ -583,7 +479,7 @@ fn a_mesh_already_on_the_device_builds_the_cpu_meshlets() {
                 built.meshlets.read(&gpu).unwrap(),
                 cpu,
                 "kmedoids-parallel at {limits}, {} per region",
-                o.kmedoids.region_triangles
+                o.kmedoids.parallel.region_triangles
             );
         }
         let cpu = meshletlab::strategy::by_name("kmedoids-flat", &opts)

@@ -85,7 +85,7 @@ fn every_strategy_validates(pick: impl Fn(&str) -> bool, expected: usize) {
     // Paper-mode k-medoids gets a short budget here: it then finishes the fast way, and the test is
     // about validity, not the paper's timing.
     let mut opts = Options::default();
-    opts.kmedoids.paper_budget = std::time::Duration::from_millis(500);
+    opts.kmedoids.paper.budget = std::time::Duration::from_millis(500);
     let strategies: Vec<_> = strategy::NAMES
         .iter()
         .map(|n| strategy::by_name(n, &opts).unwrap())

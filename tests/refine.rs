@@ -64,7 +64,7 @@ fn full_effort(name: &str, triangles: usize) -> bool {
 /// not depend on the thread count.
 fn refine_every_output(small: bool) {
     let mut opts = Options::default();
-    opts.kmedoids.paper_budget = std::time::Duration::from_millis(500);
+    opts.kmedoids.paper.budget = std::time::Duration::from_millis(500);
     let (one, many) = (common::pool(1), common::pool(common::MANY_THREADS));
     let mut checked = 0;
     for f in common::mesh_files() {
@@ -278,7 +278,7 @@ fn bench_build_writes_the_per_preset_comparison() {
     let src = common::meshes_dir().join("fandisk.ply.zst");
     std::os::unix::fs::symlink(&src, meshes.join("fandisk.ply.zst")).unwrap();
     let mut options = Options::default();
-    options.kmedoids.paper_budget = std::time::Duration::from_millis(500);
+    options.kmedoids.paper.budget = std::time::Duration::from_millis(500);
     let cfg = build::Config {
         meshes,
         runs: 1,

@@ -14,7 +14,7 @@ use meshletlab::strategy::{self, Options};
 fn every_strategy_validates_on_every_stress_mesh_and_preset() {
     let mut opts = Options::default();
     // Paper-mode k-medoids finishes the fast way after a short budget: this test is about validity.
-    opts.kmedoids.paper_budget = std::time::Duration::from_millis(200);
+    opts.kmedoids.paper.budget = std::time::Duration::from_millis(200);
     let names: Vec<String> = strategy::NAMES
         .iter()
         .map(|n| n.to_string())
@@ -62,25 +62,20 @@ fn stress_meshes_give_the_same_meshlets_on_any_thread_count() {
     }
 }
 
-/// The two region methods, `kmedoids-parallel` and `kmedoids-tiled`, with small regions, so every
-/// stress mesh is cut into several (the default region holds a whole stress mesh): valid at every
+/// The region method, `kmedoids-parallel`, with small regions, so every stress mesh is cut into
+/// several (the default region holds a whole stress mesh): valid at every
 /// preset, edge-connected clusters wherever the mesh is, and the same on 1 and many threads.
 #[test]
 fn region_methods_with_many_regions_on_every_stress_mesh() {
     use meshletlab::adjacency::{cluster_pieces, dual_graph, vertex_triangles};
     use meshletlab::strategy::kmedoids::{cluster, coarse::regions, Config, Mode};
-    let cfg = Config {
-        region_triangles: 1024,
-        ..Config::default()
-    };
+    let mut cfg = Config::default();
+    cfg.parallel.region_triangles = 1024;
     let (one, many) = (common::pool(1), common::pool(common::MANY_THREADS));
     for g in stress_set(3) {
         let dual = dual_graph(&g.mesh, &vertex_triangles(&g.mesh));
         assert!(regions(&g.mesh, &dual, 1024).1 >= 3, "{}", g.name);
-        for (limits, mode) in Limits::PRESETS
-            .into_iter()
-            .flat_map(|l| [(l, Mode::Regions), (l, Mode::Tiled)])
-        {
+        for (limits, mode) in Limits::PRESETS.into_iter().map(|l| (l, Mode::Parallel)) {
             let what = format!("{} {} {limits}", g.name, mode.name());
             let a = one.install(|| cluster(&g.mesh, limits, mode, &cfg));
             let b = many.install(|| cluster(&g.mesh, limits, mode, &cfg));

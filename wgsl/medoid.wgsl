@@ -1,6 +1,6 @@
-// The paper's medoid of one cluster and its members' hop distances, shared by regions.wgsl and
-// moves.wgsl (src/gpu/mod.rs puts it after each, `wgsl!`). The CPU reference is
-// `capacity::medoid_of` (`LocalGraph::least_sum_128` for the reach sets). The including
+// The paper's medoid of one cluster and its members' hop distances, shared by kmedoids_parallel.wgsl and
+// kmedoids_parallel_moves.wgsl (src/gpu/mod.rs puts it after each, `wgsl!`). The CPU reference is
+// `local_graph::medoid_of` (`LocalGraph::least_sum_128` for the reach sets). The including
 // module declares `labels`, `dist`, `arena` (the member list at `M`, a BFS queue at `Q`), `cstate`
 // (9 scratch words per member), `dual_off` with `nb`, and `set_medoid(g, m)`.
 

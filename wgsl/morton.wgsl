@@ -1,8 +1,8 @@
-// The Morton order on the device, step for step strategy::kmedoids::flat::{morton_order,
+// The Morton order on the device, step for step strategy::kmedoids::morton::{morton_order,
 // initial_medoids} (the seeds of kmedoids-flat and of the coarse regions):
 //   bbox                        the positions' box, as order-preserving integers (atomic min/max)
 //   keys                        each triangle's Morton key (MortonFrame::key) and its id
-//   centre_cells                each triangle's packed fine centroid cell (flat::packed_centres)
+//   centre_cells                each triangle's packed fine centroid cell (morton::packed_centres)
 //   (hist, scan, scatter) x 8   a stable radix sort by key, 4 bits a pass: ids in Morton order,
 //                               ties by id (they start in id order and every pass is stable)
 //   pick                        the triangle at each requested rank (the middle of each of k runs)

@@ -3,8 +3,8 @@
 
 // Elements per part of a split array (gpu::PART, 2^25 u32 = 128 MiB: lavapipe's binding limit).
 const PART: u32 = 33554432u;
-// Largest coordinate of a fine centroid cell, 15 bits per axis (kmedoids::flat::FINE_MAX): the
-// cells kmedoids-parallel's growth key measures distances in (morton.wgsl writes, regions.wgsl reads).
+// Largest coordinate of a fine centroid cell, 15 bits per axis (kmedoids::morton::FINE_MAX): the
+// cells kmedoids-parallel's growth key measures distances in (morton.wgsl writes, kmedoids_parallel.wgsl reads).
 const FINE_MAX: u32 = 32767u;
 // "No index": an unassigned label, an unreached distance, a padded neighbour slot.
 const NONE: u32 = 0xffffffffu;
@@ -17,7 +17,7 @@ fn group(wid: vec3<u32>) -> u32 { return wid.x + wid.y * 65535u; }
 fn stride(nwg: vec3<u32>) -> u32 { return nwg.x * nwg.y * 64u; }
 
 // A packed centroid cell (x | y << 16, z): its coordinates, and the squared distance between two
-// (kmedoids::flat::{unpack, distance2}; regions.wgsl's growth key, moves.wgsl's distance rule).
+// (kmedoids::morton::{unpack, distance2}; kmedoids_parallel.wgsl's growth key, kmedoids_parallel_moves.wgsl's distance rule).
 fn unpack_cell(xy: u32, z: u32) -> vec3<u32> { return vec3<u32>(xy & 0xffffu, xy >> 16u, z); }
 fn cell_distance2(a: vec3<u32>, b: vec3<u32>) -> u32 {
     let e = max(a, b) - min(a, b);

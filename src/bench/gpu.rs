@@ -14,11 +14,11 @@ use super::table::{
 };
 use super::{floor, is_lavapipe, machine_note, today, Common, Tag};
 use crate::adjacency::{dual_graph, vertex_triangles};
-use crate::gpu::kmedoids::MeshSource;
+use crate::gpu::source::MeshSource;
 use crate::gpu::{self, timed as secs, Gpu, Profile};
 use crate::mesh::{self, subdivide::subdivide, Mesh};
 use crate::meshlet::{Limits, Meshlets};
-use crate::strategy::kmedoids::{cluster, Config as KConfig, Mode};
+use crate::strategy::kmedoids::{cluster, Clustering, Config as KConfig, Mode};
 use crate::strategy::{self, grow};
 use anyhow::{bail, Context, Result};
 use indicatif::ProgressBar;
@@ -72,15 +72,11 @@ struct Row {
     km_gpu: Option<KGpu>,
     /// Per-kernel profile of a second GPU k-medoids run (bunny and the dragon).
     profile: Option<Profile>,
-    /// The same for the capacity-aware method.
-    cap_profile: Option<Profile>,
     meshlets: usize,
     iterations: u32,
     grow: Vec<GrowRow>,
-    /// The capacity-aware default `kmedoids`.
-    cap: Cap,
-    /// `kmedoids-tiled` (no GPU path): meshlets, one thread and rayon seconds.
-    par: (usize, Option<f64>, f64),
+    /// The sequential default `kmedoids` (CPU only), the reference for `kmedoids-parallel`.
+    seq: Seq,
     /// `kmedoids-parallel`.
     reg: Reg,
     /// The library's GPU builds, per GPU strategy that ran here.
@@ -202,17 +198,11 @@ fn resident_builds(
     })
 }
 
-/// Capacity-aware k-medoids on one mesh: CPU one thread and rayon, GPU (adjacency, medoid
-/// updates and capacity-aware assignment on the GPU, the seeding growth and merges on the host).
-struct Cap {
+/// The sequential `kmedoids` on one mesh (CPU only): meshlets, one thread and rayon seconds.
+struct Seq {
     meshlets: usize,
-    /// Capacity-aware assignments run (re-assignment rounds tried; none where too few clusters
-    /// are light for a round to pay).
-    assignments: u32,
     cpu1: Option<f64>,
     rayon: f64,
-    /// (wall seconds, kernel seconds, medoid updates run on the GPU).
-    gpu: Option<(f64, f64, u64)>,
 }
 
 /// A timed GPU k-medoids run.
@@ -316,47 +306,66 @@ pub fn run(cfg: &Config) -> Result<()> {
         }
     };
     say(format!("GPU: {}", g.describe()));
-    // Warm-up: lavapipe compiles each pipeline with LLVM on first use (seconds per kernel family,
-    // then cached on disk); a small mesh through every timed path keeps that out of the tables.
-    let warm = mesh::generate::terrain(24, 1);
-    gpu::adjacency::adjacency(&g, &warm)?;
-    gpu::kmedoids::cluster_flat(&g, &warm, cfg.limits, &KConfig::default())?;
-    gpu::grow::grow(&g, &warm, cfg.limits, grow::DEFAULT_SPACING)?;
-    gpu::regions::cluster_regions(
-        &g,
-        MeshSource::Host(&warm),
-        cfg.limits,
-        &KConfig::default(),
-        true,
-    )?;
-    let warm_positions = g.upload("positions", &warm.positions);
-    gpu::build::build_resident(
-        &g,
-        "kmedoids-flat",
-        &warm,
-        &warm_positions,
-        cfg.limits,
-        &strategy::Options::default(),
-    )?;
+    warm_up(&g, cfg.limits)?;
     // The bandwidths the physical limits are taken at (64 MiB copied on the GPU, 256 MiB on the
     // host; medians).
     say("measuring memory bandwidth".into());
     let copy = gpu::copy::bandwidth(&g, 64 << 20, 7)?;
     let host_copy = floor::memcpy(256 << 20, 5);
+    let inputs = load_inputs(cfg, &meshes)?;
+    let one = crate::common::one_thread_pool();
+    let mut rows = Vec::new();
+    for (name, m) in &inputs {
+        let profiled = PROFILED.contains(&name.as_str()) || (cfg.common.smoke && rows.is_empty());
+        let row = measure_mesh(cfg, &g, &one, name, m, profiled)?;
+        say(format!(
+            "{name}: adjacency cpu {:.3}s gpu kernel {:.3}s; kmedoids-flat rayon {:.2}s gpu {:?}",
+            row.adj_cpu,
+            row.adj_gpu.kernel,
+            row.km_rayon,
+            row.km_gpu.as_ref().map(|k| k.seconds)
+        ));
+        rows.push(row);
+    }
+    let bunny = &inputs[0].1;
+    let curve = objective_curve(cfg, &g, bunny)?;
+    let sweep = spacing_sweep(cfg, &g, bunny)?;
+    let floors = Floors { copy, host_copy };
+    write(cfg, &g, &rows, &curve, &sweep, &floors)
+}
+
+/// Lavapipe compiles each pipeline with LLVM on first use (seconds per kernel family, then cached
+/// on disk): a small mesh through every timed path keeps that out of the tables.
+fn warm_up(g: &Gpu, limits: Limits) -> Result<()> {
+    let warm = mesh::generate::terrain(24, 1);
+    let kc = KConfig::default();
+    gpu::adjacency::adjacency(g, &warm)?;
+    gpu::kmedoids_flat::cluster(g, &warm, limits, &kc.flat)?;
+    gpu::grow::grow(g, &warm, limits, grow::DEFAULT_SPACING)?;
+    let source = MeshSource::Host(&warm);
+    gpu::kmedoids_parallel::cluster(g, source, limits, &kc.parallel, true)?;
+    let warm_positions = g.upload("positions", &warm.positions);
+    let opts = strategy::Options::default();
+    gpu::build::build_resident(g, "kmedoids-flat", &warm, &warm_positions, limits, &opts)?;
+    Ok(())
+}
+
+/// The meshes of the run: the bunny, igea and the dragon (every shared mesh in a smoke run), then
+/// unless `quick` the dragon subdivided once and twice.
+fn load_inputs(cfg: &Config, meshes: &std::path::Path) -> Result<Vec<(String, Mesh)>> {
     let load = |stem: &str| -> Result<Mesh> {
         let p = meshes.join(format!("{stem}.ply.zst"));
         mesh::load(&p).with_context(|| format!("bench gpu needs {}", p.display()))
     };
     let mut inputs: Vec<(String, Mesh)> = Vec::new();
     if cfg.common.smoke {
-        for p in super::build::mesh_files(&meshes)? {
+        for p in super::build::mesh_files(meshes)? {
             inputs.push((super::build::mesh_name(&p), mesh::load(&p)?));
         }
     } else {
-        let dragon = load("stanford_dragon_vrip")?;
-        inputs.push(("stanford_bunny".into(), load("stanford_bunny")?));
-        inputs.push(("igea".into(), load("igea")?));
-        inputs.push(("stanford_dragon_vrip".into(), dragon));
+        for stem in ["stanford_bunny", "igea", "stanford_dragon_vrip"] {
+            inputs.push((stem.into(), load(stem)?));
+        }
     }
     if !cfg.quick() {
         let dragon = &inputs[2].1;
@@ -365,252 +374,232 @@ pub fn run(cfg: &Config) -> Result<()> {
         inputs.push(("dragon x4 (subdivided)".into(), x4));
         inputs.push(("dragon x16 (subdivided)".into(), x16));
     }
-    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build()?;
-    let kc = KConfig::default();
-    let mut rows = Vec::new();
-    for (name, m) in &inputs {
-        let t = m.triangle_count();
-        let pb = if cfg.common.quiet {
-            ProgressBar::hidden()
-        } else {
-            ProgressBar::new_spinner()
-        };
-        pb.enable_steady_tick(std::time::Duration::from_millis(200));
-        pb.set_message(format!("{name} ({t} triangles): adjacency"));
-        // Adjacency: CPU (serial by design), GPU; identical or no row.
-        let ((vt, dual), adj_cpu) = secs(|| {
-            let vt = vertex_triangles(m);
-            let d = dual_graph(m, &vt);
-            (vt, d)
-        });
-        let (host, adj_gpu) = gpu::adjacency::adjacency(&g, m)?;
-        if host.vertex_triangles != vt || host.dual != dual {
-            bail!("{name}: GPU adjacency differs from the CPU's");
-        }
-        let dual_items = dual.items.len();
-        drop((vt, host));
-        pb.set_message(format!("{name} ({t} triangles): growers"));
-        let (grow, grow_meshlets) =
-            growers(&g, m, &dual, cfg.limits, t <= cfg.one_thread_max, &one)
-                .with_context(|| format!("{name}: parallel grower"))?;
-        drop(dual);
-        pb.set_message(format!("{name} ({t} triangles): k-medoids, rayon"));
-        let (cr, km_rayon) = secs(|| cluster(m, cfg.limits, Mode::Flat, &kc));
-        let km_cpu1 = if t <= cfg.one_thread_max {
-            pb.set_message(format!("{name} ({t} triangles): k-medoids, one thread"));
-            Some(secs(|| one.install(|| cluster(m, cfg.limits, Mode::Flat, &kc))).1)
-        } else {
-            None
-        };
-        let km_gpu = if t <= cfg.kmedoids_gpu_max.min(cfg.flat_gpu_max) {
-            pb.set_message(format!("{name} ({t} triangles): k-medoids, GPU"));
-            let before = g.profile();
-            let r = gpu::kmedoids::cluster_flat(&g, m, cfg.limits, &kc)?;
-            if r.clustering.labels != cr.labels || r.clustering.meshlets != cr.meshlets {
-                bail!("{name}: GPU k-medoids differs from the CPU's");
-            }
-            Some(KGpu {
-                seconds: r.seconds,
-                timing: r.timing,
-                large: r.large_updates,
-                host: g.profile().since(&before),
-                updates: r.updates,
-                skipped: r.clustering.skipped_updates as u64,
-            })
-        } else {
-            None
-        };
-        // The profile: the same run again with every dispatch timed on its own (its pass
-        // boundaries cost a little, so its times are not the table's).
-        let profiled = PROFILED.contains(&name.as_str()) || (cfg.common.smoke && rows.is_empty());
-        // A GPU run again with every kernel timed, checked against the CPU's labels.
-        let profile_run = |what: &str,
-                           run: &dyn Fn()
-            -> Result<gpu::kmedoids::GpuClustering, gpu::GpuError>,
-                           labels: &[u32]|
-         -> Result<Profile> {
-            pb.set_message(format!("{name} ({t} triangles): {what}, GPU profile"));
-            g.time_each_kernel(true);
-            let before = g.profile();
-            let r = run();
-            g.time_each_kernel(false);
-            if r?.clustering.labels != labels {
-                bail!("{name}: profiled GPU {what} differs from the CPU's");
-            }
-            Ok(g.profile().since(&before))
-        };
-        let profile = if km_gpu.is_some() && profiled {
-            Some(profile_run(
-                "k-medoids",
-                &|| gpu::kmedoids::cluster_flat(&g, m, cfg.limits, &kc),
-                &cr.labels,
-            )?)
-        } else {
-            None
-        };
-        pb.set_message(format!("{name} ({t} triangles): kmedoids (capacity-aware)"));
-        let capc = kc;
-        let (cap_r, cap_rayon) = secs(|| cluster(m, cfg.limits, Mode::Capacity, &capc));
-        let cap_cpu1 = (t <= cfg.one_thread_max)
-            .then(|| secs(|| one.install(|| cluster(m, cfg.limits, Mode::Capacity, &capc))).1);
-        let cap_gpu = if t <= cfg.kmedoids_gpu_max {
-            let r = gpu::kmedoids::cluster_capacity(&g, m, cfg.limits, &capc)?;
-            if r.clustering.labels != cap_r.labels || r.clustering.meshlets != cap_r.meshlets {
-                bail!("{name}: GPU capacity-aware k-medoids differs from the CPU's");
-            }
-            Some((r.seconds, r.timing.kernel, r.updates))
-        } else {
-            None
-        };
-        let cap_profile = if cap_gpu.is_some() && profiled {
-            Some(profile_run(
-                "capacity-aware k-medoids",
-                &|| gpu::kmedoids::cluster_capacity(&g, m, cfg.limits, &capc),
-                &cap_r.labels,
-            )?)
-        } else {
-            None
-        };
-        let cap = Cap {
-            meshlets: cap_r.meshlets.len(),
-            assignments: cap_r.iterations,
-            cpu1: cap_cpu1,
-            rayon: cap_rayon,
-            gpu: cap_gpu,
-        };
-        pb.set_message(format!("{name} ({t} triangles): kmedoids-tiled"));
-        let (par_r, par_rayon) = secs(|| cluster(m, cfg.limits, Mode::Tiled, &capc));
-        let par_cpu1 = (t <= cfg.one_thread_max)
-            .then(|| secs(|| one.install(|| cluster(m, cfg.limits, Mode::Tiled, &capc))))
-            .map(|(one_r, s)| {
-                if one_r.meshlets != par_r.meshlets {
-                    bail!("{name}: kmedoids-tiled differs on one thread");
-                }
-                Ok(s)
-            })
-            .transpose()?;
-        let par = (par_r.meshlets.len(), par_cpu1, par_rayon);
-        pb.set_message(format!("{name} ({t} triangles): kmedoids-parallel"));
-        let (reg_r, reg_rayon) = secs(|| cluster(m, cfg.limits, Mode::Regions, &capc));
-        let reg_cpu1 = (t <= cfg.one_thread_max)
-            .then(|| secs(|| one.install(|| cluster(m, cfg.limits, Mode::Regions, &capc))))
-            .map(|(one_r, s)| {
-                if one_r.meshlets != reg_r.meshlets {
-                    bail!("{name}: kmedoids-parallel differs on one thread");
-                }
-                Ok(s)
-            })
-            .transpose()?;
-        // Its state takes nine words per triangle in one binding: meshes past the adapter's
-        // binding size are left out (`-`), as the error says.
-        let before = g.profile();
-        let reg_run = (t <= cfg.kmedoids_gpu_max).then(|| {
-            gpu::regions::cluster_regions(&g, MeshSource::Host(m), cfg.limits, &capc, true)
-        });
-        let trips = g.profile().since(&before).round_trips;
-        let (reg_gpu, reg_regions) = match reg_run {
-            Some(Ok((r, _))) => {
-                if r.clustering.labels != reg_r.labels || r.clustering.meshlets != reg_r.meshlets {
-                    bail!("{name}: GPU kmedoids-parallel differs from the CPU's");
-                }
-                (Some((r.seconds, r.timing, trips)), r.regions)
-            }
-            Some(Err(gpu::GpuError::TooLarge { what, len, max })) => {
-                say(format!(
-                    "{name}: kmedoids-parallel GPU left out: {what} {len} > {max}"
-                ));
-                (None, 0)
-            }
-            Some(Err(e)) => return Err(e.into()),
-            None => (None, 0),
-        };
-        let reg_profile = if reg_gpu.is_some() && profiled {
-            pb.set_message(format!(
-                "{name} ({t} triangles): kmedoids-parallel, GPU profile"
-            ));
-            g.time_each_kernel(true);
-            let before = g.profile();
-            let r = gpu::regions::cluster_regions(&g, MeshSource::Host(m), cfg.limits, &capc, true);
-            g.time_each_kernel(false);
-            if r?.0.clustering.labels != reg_r.labels {
-                bail!("{name}: profiled GPU kmedoids-parallel differs from the CPU's");
-            }
-            Some(g.profile().since(&before))
-        } else {
-            None
-        };
-        let reg = Reg {
-            meshlets: reg_r.meshlets.len(),
-            regions: reg_regions,
-            cpu1: reg_cpu1,
-            rayon: reg_rayon,
-            gpu: reg_gpu,
-            profile: reg_profile,
-        };
-        let mut resident = Vec::new();
-        pb.set_message(format!("{name} ({t} triangles): builds left on the device"));
-        if reg.gpu.is_some() {
-            resident.push(resident_builds(
-                &g,
-                "kmedoids-parallel",
-                m,
-                cfg.limits,
-                &reg_r.meshlets,
-            )?);
-        }
-        if t <= cfg.kmedoids_gpu_max.min(cfg.flat_gpu_max) {
-            resident.push(resident_builds(
-                &g,
-                "kmedoids-flat",
-                m,
-                cfg.limits,
-                &cr.meshlets,
-            )?);
-        }
-        if t <= cfg.one_thread_max {
-            resident.push(resident_builds(
-                &g,
-                "bsphere-parallel",
-                m,
-                cfg.limits,
-                &grow_meshlets,
-            )?);
-        }
-        pb.finish_and_clear();
-        say(format!("{name}: adjacency cpu {adj_cpu:.3}s gpu kernel {:.3}s; k-medoids rayon {km_rayon:.2}s gpu {:?}", adj_gpu.kernel, km_gpu.as_ref().map(|k| k.seconds)));
-        rows.push(Row {
-            mesh: name.clone(),
-            triangles: t,
-            vertices: m.vertex_count(),
-            dual_items,
-            adj_cpu,
-            adj_gpu,
-            km_cpu1,
-            km_rayon,
-            km_gpu,
-            profile,
-            cap_profile,
-            meshlets: cr.meshlets.len(),
-            iterations: cr.iterations,
-            grow,
-            cap,
-            par,
-            reg,
-            resident,
-        });
-    }
+    Ok(inputs)
+}
 
-    // Run time against error on the bunny: the objective after the initial clustering for
-    // iteration caps 0..16, CPU (rayon) and GPU.
-    let bunny = &inputs[0].1;
+/// Runs `f` on the pool and, where `t` is within `--one-thread-max`, on `one` too, checking that
+/// both give the same meshlets; the pool's result, its seconds and the one-thread seconds.
+fn on_both_pools(
+    cfg: &Config,
+    one: &rayon::ThreadPool,
+    what: &str,
+    t: usize,
+    f: &(dyn Fn() -> Clustering + Sync),
+) -> Result<(Clustering, f64, Option<f64>)> {
+    let (r, rayon_s) = secs(f);
+    let one_s = if t <= cfg.one_thread_max {
+        let (one_r, s) = secs(|| one.install(f));
+        if one_r.meshlets != r.meshlets {
+            bail!("{what} differs on one thread");
+        }
+        Some(s)
+    } else {
+        None
+    };
+    Ok((r, rayon_s, one_s))
+}
+
+/// A GPU run again with every kernel timed on its own (its pass boundaries cost a little, so its
+/// times are not the table's), checked against the CPU's `labels`.
+fn profile_run(
+    g: &Gpu,
+    what: &str,
+    run: &dyn Fn() -> Result<Clustering, gpu::GpuError>,
+    labels: &[u32],
+) -> Result<Profile> {
+    g.time_each_kernel(true);
+    let before = g.profile();
+    let r = run();
+    g.time_each_kernel(false);
+    if r?.labels != labels {
+        bail!("profiled GPU {what} differs from the CPU's");
+    }
+    Ok(g.profile().since(&before))
+}
+
+/// Every measurement of one mesh: adjacency, growers, the k-medoids methods, the library builds.
+fn measure_mesh(
+    cfg: &Config,
+    g: &Gpu,
+    one: &rayon::ThreadPool,
+    name: &str,
+    m: &Mesh,
+    profiled: bool,
+) -> Result<Row> {
+    let t = m.triangle_count();
+    let pb = if cfg.common.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new_spinner()
+    };
+    pb.enable_steady_tick(std::time::Duration::from_millis(200));
+    let step = |what: &str| pb.set_message(format!("{name} ({t} triangles): {what}"));
+    step("adjacency");
+    // Adjacency: CPU (serial by design), GPU; identical or no row.
+    let ((vt, dual), adj_cpu) = secs(|| {
+        let vt = vertex_triangles(m);
+        let d = dual_graph(m, &vt);
+        (vt, d)
+    });
+    let (host, adj_gpu) = gpu::adjacency::adjacency(g, m)?;
+    if host.vertex_triangles != vt || host.dual != dual {
+        bail!("{name}: GPU adjacency differs from the CPU's");
+    }
+    let dual_items = dual.items.len();
+    drop((vt, host));
+    step("growers");
+    let (grow, grow_meshlets) = growers(g, m, &dual, cfg.limits, t <= cfg.one_thread_max, one)
+        .with_context(|| format!("{name}: parallel grower"))?;
+    drop(dual);
+    step("kmedoids-flat");
+    let kc = KConfig::default();
+    let run_cpu = |mode| move || cluster(m, cfg.limits, mode, &kc);
+    let (cr, km_rayon, km_cpu1) = on_both_pools(
+        cfg,
+        one,
+        &format!("{name}: kmedoids-flat"),
+        t,
+        &run_cpu(Mode::Flat),
+    )?;
+    let km_gpu = if t <= cfg.kmedoids_gpu_max.min(cfg.flat_gpu_max) {
+        let before = g.profile();
+        let r = gpu::kmedoids_flat::cluster(g, m, cfg.limits, &kc.flat)?;
+        if r.clustering.labels != cr.labels || r.clustering.meshlets != cr.meshlets {
+            bail!("{name}: GPU kmedoids-flat differs from the CPU's");
+        }
+        Some(KGpu {
+            seconds: r.seconds,
+            timing: r.timing,
+            large: r.large_updates,
+            host: g.profile().since(&before),
+            updates: r.updates,
+            skipped: r.clustering.skipped_updates as u64,
+        })
+    } else {
+        None
+    };
+    let profile = if km_gpu.is_some() && profiled {
+        step("kmedoids-flat, GPU profile");
+        let run = || gpu::kmedoids_flat::cluster(g, m, cfg.limits, &kc.flat).map(|r| r.clustering);
+        Some(profile_run(g, "kmedoids-flat", &run, &cr.labels).context(name.to_string())?)
+    } else {
+        None
+    };
+    step("kmedoids (CPU only)");
+    let what = format!("{name}: kmedoids");
+    let (seq_r, seq_rayon, seq_cpu1) =
+        on_both_pools(cfg, one, &what, t, &run_cpu(Mode::Sequential))?;
+    let seq = Seq {
+        meshlets: seq_r.meshlets.len(),
+        cpu1: seq_cpu1,
+        rayon: seq_rayon,
+    };
+    step("kmedoids-parallel");
+    let (reg, reg_meshlets) = measure_parallel(cfg, g, one, name, m, profiled)?;
+    step("builds left on the device");
+    let mut resident = Vec::new();
+    if reg.gpu.is_some() {
+        let b = resident_builds(g, "kmedoids-parallel", m, cfg.limits, &reg_meshlets)?;
+        resident.push(b);
+    }
+    if t <= cfg.kmedoids_gpu_max.min(cfg.flat_gpu_max) {
+        resident.push(resident_builds(
+            g,
+            "kmedoids-flat",
+            m,
+            cfg.limits,
+            &cr.meshlets,
+        )?);
+    }
+    if t <= cfg.one_thread_max {
+        let b = resident_builds(g, "bsphere-parallel", m, cfg.limits, &grow_meshlets)?;
+        resident.push(b);
+    }
+    pb.finish_and_clear();
+    Ok(Row {
+        mesh: name.to_string(),
+        triangles: t,
+        vertices: m.vertex_count(),
+        dual_items,
+        adj_cpu,
+        adj_gpu,
+        km_cpu1,
+        km_rayon,
+        km_gpu,
+        profile,
+        meshlets: cr.meshlets.len(),
+        iterations: cr.iterations,
+        grow,
+        seq,
+        reg,
+        resident,
+    })
+}
+
+/// `kmedoids-parallel` on one mesh: CPU one thread and rayon, the GPU (checked identical) and on
+/// the profiled meshes its per-kernel profile; returns the CPU's meshlets too.
+fn measure_parallel(
+    cfg: &Config,
+    g: &Gpu,
+    one: &rayon::ThreadPool,
+    name: &str,
+    m: &Mesh,
+    profiled: bool,
+) -> Result<(Reg, Meshlets)> {
+    let t = m.triangle_count();
+    let kc = KConfig::default();
+    let what = format!("{name}: kmedoids-parallel");
+    let run_cpu = || cluster(m, cfg.limits, Mode::Parallel, &kc);
+    let (reg_r, reg_rayon, reg_cpu1) = on_both_pools(cfg, one, &what, t, &run_cpu)?;
+    let run_gpu =
+        || gpu::kmedoids_parallel::cluster(g, MeshSource::Host(m), cfg.limits, &kc.parallel, true);
+    // Its state takes nine words per triangle in one binding: meshes past the adapter's binding
+    // size are left out (`-`), as the error says.
+    let before = g.profile();
+    let reg_run = (t <= cfg.kmedoids_gpu_max).then(run_gpu);
+    let trips = g.profile().since(&before).round_trips;
+    let (reg_gpu, reg_regions) = match reg_run {
+        Some(Ok((r, _))) => {
+            if r.clustering.labels != reg_r.labels || r.clustering.meshlets != reg_r.meshlets {
+                bail!("{what}: the GPU's differs from the CPU's");
+            }
+            (Some((r.seconds, r.timing, trips)), r.regions)
+        }
+        Some(Err(gpu::GpuError::TooLarge { what: w, len, max })) => {
+            if !cfg.common.quiet {
+                eprintln!("{what}: GPU left out: {w} {len} > {max}");
+            }
+            (None, 0)
+        }
+        Some(Err(e)) => return Err(e.into()),
+        None => (None, 0),
+    };
+    let profile = if reg_gpu.is_some() && profiled {
+        let run = || run_gpu().map(|r| r.0.clustering);
+        Some(profile_run(g, "kmedoids-parallel", &run, &reg_r.labels).context(what)?)
+    } else {
+        None
+    };
+    let reg = Reg {
+        meshlets: reg_r.meshlets.len(),
+        regions: reg_regions,
+        cpu1: reg_cpu1,
+        rayon: reg_rayon,
+        gpu: reg_gpu,
+        profile,
+    };
+    Ok((reg, reg_r.meshlets))
+}
+
+/// Run time against error on the bunny: the objective after the initial clustering for
+/// iteration caps 0..16, CPU (rayon) and GPU.
+fn objective_curve(cfg: &Config, g: &Gpu, bunny: &Mesh) -> Result<Vec<Curve>> {
     let mut curve = Vec::new();
     for it in [0u32, 1, 2, 4, 8, 16] {
-        let c = KConfig {
-            max_iterations: it,
-            ..kc
-        };
+        let mut c = KConfig::default();
+        c.flat.max_iterations = it;
         let (cpu, cs) = secs(|| cluster(bunny, cfg.limits, Mode::Flat, &c));
-        let gr = gpu::kmedoids::cluster_flat(&g, bunny, cfg.limits, &c)?;
+        let gr = gpu::kmedoids_flat::cluster(g, bunny, cfg.limits, &c.flat)?;
         if gr.clustering.initial_mean_distance != cpu.initial_mean_distance {
             bail!("bunny, {it} iterations: GPU objective differs from the CPU's");
         }
@@ -623,12 +612,16 @@ pub fn run(cfg: &Config) -> Result<()> {
             gr.clustering.initial_seconds,
         ));
     }
-    // Seed spacing against meshlet count and rounds (the parallel grower's time against error).
+    Ok(curve)
+}
+
+/// Seed spacing against meshlet count and rounds (the parallel grower's time against error).
+fn spacing_sweep(cfg: &Config, g: &Gpu, bunny: &Mesh) -> Result<Sweep> {
     let bunny_dual = dual_graph(bunny, &vertex_triangles(bunny));
     let mut sweep = Sweep::new();
     for spacing in [1.0, 2.0, 4.0, 8.0] {
         let (cpu, cs) = secs(|| grow::grow(bunny, &bunny_dual, cfg.limits, spacing));
-        let gr = gpu::grow::grow(&g, bunny, cfg.limits, spacing)?;
+        let gr = gpu::grow::grow(g, bunny, cfg.limits, spacing)?;
         if gr.owner != cpu.owner || gr.order != cpu.order {
             bail!("bunny, spacing {spacing}: GPU grower differs from the CPU's");
         }
@@ -638,8 +631,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             gr.seconds,
         ));
     }
-    let floors = Floors { copy, host_copy };
-    write(cfg, &g, &rows, &curve, &sweep, &floors)
+    Ok(sweep)
 }
 
 /// The measured bandwidths the physical limits are taken at.
@@ -843,11 +835,7 @@ fn write_floors(
         gb(f.host_copy.0),
         rayon::current_num_threads(),
         gb(f.host_copy.1))?;
-    let Some(r) = rows
-        .iter()
-        .rev()
-        .find(|r| r.profile.is_some() || r.cap_profile.is_some())
-    else {
+    let Some(r) = rows.iter().rev().find(|r| r.profile.is_some()) else {
         writeln!(md, "No run was profiled.\n")?;
         return Ok(Vec::new());
     };
@@ -864,14 +852,11 @@ fn write_floors(
     if let Some(p) = &r.profile {
         out.extend(floor::rows("kmedoids-flat", p, &sizes(flat_share), &f.copy));
     }
-    if let Some(p) = &r.cap_profile {
-        out.extend(floor::rows("kmedoids", p, &sizes(1.0), &f.copy));
-    }
     writeln!(md, "{} ({} triangles, {} vertices, {} dual items; T, V, E below), the profiled runs above. *Must move*: every array the kernel touches, once, in 32-bit words: the least its job allows. The floor is that traffic at the copy kernel's bandwidth; measured / floor says how far a kernel is from being bandwidth-bound (far above 1: bound by dispatches, dependent loads or divergence instead). The flat method's `update` skips unchanged clusters: its share is the {:.2} of cluster updates that ran. The last column is the same traffic at an H100's 3.35 TB/s: **a projection, not a measurement**{}. Kernels left out (prefix sums over arrays of several lengths, per-cluster bookkeeping) are a few percent of the time. Data: {csv}.\n",
         r.mesh, r.triangles, r.vertices, r.dual_items, flat_share,
         if cpu { " (no GPU was lent to this run)" } else { "" })?;
     writeln!(md, "{}", floor::table().markdown(&out))?;
-    for run in ["kmedoids-flat", "kmedoids"] {
+    for run in ["kmedoids-flat"] {
         let (m, fl, b): (f64, f64, f64) = out
             .iter()
             .filter(|x| x.run == run)
@@ -939,24 +924,24 @@ fn adjacency_table<'a>() -> Table<'a, Row> {
         })
         .csv_only("meshlets", |r| r.meshlets.to_string())
         .csv_only("iterations", |r| r.iterations.to_string())
-        .csv_only("capacity_meshlets", |r| r.cap.meshlets.to_string())
-        .csv_only("capacity_assignments", |r| r.cap.assignments.to_string())
-        .csv_only("capacity_cpu1_s", move |r| s4(r.cap.cpu1))
-        .csv_only("capacity_rayon_s", |r| format!("{:.4}", r.cap.rayon))
-        .csv_only("capacity_gpu_s", move |r| s4(r.cap.gpu.map(|g| g.0)))
-        .csv_only("capacity_gpu_kernel_s", move |r| s4(r.cap.gpu.map(|g| g.1)))
-        .csv_only("parallel_meshlets", |r| r.par.0.to_string())
-        .csv_only("parallel_cpu1_s", move |r| s4(r.par.1))
-        .csv_only("parallel_rayon_s", |r| format!("{:.4}", r.par.2))
-        .csv_only("regions_meshlets", |r| r.reg.meshlets.to_string())
-        .csv_only("regions_cpu1_s", move |r| s4(r.reg.cpu1))
-        .csv_only("regions_rayon_s", |r| format!("{:.4}", r.reg.rayon))
-        .csv_only("regions_gpu_s", move |r| s4(r.reg.gpu.map(|x| x.0)))
-        .csv_only("regions_gpu_kernel_s", move |r| {
+        .csv_only("sequential_meshlets", |r| r.seq.meshlets.to_string())
+        .csv_only("sequential_cpu1_s", move |r| s4(r.seq.cpu1))
+        .csv_only("sequential_rayon_s", |r| format!("{:.4}", r.seq.rayon))
+        .csv_only("parallel_meshlets", |r| r.reg.meshlets.to_string())
+        .csv_only("parallel_cpu1_s", move |r| s4(r.reg.cpu1))
+        .csv_only("parallel_rayon_s", |r| format!("{:.4}", r.reg.rayon))
+        .csv_only("parallel_gpu_s", move |r| s4(r.reg.gpu.map(|x| x.0)))
+        .csv_only("parallel_gpu_kernel_s", move |r| {
             s4(r.reg.gpu.map(|x| x.1.kernel))
         })
 }
 
+/// A cell: `x` formatted, or "skipped" where the run was left out.
+fn opt(x: Option<f64>, f: &dyn Fn(f64) -> String) -> String {
+    x.map(f).unwrap_or_else(|| "skipped".into())
+}
+
+/// Writes gpu.md, gpu.csv, gpu_floor.csv and the three plots.
 fn write(
     cfg: &Config,
     g: &Gpu,
@@ -966,8 +951,6 @@ fn write(
     floors: &Floors,
 ) -> Result<()> {
     std::fs::create_dir_all(&cfg.common.out)?;
-    let opt =
-        |x: Option<f64>, f: &dyn Fn(f64) -> String| x.map(f).unwrap_or_else(|| "skipped".into());
     let mut md = String::new();
     writeln!(md, "# GPU kernels against their CPU references\n")?;
     writeln!(
@@ -980,6 +963,41 @@ fn write(
     if is_lavapipe(&g.info.name) {
         writeln!(md, "Lavapipe is itself a CPU renderer on this machine's cores: a GPU/CPU ratio here compares LLVM-compiled compute shaders with native Rust on the same {} cores, not a GPU with a CPU.\n", std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1))?;
     }
+    write_flat(&mut md, cfg, rows)?;
+    write_sequential_and_parallel(&mut md, rows)?;
+    write_region_profile(&mut md, rows)?;
+    write_resident(&mut md, rows)?;
+    write_profile(&mut md, rows)?;
+    let floor_rows = write_floors(
+        &mut md,
+        rows,
+        floors,
+        g.is_cpu(),
+        &cfg.tag.name("gpu_floor.csv"),
+    )?;
+    write_paper(&mut md, rows)?;
+    write_curve_and_growers(&mut md, rows, curve, sweep)?;
+    writeln!(
+        md,
+        "\n![scaling]({})\n\n![time vs error]({})\n\n![grower]({})",
+        cfg.tag.name("gpu_scaling.svg"),
+        cfg.tag.name("gpu_time_vs_error.svg"),
+        cfg.tag.name("gpu_grower_sweep.svg")
+    )?;
+    crate::atomic::write(cfg.common.out.join(cfg.tag.name("gpu.md")), md)?;
+    crate::atomic::write(
+        cfg.common.out.join(cfg.tag.name("gpu.csv")),
+        adjacency_table().csv(rows),
+    )?;
+    crate::atomic::write(
+        cfg.common.out.join(cfg.tag.name("gpu_floor.csv")),
+        floor::table().csv(&floor_rows),
+    )?;
+    plot(cfg, g, rows, curve, sweep)
+}
+
+/// The adjacency and `kmedoids-flat` tables.
+fn write_flat(md: &mut String, cfg: &Config, rows: &[Row]) -> Result<()> {
     writeln!(md, "## Adjacency (vertex -> triangle CSR + dual graph)\n")?;
     writeln!(md, "{}", adjacency_table().markdown(rows))?;
     writeln!(md, "\nTarget (set for lavapipe): >= 20 M triangles/s.\n")?;
@@ -1013,62 +1031,40 @@ fn write(
         )?;
     }
     writeln!(md, "\n\"skipped\": above {} triangles the one-thread CPU runs (and the GPU grower) are left out (`--one-thread-max`), above {} the flat method's GPU run (`--flat-gpu-max`: on lavapipe its 14 M-triangle run alone outlasts the rest of the benchmark), above {} every GPU k-medoids (`--kmedoids-gpu-max`), to keep the benchmark short; rayon runs on every mesh. Targets: GPU / rayon <= 1.0. A cluster update is skipped when its members are those it had at the last update (the CPU's cache, the same test on the GPU).\n", cfg.one_thread_max, cfg.flat_gpu_max.min(cfg.kmedoids_gpu_max), cfg.kmedoids_gpu_max)?;
+    Ok(())
+}
+
+/// The sequential `kmedoids` (CPU only) and `kmedoids-parallel` tables.
+fn write_sequential_and_parallel(md: &mut String, rows: &[Row]) -> Result<()> {
     writeln!(
         md,
-        "## k-medoids, capacity-aware (the default `kmedoids`, {}/{}), whole run including adjacency\n",
-        cfg.limits.max_vertices, cfg.limits.max_triangles
+        "## `kmedoids` (the sequential default, CPU only), whole run including adjacency\n"
     )?;
-    writeln!(md, "The GPU runs the adjacency, every medoid update (one workgroup per cluster, the `update` kernel above) and the capacity-aware assignment (`capacity.wgsl`: one thread per cluster walks each BFS level, walks repeated to the fixed point that equals the CPU's sequential order) in each re-assignment round, which runs only where at least a third of the clusters are at most half full (column `assignments`); the seeding growth, merges and packing are sequential and run on the host between them. Outputs identical to the CPU's (checked here and in `make test`).\n")?;
-    writeln!(md, "| mesh | triangles | meshlets | CPU 1 thread s | CPU rayon s | GPU s | GPU kernel s | GPU / rayon | medoid updates on the GPU | assignments |")?;
-    writeln!(md, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+    writeln!(md, "The reference for `kmedoids-parallel` below: clusters grown one at a time to the limits (src/strategy/kmedoids/sequential.rs). It has no GPU path: its growth and merges are sequential. One thread checked identical to the pool.\n")?;
+    writeln!(
+        md,
+        "| mesh | triangles | meshlets | CPU 1 thread s | CPU rayon s | 1 thread / rayon |"
+    )?;
+    writeln!(md, "|---|---:|---:|---:|---:|---:|")?;
     for r in rows {
-        let c = &r.cap;
+        let c = &r.seq;
         writeln!(
             md,
-            "| {} | {} | {} | {} | {:.2} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {:.2} | {} |",
             r.mesh,
             r.triangles,
             c.meshlets,
             opt(c.cpu1, &|x| format!("{x:.2}")),
             c.rayon,
-            opt(c.gpu.map(|g| g.0), &|x| format!("{x:.2}")),
-            opt(c.gpu.map(|g| g.1), &|x| format!("{x:.2}")),
-            opt(c.gpu.map(|g| g.0 / c.rayon), &|x| format!("{x:.2}x")),
-            c.gpu.map(|g| g.2.to_string()).unwrap_or_else(|| "-".into()),
-            c.assignments,
-        )?;
-    }
-    writeln!(md)?;
-    writeln!(
-        md,
-        "## `kmedoids-tiled` (CPU only), whole run including adjacency\n"
-    )?;
-    writeln!(md, "The capacity-aware method on regions of the mesh at once, border clusters merged in matching rounds (src/strategy/kmedoids/tiled.rs). It has no GPU path: the per-region growth is host code; `kmedoids-parallel` (next table) is its kernel-shaped counterpart. One thread checked identical to the pool.\n")?;
-    writeln!(
-        md,
-        "| mesh | triangles | meshlets | CPU 1 thread s | CPU rayon s | 1 thread / rayon | rayon / kmedoids rayon |"
-    )?;
-    writeln!(md, "|---|---:|---:|---:|---:|---:|---:|")?;
-    for r in rows {
-        let (n, one, pool) = r.par;
-        writeln!(
-            md,
-            "| {} | {} | {} | {} | {:.2} | {} | {:.2}x |",
-            r.mesh,
-            r.triangles,
-            n,
-            opt(one, &|x| format!("{x:.2}")),
-            pool,
-            opt(one.map(|x| x / pool), &|x| format!("{x:.2}")),
-            pool / r.cap.rayon,
+            opt(c.cpu1.map(|x| x / c.rayon), &|x| format!("{x:.2}")),
         )?;
     }
     writeln!(md)?;
     writeln!(md, "## `kmedoids-parallel`: every step on the GPU\n")?;
-    writeln!(md, "The region-parallel k-medoids whose per-region growth is a kernel (src/strategy/kmedoids/regions.rs, wgsl/regions.wgsl): one invocation per region grows, packs, absorbs pockets and merges its clusters, then dissolves its smallest across their neighbours; one per cluster finds the medoid; two rounds of boundary moves (wgsl/moves.wgsl: per-triangle maps and per-cluster atomics, then the medoid of each changed cluster again) are its medoid iteration, in the same submission; the assembly is `wgsl/assemble.wgsl`. The regions are kernels too (wgsl/coarse.wgsl with the Morton sort and the BFS): nothing a kernel reads comes back to the host, only control words (the box, the seeds, frontier sizes, one count per region, one medoid per cluster, the moves' counters); `round trips` counts the host's waits on the device in the whole run, the final readbacks included. The GPU run is checked identical to the CPU's (labels and meshlets); one thread checked identical to the pool. GPU wall time includes the adjacency kernels, uploads and readbacks of labels, distances and meshlets; pipeline compilation is warmed up before. `-`: left out, its state (nine words per triangle in one binding) past the adapter's binding size.\n")?;
+    writeln!(md, "The region-parallel k-medoids whose per-region growth is a kernel (src/strategy/kmedoids/parallel/, wgsl/kmedoids_parallel.wgsl): one invocation per region grows, packs, absorbs pockets and merges its clusters, then dissolves its smallest across their neighbours; one per cluster finds the medoid; two rounds of boundary moves (wgsl/kmedoids_parallel_moves.wgsl: per-triangle maps and per-cluster atomics, then the medoid of each changed cluster again) are its medoid iteration, in the same submission; the assembly is `wgsl/assemble.wgsl`. The regions are kernels too (wgsl/coarse.wgsl with the Morton sort and the BFS): nothing a kernel reads comes back to the host, only control words (the box, the seeds, frontier sizes, one count per region, one medoid per cluster, the moves' counters); `round trips` counts the host's waits on the device in the whole run, the final readbacks included. The GPU run is checked identical to the CPU's (labels and meshlets); one thread checked identical to the pool. GPU wall time includes the adjacency kernels, uploads and readbacks of labels, distances and meshlets; pipeline compilation is warmed up before. `-`: left out, its state (nine words per triangle in one binding) past the adapter's binding size.\n")?;
     writeln!(
         md,
-        "| mesh | triangles | regions | meshlets | CPU 1 thread s | CPU rayon s | GPU s | upload s | kernel s | readback s | round trips | GPU / rayon | meshlets / kmedoids-tiled |"
+        "| mesh | triangles | regions | meshlets | CPU 1 thread s | CPU rayon s | GPU s | upload s | kernel s | readback s | round trips | GPU / rayon | meshlets / kmedoids |"
     )?;
     writeln!(
         md,
@@ -1093,11 +1089,15 @@ fn write(
             opt(g.gpu.map(|x| x.1.readback), &|x| format!("{x:.3}")),
             opt(g.gpu.map(|x| x.2 as f64), &|x| format!("{x}")),
             opt(g.gpu.map(|x| x.0 / g.rayon), &|x| format!("{x:.2}x")),
-            g.meshlets as f64 / r.par.0 as f64,
+            g.meshlets as f64 / r.seq.meshlets as f64,
         )?;
     }
     writeln!(md)?;
-    write_region_profile(&mut md, rows)?;
+    Ok(())
+}
+
+/// The library's GPU builds.
+fn write_resident(md: &mut String, rows: &[Row]) -> Result<()> {
     writeln!(
         md,
         "## Meshlets left on the device (the library's GPU builds)\n"
@@ -1121,14 +1121,11 @@ fn write(
         }
     }
     writeln!(md)?;
-    write_profile(&mut md, rows)?;
-    let floor_rows = write_floors(
-        &mut md,
-        rows,
-        floors,
-        g.is_cpu(),
-        &cfg.tag.name("gpu_floor.csv"),
-    )?;
+    Ok(())
+}
+
+/// Our times beside the paper's Table 4.
+fn write_paper(md: &mut String, rows: &[Row]) -> Result<()> {
     writeln!(
         md,
         "### Beside the paper's Table 4 (their k-medoids, their machine)\n"
@@ -1154,6 +1151,16 @@ fn write(
             ))
         )?;
     }
+    Ok(())
+}
+
+/// Run time against error on the bunny, and the parallel grower against the serial ones.
+fn write_curve_and_growers(
+    md: &mut String,
+    rows: &[Row],
+    curve: &[Curve],
+    sweep: &Sweep,
+) -> Result<()> {
     writeln!(md, "\n## Run time against error (bunny)\n")?;
     writeln!(md, "The k-medoids objective (mean hop distance to the medoid after the initial clustering) for each iteration cap; GPU and CPU reach the same objective at every cap (checked).\n")?;
     writeln!(md, "| max iterations | objective (hops) | CPU rayon s (initial clustering) | CPU rayon s (whole run) | GPU s (initial clustering) | GPU s (whole run) |")?;
@@ -1202,22 +1209,11 @@ fn write(
             r.meshlets, r.tris_per, r.seconds
         )?;
     }
-    writeln!(
-        md,
-        "\n![scaling]({})\n\n![time vs error]({})\n\n![grower]({})",
-        cfg.tag.name("gpu_scaling.svg"),
-        cfg.tag.name("gpu_time_vs_error.svg"),
-        cfg.tag.name("gpu_grower_sweep.svg")
-    )?;
-    crate::atomic::write(cfg.common.out.join(cfg.tag.name("gpu.md")), md)?;
-    crate::atomic::write(
-        cfg.common.out.join(cfg.tag.name("gpu.csv")),
-        adjacency_table().csv(rows),
-    )?;
-    crate::atomic::write(
-        cfg.common.out.join(cfg.tag.name("gpu_floor.csv")),
-        floor::table().csv(&floor_rows),
-    )?;
+    Ok(())
+}
+
+/// gpu_scaling.svg, gpu_time_vs_error.svg and gpu_grower_sweep.svg.
+fn plot(cfg: &Config, g: &Gpu, rows: &[Row], curve: &[Curve], sweep: &Sweep) -> Result<()> {
     let pts = |f: &dyn Fn(&Row) -> Option<f64>| {
         rows.iter()
             .filter_map(|r| f(r).map(|y| (r.triangles as f64, y)))
@@ -1243,23 +1239,11 @@ fn write(
             },
             Series {
                 label: "kmedoids CPU 1 thread".into(),
-                points: pts(&|r| r.cap.cpu1),
+                points: pts(&|r| r.seq.cpu1),
             },
             Series {
                 label: "kmedoids CPU rayon".into(),
-                points: pts(&|r| Some(r.cap.rayon)),
-            },
-            Series {
-                label: format!("kmedoids GPU + host ({})", g.info.name),
-                points: pts(&|r| r.cap.gpu.map(|g| g.0)),
-            },
-            Series {
-                label: "kmedoids-tiled CPU 1 thread".into(),
-                points: pts(&|r| r.par.1),
-            },
-            Series {
-                label: "kmedoids-tiled CPU rayon".into(),
-                points: pts(&|r| Some(r.par.2)),
+                points: pts(&|r| Some(r.seq.rayon)),
             },
             Series {
                 label: "kmedoids-parallel CPU 1 thread".into(),

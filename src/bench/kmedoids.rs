@@ -1,5 +1,5 @@
-//! `meshletlab bench kmedoids`: the k-medoids variants at scale (the capacity-aware default, the
-//! flat method and the paper's, on every shared mesh, the in-tree stress meshes and the dragon
+//! `meshletlab bench kmedoids`: the k-medoids methods at scale (the sequential default, the
+//! region-parallel method, the flat method and the paper's, on every shared mesh, the in-tree stress meshes and the dragon
 //! subdivided x4 and x16, with meshoptimizer's `build_meshlets` timed in the same run), the
 //! k-medoids targets per mesh, and a sweep of each method's knobs (run time against error, with the
 //! Pareto front) -> results/kmedoids.md, results/kmedoids.csv, results/kmedoids_sweep.csv and two
@@ -48,7 +48,7 @@ pub struct Config {
     /// Above this many triangles the one-thread runs are left out (they double a long run).
     #[arg(long, default_value_t = 1_000_000)]
     pub one_thread_max: usize,
-    /// Timed runs of `kmedoids`, `kmedoids-tiled`, `kmedoids-parallel` and meshoptimizer,
+    /// Timed runs of `kmedoids`, `kmedoids-parallel` and meshoptimizer,
     /// interleaved, per mesh under 2 M triangles (the median is reported); one run above. Small
     /// meshes get more rounds, until the rounds add up to half a second (at most 31).
     #[arg(long, default_value_t = 3)]
@@ -117,54 +117,44 @@ fn connected_where_mesh_is(m: &mesh::Mesh, labels: &[u32], k: usize) -> f64 {
     ok as f64 / k.max(1) as f64
 }
 
-/// What one row ran: the default, its count-first growth, and the two older methods.
+/// What one row ran: each of the four methods, and the default with its count-first growth.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Method {
-    /// `kmedoids` (capacity-aware, growth by centroid distance).
-    Default,
+    /// `kmedoids` (sequential, growth by centroid distance).
+    Sequential,
     /// `kmedoids --kmedoids-grow hops`.
     Hops,
+    /// `kmedoids-parallel`.
+    Parallel,
     /// `kmedoids-flat`.
     Flat,
     /// `kmedoids-paper`.
     Paper,
-    /// `kmedoids-tiled`.
-    Tiled,
-    /// `kmedoids-parallel`.
-    Regions,
 }
 
 impl Method {
     fn name(self) -> &'static str {
         match self {
-            Method::Default => "kmedoids",
             Method::Hops => "kmedoids, grow hops",
-            Method::Flat => "kmedoids-flat",
-            Method::Paper => "kmedoids-paper",
-            Method::Tiled => "kmedoids-tiled",
-            Method::Regions => "kmedoids-parallel",
+            _ => self.mode().name(),
         }
     }
 
     fn mode(self) -> Mode {
         match self {
-            Method::Default | Method::Hops => Mode::Capacity,
+            Method::Sequential | Method::Hops => Mode::Sequential,
+            Method::Parallel => Mode::Parallel,
             Method::Flat => Mode::Flat,
             Method::Paper => Mode::Paper,
-            Method::Tiled => Mode::Tiled,
-            Method::Regions => Mode::Regions,
         }
     }
 
     fn config(self) -> KConfig {
-        let grow = match self {
-            Method::Hops => Grow::Hops,
-            _ => Grow::Centre,
-        };
-        KConfig {
-            grow,
-            ..KConfig::default()
+        let mut c = KConfig::default();
+        if self == Method::Hops {
+            c.sequential.grow = Grow::Hops;
         }
+        c
     }
 }
 
@@ -308,7 +298,7 @@ struct Verdict {
 
 fn verdicts(runs: &[Run]) -> Vec<Verdict> {
     runs.iter()
-        .filter(|r| r.mode == Method::Default)
+        .filter(|r| r.mode == Method::Sequential)
         .map(|r| {
             let flat = runs
                 .iter()
@@ -382,7 +372,7 @@ struct Interleaved {
     out: Option<Clustering>,
 }
 
-/// One mesh's verdict on the region-parallel targets (`kmedoids-parallel` and `kmedoids-tiled`).
+/// One mesh's verdict on the region-parallel targets (`kmedoids-parallel`).
 struct ParallelVerdict {
     mesh: String,
     method: &'static str,
@@ -406,7 +396,7 @@ fn parallel_verdicts(runs: &[Run], method: Method) -> Vec<ParallelVerdict> {
         .filter_map(|r| {
             let seq = runs
                 .iter()
-                .find(|f| f.mesh == r.mesh && f.mode == Method::Default)?;
+                .find(|f| f.mesh == r.mesh && f.mode == Method::Sequential)?;
             let stress = mesh::generate::STRESS_NAMES.contains(&r.mesh.as_str());
             Some(ParallelVerdict {
                 mesh: r.mesh.clone(),
@@ -587,11 +577,7 @@ fn timed<T>(n: usize, mut f: impl FnMut() -> T) -> (f64, T) {
 }
 
 fn one_thread<T: Send>(f: impl FnOnce() -> T + Send) -> T {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .expect("one-thread pool")
-        .install(f)
+    crate::common::one_thread_pool().install(f)
 }
 
 /// Runs everything and writes the results.
@@ -599,9 +585,8 @@ pub fn run(cfg: &Config) -> Result<()> {
     let meshes = cfg.common.meshes_dir()?;
     let inputs = corpus(cfg, &meshes)?;
     let mut modes = vec![
-        Method::Default,
-        Method::Tiled,
-        Method::Regions,
+        Method::Sequential,
+        Method::Parallel,
         Method::Hops,
         Method::Flat,
     ];
@@ -617,137 +602,155 @@ pub fn run(cfg: &Config) -> Result<()> {
         ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")?
             .progress_chars("=> "),
     );
-    let meshopt = crate::strategy::Kind::Meshopt.strategy(&Default::default());
     let mut runs = Vec::new();
     for (name, m) in &inputs {
-        let t = m.triangle_count();
-        let scaled = name.contains(' ');
-        // Under 2 M triangles, interleaved rounds: `runs` of them, and on small meshes more, until
-        // they add up to MIN_ROUND_TIME (a run of a few milliseconds is at the mercy of one
-        // scheduler hiccup, and the medians, so the time targets, would follow the noise).
-        let (reps, min_time) = if t < 2_000_000 {
-            let min_time = cfg.common.or_smoke(MIN_ROUND_TIME.as_secs_f64(), 0.0);
-            (cfg.runs.max(1), min_time)
-        } else {
-            (1, 0.0)
-        };
-        // meshoptimizer and the capacity-aware methods interleaved, each on the pool and (up to
-        // `one_thread_max`) on one thread, so that machine noise hits them alike: the targets
-        // compare their times and their scaling.
-        pb.set_message(format!(
-            "{name} / meshopt, kmedoids, kmedoids-tiled, kmedoids-parallel"
-        ));
-        let mut mo_times = Vec::new();
-        let mut mo_out = None;
-        let mut interleaved: Vec<Interleaved> = [Method::Default, Method::Tiled, Method::Regions]
-            .into_iter()
-            .filter(|&x| x != Method::Regions || modes.contains(&x))
-            .map(|method| Interleaved {
-                method,
-                times: Vec::new(),
-                times_1t: Vec::new(),
-                out: None,
-            })
-            .collect();
-        let started = Instant::now();
-        let mut rounds = 0;
-        while rounds < reps || (rounds < MAX_ROUNDS && started.elapsed().as_secs_f64() < min_time) {
-            rounds += 1;
-            let (s, out) = timed(1, || meshopt.build(m, cfg.limits));
-            mo_times.push(s);
-            mo_out = Some(out);
-            for run in &mut interleaved {
-                let kc = run.method.config();
-                let mode = run.method.mode();
-                let (s, c) = timed(1, || cluster(m, cfg.limits, mode, &kc));
-                run.times.push(s);
-                if t <= cfg.one_thread_max {
-                    run.times_1t.push(one_thread_seconds(
-                        name, m, cfg.limits, run.method, &kc, &c,
-                    )?);
-                }
-                run.out = Some(c);
-            }
-        }
-        let mo = mo_out.expect("one run");
-        validate(m, &mo, cfg.limits).with_context(|| format!("{name}: meshopt invalid"))?;
-        let mo_bounds = bounds::compute_bounds(m, &mo);
-        let mo_metrics = Metrics::compute(m, &mo, cfg.limits, &mo_bounds, None);
-        let meshopt_seconds = super::median(&mo_times);
-        for &mode in &modes {
-            if mode == Method::Paper && scaled {
-                continue;
-            }
-            pb.set_message(format!("{name} / {}", mode.name()));
-            let kc = KConfig {
-                paper_budget: cfg.paper_budget(),
-                ..mode.config()
-            };
-            let done = interleaved
-                .iter_mut()
-                .find(|r| r.method == mode)
-                .and_then(|r| {
-                    let one = (!r.times_1t.is_empty()).then(|| super::median(&r.times_1t));
-                    r.out.take().map(|c| (super::median(&r.times), one, c))
-                });
-            let (seconds, seconds_1t, c) = match done {
-                Some(run) => run,
-                None => {
-                    let (s, c) = timed(1, || cluster(m, cfg.limits, mode.mode(), &kc));
-                    let one = (mode != Method::Paper && t <= cfg.one_thread_max)
-                        .then(|| one_thread_seconds(name, m, cfg.limits, mode, &kc, &c))
-                        .transpose()?;
-                    (s, one, c)
-                }
-            };
-            validate(m, &c.meshlets, cfg.limits)
-                .with_context(|| format!("{name}: {} produced invalid meshlets", mode.name()))?;
-            let b = bounds::compute_bounds(m, &c.meshlets);
-            let metrics = Metrics::compute(
-                m,
-                &c.meshlets,
-                cfg.limits,
-                &b,
-                Some(Duration::from_secs_f64(seconds)),
-            );
-            let connected_mesh = connected_where_mesh_is(m, &c.labels, c.medoids.len());
-            runs.push(Run {
-                mesh: name.clone(),
-                triangles: t,
-                mode,
-                seconds,
-                seconds_1t,
-                connected_mesh,
-                c,
-                metrics,
-                meshopt_seconds,
-                meshopt: mo_metrics.clone(),
-            });
-            pb.inc(1);
-        }
+        runs.extend(measure_mesh(cfg, &modes, &pb, name, m)?);
     }
     pb.finish_and_clear();
     let order = |m: Method| modes.iter().position(|&x| x == m);
     runs.sort_by_key(|r| (r.triangles, r.mesh.clone(), order(r.mode)));
-    let loaded = inputs;
-
     // The sweep: each method's knobs on one mesh.
-    let Some((_, sm)) = loaded.iter().find(|(n, _)| *n == cfg.sweep_mesh()) else {
+    let Some((_, sm)) = inputs.iter().find(|(n, _)| *n == cfg.sweep_mesh()) else {
         bail!(
             "sweep mesh '{}' is not in {}",
             cfg.sweep_mesh(),
             meshes.display()
         );
     };
-    let iterations = [0u32, 1, 2, 4, 8, 16, 32];
-    let thresholds = [0.0f64, 0.25, 1.0];
+    let mut sweep = run_sweep(cfg, sm)?;
+    mark_pareto(&mut sweep);
+    write_data(cfg, &runs, &sweep)?;
+    let out = cfg.common.out.join(cfg.tag.name("kmedoids.md"));
+    crate::atomic::write(out, report(cfg, &runs, &sweep))?;
+    Ok(())
+}
+
+/// Every method in `modes` on one mesh, the growing ones interleaved with meshoptimizer.
+fn measure_mesh(
+    cfg: &Config,
+    modes: &[Method],
+    pb: &ProgressBar,
+    name: &str,
+    m: &mesh::Mesh,
+) -> Result<Vec<Run>> {
+    let meshopt = crate::strategy::Kind::Meshopt.strategy(&Default::default());
+    let mut runs = Vec::new();
+    let t = m.triangle_count();
+    let scaled = name.contains(' ');
+    // Under 2 M triangles, interleaved rounds: `runs` of them, and on small meshes more, until
+    // they add up to MIN_ROUND_TIME (a run of a few milliseconds is at the mercy of one
+    // scheduler hiccup, and the medians, so the time targets, would follow the noise).
+    let (reps, min_time) = if t < 2_000_000 {
+        let min_time = cfg.common.or_smoke(MIN_ROUND_TIME.as_secs_f64(), 0.0);
+        (cfg.runs.max(1), min_time)
+    } else {
+        (1, 0.0)
+    };
+    // meshoptimizer and the growing methods interleaved, each on the pool and (up to
+    // `one_thread_max`) on one thread, so that machine noise hits them alike: the targets
+    // compare their times and their scaling.
+    pb.set_message(format!("{name} / meshopt, kmedoids, kmedoids-parallel"));
+    let mut mo_times = Vec::new();
+    let mut mo_out = None;
+    let mut interleaved: Vec<Interleaved> = [Method::Sequential, Method::Parallel]
+        .into_iter()
+        .map(|method| Interleaved {
+            method,
+            times: Vec::new(),
+            times_1t: Vec::new(),
+            out: None,
+        })
+        .collect();
+    let started = Instant::now();
+    let mut rounds = 0;
+    while rounds < reps || (rounds < MAX_ROUNDS && started.elapsed().as_secs_f64() < min_time) {
+        rounds += 1;
+        let (s, out) = timed(1, || meshopt.build(m, cfg.limits));
+        mo_times.push(s);
+        mo_out = Some(out);
+        for run in &mut interleaved {
+            let kc = run.method.config();
+            let mode = run.method.mode();
+            let (s, c) = timed(1, || cluster(m, cfg.limits, mode, &kc));
+            run.times.push(s);
+            if t <= cfg.one_thread_max {
+                run.times_1t.push(one_thread_seconds(
+                    name, m, cfg.limits, run.method, &kc, &c,
+                )?);
+            }
+            run.out = Some(c);
+        }
+    }
+    let mo = mo_out.expect("one run");
+    validate(m, &mo, cfg.limits).with_context(|| format!("{name}: meshopt invalid"))?;
+    let mo_bounds = bounds::compute_bounds(m, &mo);
+    let mo_metrics = Metrics::compute(m, &mo, cfg.limits, &mo_bounds, None);
+    let meshopt_seconds = super::median(&mo_times);
+    for &mode in modes {
+        if mode == Method::Paper && scaled {
+            continue;
+        }
+        pb.set_message(format!("{name} / {}", mode.name()));
+        let mut kc = mode.config();
+        kc.paper.budget = cfg.paper_budget();
+        let done = interleaved
+            .iter_mut()
+            .find(|r| r.method == mode)
+            .and_then(|r| {
+                let one = (!r.times_1t.is_empty()).then(|| super::median(&r.times_1t));
+                r.out.take().map(|c| (super::median(&r.times), one, c))
+            });
+        let (seconds, seconds_1t, c) = match done {
+            Some(run) => run,
+            None => {
+                let (s, c) = timed(1, || cluster(m, cfg.limits, mode.mode(), &kc));
+                let one = (mode != Method::Paper && t <= cfg.one_thread_max)
+                    .then(|| one_thread_seconds(name, m, cfg.limits, mode, &kc, &c))
+                    .transpose()?;
+                (s, one, c)
+            }
+        };
+        validate(m, &c.meshlets, cfg.limits)
+            .with_context(|| format!("{name}: {} produced invalid meshlets", mode.name()))?;
+        let b = bounds::compute_bounds(m, &c.meshlets);
+        let metrics = Metrics::compute(
+            m,
+            &c.meshlets,
+            cfg.limits,
+            &b,
+            Some(Duration::from_secs_f64(seconds)),
+        );
+        let connected_mesh = connected_where_mesh_is(m, &c.labels, c.medoids.len());
+        runs.push(Run {
+            mesh: name.to_string(),
+            triangles: t,
+            mode,
+            seconds,
+            seconds_1t,
+            connected_mesh,
+            c,
+            metrics,
+            meshopt_seconds,
+            meshopt: mo_metrics.clone(),
+        });
+        pb.inc(1);
+    }
+    Ok(runs)
+}
+
+/// The iteration caps of the sweep.
+const SWEEP_ITERATIONS: [u32; 7] = [0, 1, 2, 4, 8, 16, 32];
+/// The flat method's convergence thresholds in the sweep.
+const SWEEP_THRESHOLDS: [f64; 3] = [0.0, 0.25, 1.0];
+
+/// Each method's knobs on the sweep mesh `sm`, one run per point.
+fn run_sweep(cfg: &Config, sm: &mesh::Mesh) -> Result<Vec<SweepRow>> {
+    let (iterations, thresholds) = (SWEEP_ITERATIONS, SWEEP_THRESHOLDS);
     let mut sweep = Vec::new();
-    for method in [Method::Default, Method::Hops] {
+    for method in [Method::Sequential, Method::Hops] {
         for &it in &iterations {
-            let kc = KConfig {
-                max_iterations: it,
-                ..method.config()
-            };
+            let mut kc = method.config();
+            kc.sequential.max_rounds = it;
             let (seconds, c, metrics) = run_one(sm, cfg.limits, method, kc, cfg.sweep_mesh())?;
             sweep.push(SweepRow {
                 mode: method,
@@ -764,11 +767,9 @@ pub fn run(cfg: &Config) -> Result<()> {
     }
     for &th in &thresholds {
         for &it in &iterations {
-            let kc = KConfig {
-                max_iterations: it,
-                shift_threshold: th,
-                ..Method::Flat.config()
-            };
+            let mut kc = Method::Flat.config();
+            kc.flat.max_iterations = it;
+            kc.flat.shift_threshold = th;
             let (seconds, c, metrics) =
                 run_one(sm, cfg.limits, Method::Flat, kc, cfg.sweep_mesh())?;
             sweep.push(SweepRow {
@@ -789,19 +790,17 @@ pub fn run(cfg: &Config) -> Result<()> {
     let regions = REGION_SWEEP.map(|r| (Some(r), None));
     let moves = MOVE_SWEEP.map(|m| (None, Some(m)));
     for knob in [&regions[..], &moves[..]] {
-        for method in [Method::Tiled, Method::Regions] {
+        for method in [Method::Parallel] {
             for &(region, moves) in knob {
-                let base = method.config();
-                let kc = KConfig {
-                    region_triangles: region.unwrap_or(base.region_triangles),
-                    move_rounds: moves.unwrap_or(base.move_rounds),
-                    ..base
-                };
+                let mut kc = method.config();
+                let base = kc.parallel;
+                kc.parallel.region_triangles = region.unwrap_or(base.region_triangles);
+                kc.parallel.move_rounds = moves.unwrap_or(base.move_rounds);
                 let (seconds, c, metrics) = run_one(sm, cfg.limits, method, kc, cfg.sweep_mesh())?;
                 sweep.push(SweepRow {
                     mode: method,
                     threshold: 0.0,
-                    max_iterations: kc.max_iterations,
+                    max_iterations: kc.flat.max_iterations,
                     region,
                     moves,
                     seconds,
@@ -813,16 +812,21 @@ pub fn run(cfg: &Config) -> Result<()> {
         }
     }
 
+    Ok(sweep)
+}
+
+/// kmedoids.csv, kmedoids_sweep.csv and the two sweep plots.
+fn write_data(cfg: &Config, runs: &[Run], sweep: &[SweepRow]) -> Result<()> {
+    let thresholds = SWEEP_THRESHOLDS;
     let out = |f: &str| cfg.common.out.join(cfg.tag.name(f));
     std::fs::create_dir_all(&cfg.common.out)?;
-    crate::atomic::write(out("kmedoids.csv"), runs_table().csv(&runs))?;
-    mark_pareto(&mut sweep);
+    crate::atomic::write(out("kmedoids.csv"), runs_table().csv(runs))?;
     crate::atomic::write(
         out("kmedoids_sweep.csv"),
-        sweep_table(cfg.sweep_mesh()).csv(&sweep),
+        sweep_table(cfg.sweep_mesh()).csv(sweep),
     )?;
     let series = |y: &dyn Fn(&SweepRow) -> f64| {
-        let mut out: Vec<plot::Series> = [Method::Default, Method::Hops]
+        let mut out: Vec<plot::Series> = [Method::Sequential, Method::Hops]
             .iter()
             .map(|&m| plot::Series {
                 label: format!("{} (max iterations 0..32)", m.name()),
@@ -839,7 +843,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             ("move rounds", &MOVE_SWEEP[..], false),
         ];
         for (knob, values, by_region) in knobs {
-            for m in [Method::Tiled, Method::Regions] {
+            for m in [Method::Parallel] {
                 out.push(plot::Series {
                     label: format!(
                         "{} ({knob} {}..{})",
@@ -909,6 +913,11 @@ pub fn run(cfg: &Config) -> Result<()> {
         },
     )?;
 
+    Ok(())
+}
+
+/// kmedoids.md.
+fn report(cfg: &Config, runs: &[Run], sweep: &[SweepRow]) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# k-medoids at scale, and run time against error\n");
     let _ = writeln!(
@@ -927,46 +936,42 @@ pub fn run(cfg: &Config) -> Result<()> {
          (giving back triangles at its growth front to make room), neighbours merged, whole small pieces packed, \
          capacity-aware \
          re-assignment from the paper's medoids kept while it helps, tried only where at least a third of \
-         the clusters hold at most half the triangle limit (src/strategy/kmedoids/capacity.rs). \
-         `kmedoids-tiled`: the same method on regions of about {} triangles at once (a coarse \
-         multi-source BFS from seeds spread in Morton order; small pieces join the nearest region), then the \
-         clusters that did not fill merged with a neighbour across region borders in rounds of mutual \
-         proposals (src/strategy/kmedoids/tiled.rs); its iterations are the regions' re-assignment rounds, \
-         its splits the merge rounds that merged. \
+         the clusters hold at most half the triangle limit (src/strategy/kmedoids/sequential.rs). \
+         `kmedoids-parallel`: regions of about {} triangles at once (a coarse multi-source BFS from seeds \
+         spread in Morton order), each grown by integer keys with every step a kernel, then boundary moves as \
+         its medoid iteration (src/strategy/kmedoids/parallel/); its iterations are the rounds of moves that \
+         moved triangles. \
          `kmedoids, grow hops`: the same with `--kmedoids-grow hops` (fewest hops from the seed first: fewer \
          meshlets, larger spheres). \
          `kmedoids-flat`: nearest-medoid assignment, the largest quarter of overflowing clusters split per \
          round and the mesh re-clustered (the default before; what the GPU kernels run). `kmedoids-paper`: one \
          cluster added and everything re-run per overflow, as the paper does; when its budget of {} s runs out \
          it finishes the fast way (marked; not run on the subdivided dragons). Seconds: rayon pool, median of {} \
-         or more runs of `kmedoids`, `kmedoids-tiled` and `kmedoids-parallel` interleaved with meshoptimizer's \
-         `build_meshlets` under 2 M triangles (rounds of all four repeat until they add up to {} s, at most {}: \
+         or more runs of `kmedoids` and `kmedoids-parallel` interleaved with meshoptimizer's \
+         `build_meshlets` under 2 M triangles (rounds of all three repeat until they add up to {} s, at most {}: \
          a run of a few milliseconds follows the machine's noise), else one run; one run of the others. `1 thread s`: on a one-thread pool (up to {} triangles), \
-         the median of as many runs, each right after the pool run it is compared with, for those three methods; one run for the \
+         the median of as many runs, each right after the pool run it is compared with, for those two methods; one run for the \
          others; its output was checked identical to the pool's. Mean hops: the k-medoids objective (hop distance of a \
          triangle to its medoid inside its cluster). Radius: mean bounding-sphere radius over meshoptimizer's. \
          `connected`: meshlets that are one edge-connected piece; `connected where the mesh is`: clusters with \
          as many edge-connected pieces as the mesh pieces they touch (a mesh joined only through vertices, such \
          as the strut lattice, allows no better). Every output passed the validator. Data: kmedoids.csv.\n",
-        KConfig::default().region_triangles,
+        KConfig::default().parallel.region_triangles,
         cfg.paper_budget().as_secs_f64(),
         cfg.runs,
         MIN_ROUND_TIME.as_secs_f64(),
         MAX_ROUNDS,
         cfg.one_thread_max
     );
-    let _ = writeln!(s, "{}\n", runs_table().markdown(&runs));
+    let _ = writeln!(s, "{}\n", runs_table().markdown(runs));
     let _ = writeln!(s, "## Targets, `kmedoids` per mesh\n");
     let _ = writeln!(
         s,
         "Ratios within the run above. Mean hops rise with cluster size, so fewer, fuller clusters than the flat \
          method's cost objective by construction.\n"
     );
-    let _ = writeln!(s, "{}\n", verdict_table().markdown(&verdicts(&runs)));
-    let _ = writeln!(
-        s,
-        "## Targets, `kmedoids-tiled` and `kmedoids-parallel` per mesh\n"
-    );
+    let _ = writeln!(s, "{}\n", verdict_table().markdown(&verdicts(runs)));
+    let _ = writeln!(s, "## Targets, `kmedoids-parallel` per mesh\n");
     let _ = writeln!(
         s,
         "Ratios within the run above, against meshoptimizer and the sequential `kmedoids`. Count: <= 1.05x \
@@ -974,18 +979,13 @@ pub fn run(cfg: &Config) -> Result<()> {
          stress meshes are held to this one alone: their meshoptimizer ratio is shown unmarked). Time: <= 1.5x meshoptimizer's. Threads: one-thread time \
          over the pool's (>= 1.6 on the dragon with two threads; `-` where the one-thread run was left out). \
          The objective before its iteration: the mean hop distance before the boundary moves of \
-         `kmedoids-tiled` and `kmedoids-parallel` (the same as after for the methods without one). Pool: {} threads.\n",
+         `kmedoids-parallel`. Pool: {} threads.\n",
         rayon::current_num_threads()
     );
     let _ = writeln!(
         s,
         "{}\n",
-        parallel_table().markdown(
-            &[Method::Tiled, Method::Regions]
-                .into_iter()
-                .flat_map(|m| parallel_verdicts(&runs, m))
-                .collect::<Vec<_>>()
-        )
+        parallel_table().markdown(&parallel_verdicts(runs, Method::Parallel))
     );
     let _ = writeln!(s, "## The paper's k-medoids times (their machine)\n");
     let _ = writeln!(
@@ -995,7 +995,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     for &(model, tris, secs) in PAPER_TIMES {
         let near = runs
             .iter()
-            .filter(|r| r.mode == Method::Default)
+            .filter(|r| r.mode == Method::Sequential)
             .min_by_key(|r| (r.triangles as i64 - tris as i64).unsigned_abs())
             .map(|r| {
                 let flat = runs
@@ -1031,8 +1031,8 @@ pub fn run(cfg: &Config) -> Result<()> {
     );
     let _ = writeln!(
         s,
-        "`kmedoids-tiled` and `kmedoids-parallel`: triangles per region (`region`), from many small \
-         regions to few; both also their rounds of boundary moves (`move rounds`, their medoid \
+        "`kmedoids-parallel`: triangles per region (`region`), from many small \
+         regions to few; also its rounds of boundary moves (`move rounds`, their medoid \
          iteration: the objective falls with each, the count stays). `kmedoids` and its `hops` growth: their most capacity-aware re-assignment rounds (no effect where \
          too few clusters are light for a round to run: `iterations run` says how many ran); `kmedoids-flat`: the iteration limit and \
          convergence threshold (mean medoid shift in hops) of its clustering. One run per point. Error: mean \
@@ -1040,7 +1040,6 @@ pub fn run(cfg: &Config) -> Result<()> {
          kmedoids_sweep.csv.\n\n\
          ![hops](kmedoids_sweep_hops.svg)\n\n![meshlets](kmedoids_sweep_meshlets.svg)\n"
     );
-    let _ = writeln!(s, "{}", sweep_table(cfg.sweep_mesh()).markdown(&sweep));
-    crate::atomic::write(out("kmedoids.md"), s)?;
-    Ok(())
+    let _ = writeln!(s, "{}", sweep_table(cfg.sweep_mesh()).markdown(sweep));
+    s
 }

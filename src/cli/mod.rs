@@ -56,7 +56,8 @@ pub struct StrategyArgs {
     /// meshoptimizer spatial builder fill weight (>= 0).
     #[arg(long, default_value_t = 0.5)]
     pub fill_weight: f32,
-    /// k-medoids: most assign/update iterations per clustering.
+    /// k-medoids: most assign/update iterations per clustering (kmedoids-flat, kmedoids-paper);
+    /// most re-assignment rounds (kmedoids).
     #[arg(long, default_value_t = 16)]
     pub kmedoids_iterations: u32,
     /// k-medoids: stop when the mean medoid shift (in hops) is at most this.
@@ -66,14 +67,13 @@ pub struct StrategyArgs {
     /// centroid: smaller spheres) or `hops` (fewest hops from its seed: fewer meshlets).
     #[arg(long, default_value = "centre", value_parser = clap::value_parser!(strategy::kmedoids::Grow))]
     pub kmedoids_grow: strategy::kmedoids::Grow,
-    /// kmedoids-parallel, kmedoids-tiled: triangles per region (each region is clustered on
-    /// its own, all at once; smaller regions give more parallel work and a few more meshlets at
-    /// their borders).
-    #[arg(long, default_value_t = strategy::kmedoids::DEFAULT_REGION_TRIANGLES, value_parser = clap::value_parser!(u32).range(1..))]
+    /// kmedoids-parallel: triangles per region (each region is clustered on its own, all at
+    /// once; smaller regions give more parallel work and a few more meshlets at their borders).
+    #[arg(long, default_value_t = strategy::kmedoids::parallel::DEFAULT_REGION_TRIANGLES, value_parser = clap::value_parser!(u32).range(1..))]
     pub kmedoids_regions: u32,
-    /// kmedoids-parallel, kmedoids-tiled: most rounds of boundary moves (triangles moved to a
-    /// neighbouring cluster whose medoid is nearer, within the limits; 0 turns them off).
-    #[arg(long, default_value_t = strategy::kmedoids::DEFAULT_MOVE_ROUNDS)]
+    /// kmedoids-parallel: most rounds of boundary moves (triangles moved to a neighbouring
+    /// cluster whose medoid is nearer, within the limits; 0 turns them off).
+    #[arg(long, default_value_t = strategy::kmedoids::parallel::DEFAULT_MOVE_ROUNDS)]
     pub kmedoids_moves: u32,
     /// kmedoids-paper: seconds before the remaining splits are done the flat way.
     #[arg(long, default_value_t = 300.0)]
@@ -92,17 +92,35 @@ impl StrategyArgs {
             cone_weight: self.cone_weight,
             cache_size: self.cache_size,
             fill_weight: self.fill_weight.max(0.0),
-            kmedoids: strategy::kmedoids::Config {
-                max_iterations: self.kmedoids_iterations,
-                shift_threshold: self.kmedoids_threshold,
-                grow: self.kmedoids_grow,
-                region_triangles: self.kmedoids_regions,
-                move_rounds: self.kmedoids_moves,
-                paper_budget: Duration::from_secs_f64(self.paper_budget),
-                ..Default::default()
-            },
+            kmedoids: self.kmedoids(),
             local_order: self.local_order,
             meshlet_order: self.meshlet_order,
+        }
+    }
+}
+
+impl StrategyArgs {
+    /// The k-medoids settings from the options, each method's block from the options it reads.
+    fn kmedoids(&self) -> strategy::kmedoids::Config {
+        use strategy::kmedoids::{flat, parallel, sequential};
+        strategy::kmedoids::Config {
+            sequential: sequential::Config {
+                max_rounds: self.kmedoids_iterations,
+                grow: self.kmedoids_grow,
+            },
+            parallel: parallel::Config {
+                region_triangles: self.kmedoids_regions,
+                move_rounds: self.kmedoids_moves,
+            },
+            flat: flat::Config {
+                max_iterations: self.kmedoids_iterations,
+                shift_threshold: self.kmedoids_threshold,
+                ..Default::default()
+            },
+            paper: flat::PaperConfig {
+                budget: Duration::from_secs_f64(self.paper_budget),
+            },
+            threading: Default::default(),
         }
     }
 }
@@ -167,7 +185,6 @@ pub enum Command {
 /// (`strategy::Kind::ALL`, `mesh::generate::NAMES`), so a new entry shows up here by itself.
 fn long_about() -> String {
     use std::fmt::Write as _;
-    let opts = Options::default();
     let mut s = format!(
         "Build, measure and compare meshlets (triangle clusters for GPU mesh shaders).\n\n\
          Meshes: PLY (ASCII/binary), OBJ, glTF 2.0 (.gltf/.glb), STL (ASCII/binary), each optionally \
@@ -177,7 +194,7 @@ fn long_about() -> String {
         mesh::generate::STRESS_NAMES.len()
     );
     for k in strategy::Kind::ALL {
-        let _ = writeln!(s, "  {:<17} {}", k.name(), k.strategy(&opts).summary());
+        let _ = writeln!(s, "  {:<17} {}", k.name(), k.summary());
     }
     let _ = write!(
         s,

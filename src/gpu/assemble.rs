@@ -240,7 +240,7 @@ mod tests {
         let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
         let mesh = generate::terrain(40, 2);
         for limits in [Limits::DEFAULT, Limits::new(8, 6).unwrap()] {
-            let c = cluster(&mesh, limits, Mode::Regions, &Default::default());
+            let c = cluster(&mesh, limits, Mode::Parallel, &Default::default());
             let k = c.medoids.len();
             let keys: Vec<u32> = (0..mesh.triangle_count() as u32)
                 .map(|t| {

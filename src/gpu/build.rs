@@ -13,7 +13,7 @@
 use super::adjacency::Timing;
 use super::assemble::DeviceMeshlets;
 use super::bounds::task_on_device;
-use super::kmedoids::MeshSource;
+use super::source::MeshSource;
 use super::{timed_read, DeviceMesh, Gpu, GpuError};
 use crate::mesh::Mesh;
 use crate::meshlet::order::{optimize_triangle_order, order_meshlets};
@@ -165,10 +165,10 @@ fn run_kmedoids(
 ) -> Result<(DeviceMeshlets, Timing), GpuError> {
     let cfg = &opts.kmedoids;
     Ok(if kind == Kind::KmedoidsParallel {
-        let (r, d) = super::regions::cluster_regions(gpu, source, limits, cfg, false)?;
+        let (r, d) = super::kmedoids_parallel::cluster(gpu, source, limits, &cfg.parallel, false)?;
         (d, r.timing)
     } else {
-        let (r, d) = super::kmedoids::cluster_flat_with(gpu, source, limits, cfg, false)?;
+        let (r, d) = super::kmedoids_flat::cluster_with(gpu, source, limits, &cfg.flat, false)?;
         (d, r.timing)
     })
 }
@@ -205,7 +205,7 @@ pub fn warm_up(gpu: &Gpu, name: &str, limits: Limits, opts: &Options) -> Result<
         // One region takes `grow`, several take `grow_rows` on a CPU adapter; lavapipe compiles a
         // pipeline on its first dispatch, so both run here (the mesh is 1152 triangles).
         let mut regions = *opts;
-        regions.kmedoids.region_triangles = 256;
+        regions.kmedoids.parallel.region_triangles = 256;
         build(gpu, name, &mesh, limits, &regions)?;
     }
     Ok(t0.elapsed().as_secs_f64())
@@ -223,13 +223,7 @@ mod tests {
             gpu_kind("kmedoids-parallel").unwrap(),
             Kind::KmedoidsParallel
         );
-        for name in [
-            "kmedoids",
-            "kmedoids-tiled",
-            "meshopt",
-            "kmedoids-flat+refine",
-            "nope",
-        ] {
+        for name in ["kmedoids", "meshopt", "kmedoids-flat+refine", "nope"] {
             let e = gpu_kind(name).unwrap_err().to_string();
             assert!(e.contains(&format!("'{name}'")), "{e}");
             assert!(

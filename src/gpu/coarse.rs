@@ -7,7 +7,7 @@
 //! sizes, and, where a piece of the mesh has no seed, one change count per eight hooking rounds.
 
 use super::adjacency::{DeviceAdjacency, Timing};
-use super::kmedoids::Bfs;
+use super::assign::Bfs;
 use super::morton::{self, DeviceInput, PairSort};
 use super::{binding_set, param_block, timed, wgsl, Batch, Gpu, GpuError, Kernels};
 use crate::common::sorted;

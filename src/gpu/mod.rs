@@ -8,12 +8,12 @@
 //! | driver | shader (`wgsl/`) | CPU reference |
 //! |---|---|---|
 //! | [`adjacency`] | `adjacency.wgsl` | `crate::adjacency` (and `mesh::edges`) |
-//! | [`kmedoids`] (`cluster_flat`, `cluster_capacity`) | `assign.wgsl`, `update.wgsl`, `split.wgsl` | `strategy::kmedoids::{assign, update, split}`, driven as `strategy::kmedoids::flat` |
-//! | [`morton`] | `morton.wgsl` | `strategy::kmedoids::flat::{morton_order, initial_medoids}` (the flat method's seeds), `strategy::kmedoids::flat::packed_centres` |
-//! | [`coarse`] | `coarse.wgsl` (with `morton.wgsl`, `assign.wgsl`) | `strategy::kmedoids::coarse` (the regions of `kmedoids-tiled` and `kmedoids-parallel`) |
-//! | [`regions`] | `regions.wgsl` (with `medoid.wgsl`) | `strategy::kmedoids::regions` (`kmedoids-parallel`) |
-//! | [`moves`] | `moves.wgsl` (with `medoid.wgsl`) | `strategy::kmedoids::moves` (the medoid iteration of `kmedoids-parallel`) |
-//! | [`capacity`] | `capacity.wgsl` | `strategy::kmedoids::capacity::assign_capacity` |
+//! | [`assign`] | `assign.wgsl` | `strategy::kmedoids::assign` (the multi-source BFS of `kmedoids-flat` and the coarse regions) |
+//! | [`kmedoids_flat`] | `update.wgsl`, `split.wgsl` (with `assign.wgsl`) | `strategy::kmedoids::{update, split}`, driven as `strategy::kmedoids::flat` (`kmedoids-flat`) |
+//! | [`morton`] | `morton.wgsl` | `strategy::kmedoids::morton` (the flat method's seeds, `flat::initial_medoids`; the fine centroid cells) |
+//! | [`coarse`] | `coarse.wgsl` (with `morton.wgsl`, `assign.wgsl`) | `strategy::kmedoids::coarse` (the regions of `kmedoids-parallel`) |
+//! | [`kmedoids_parallel`] | `kmedoids_parallel.wgsl` (with `medoid.wgsl`) | `strategy::kmedoids::parallel` (`kmedoids-parallel`) |
+//! | [`kmedoids_parallel_moves`] | `kmedoids_parallel_moves.wgsl` (with `medoid.wgsl`) | `strategy::kmedoids::parallel::moves` (the medoid iteration of `kmedoids-parallel`) |
 //! | [`grow`] | `grow.wgsl` | `strategy::grow` (`bsphere-parallel`) |
 //! | [`assemble`] | `assemble.wgsl` | `meshlet::assemble` (meshlets from a clustering) |
 //! | [`bounds`] | `bounds.wgsl` | [`bounds::sphere_f32`], checked against `meshlet::bounds`; the cones of `task_bounds` checked conservative (`meshlet::bounds::check_cones`) |
@@ -37,19 +37,20 @@
 
 pub mod adjacency;
 pub mod assemble;
+pub mod assign;
 pub mod bounds;
 pub mod build;
-pub mod capacity;
 pub mod coarse;
 pub mod copy;
 pub mod grow;
-pub mod kmedoids;
+pub mod kmedoids_flat;
+pub mod kmedoids_parallel;
+pub mod kmedoids_parallel_moves;
 pub mod morton;
-pub mod moves;
 pub mod parity;
-pub mod regions;
 mod scan;
 pub mod select;
+pub mod source;
 
 use bytemuck::Pod;
 use std::any::{Any, TypeId};
@@ -104,7 +105,7 @@ pub enum GpuError {
 /// Elements per part of a [`Split`] array: 2^25 u32 = 128 MiB, lavapipe's storage-binding limit.
 pub const PART: usize = 1 << 25;
 
-/// Storage buffers the widest kernel binds in one stage (`regions.wgsl`: 16, lavapipe's limit; a
+/// Storage buffers the widest kernel binds in one stage (`kmedoids_parallel.wgsl`: 16, lavapipe's limit; a
 /// test counts them).
 pub const MIN_STORAGE_BUFFERS: u32 = 16;
 
@@ -639,8 +640,15 @@ pub(crate) use binding_set;
 
 /// The WGSL source of `wgsl/<file>` behind the shared prelude (`wgsl/prelude.wgsl`: the split
 /// part size, `NONE` and the flat-id helpers every module uses), followed by the shared parts it
-/// names (each listed in [`WGSL_PARTS`]).
+/// names (each listed in [`WGSL_PARTS`]). With `generated "<name>";` first, the file `build.rs`
+/// wrote under that name comes before it all (each listed in [`WGSL_GENERATED`]).
 macro_rules! wgsl {
+    (generated $gen:literal; $file:literal $(, $part:literal)*) => {
+        concat!(
+            include_str!(concat!(env!("OUT_DIR"), "/", $gen)),
+            $crate::gpu::wgsl!($file $(, $part)*)
+        )
+    };
     ($file:literal $(, $part:literal)*) => {
         concat!(
             include_str!("../../wgsl/prelude.wgsl"),
@@ -651,13 +659,21 @@ macro_rules! wgsl {
 }
 pub(crate) use wgsl;
 
+/// Files `build.rs` writes from Rust definitions (in `OUT_DIR`), with the module each goes in
+/// front of: the drivers name them in their `wgsl!` calls; `gpu::shaders_test` reads this list.
+#[cfg(test)]
+pub(crate) const WGSL_GENERATED: &[(&str, &str)] =
+    &[("kmedoids_parallel_layout.wgsl", "kmedoids_parallel.wgsl")];
+
 /// WGSL files that are not modules but parts of several (functions over bindings each includer
 /// declares), with the modules that include them: one definition where two kernel families run
 /// the same step. The drivers name the parts in their `wgsl!` calls; `gpu::shaders_test` reads
 /// this list.
 #[cfg(test)]
-pub(crate) const WGSL_PARTS: &[(&str, &[&str])] =
-    &[("medoid.wgsl", &["regions.wgsl", "moves.wgsl"])];
+pub(crate) const WGSL_PARTS: &[(&str, &[&str])] = &[(
+    "medoid.wgsl",
+    &["kmedoids_parallel.wgsl", "kmedoids_parallel_moves.wgsl"],
+)];
 
 /// Bytes between the parameter blocks of consecutive dispatches in the uniform buffer (dynamic
 /// offsets must be multiples of 256).

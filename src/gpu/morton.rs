@@ -2,8 +2,8 @@
 //! triangles, a stable radix sort, and the triangles at the ranks the seeds take
 //! ([`crate::strategy::kmedoids::flat::initial_medoids`], [`crate::strategy::kmedoids::coarse`]);
 //! also each triangle's centroid cell packed as `kmedoids-parallel` keys it
-//! ([`crate::strategy::kmedoids::flat::packed_centres`]), and the radix sort alone for other
-//! keys ([`PairSort`]). The CPU reference is [`crate::strategy::kmedoids::flat::morton_order`];
+//! ([`crate::strategy::kmedoids::morton::packed_centres`]), and the radix sort alone for other
+//! keys ([`PairSort`]). The CPU reference is [`crate::strategy::kmedoids::morton::morton_order`];
 //! the order, the seeds and the cells are identical.
 //!
 //! Host traffic: the box (six words, from which the host computes the [`MortonFrame`] as the CPU
@@ -13,7 +13,7 @@ use super::adjacency::Timing;
 use super::scan::Scan;
 use super::{binding_set, param_block, timed, wgsl, Batch, Gpu, GpuError, Kernels, Split};
 use crate::common::sorted;
-use crate::strategy::kmedoids::flat::MortonFrame;
+use crate::strategy::kmedoids::morton::MortonFrame;
 use glam::Vec3;
 
 param_block! {

@@ -3,8 +3,8 @@
 //! the tolerance stated where they are compared).
 
 use super::bounds::SphereF32;
-use super::kmedoids::MeshSource;
 use super::select::{Selector, ViewData};
+use super::source::MeshSource;
 use super::{timed, Gpu, GpuError};
 use crate::adjacency::{dual_graph, side_flags, vertex_triangles, EdgeTable};
 use crate::lod::flat::{select, Flat, Query};
@@ -87,13 +87,9 @@ pub enum Family {
     /// Vertex -> triangles, the dual graph and the side flags.
     Adjacency,
     /// The flat k-medoids (`kmedoids-flat`).
-    Flat,
-    /// The capacity-aware k-medoids (host growth, GPU adjacency and medoid updates).
-    Capacity,
+    KmedoidsFlat,
     /// `kmedoids-parallel`, at the default region size and at 1024-triangle regions.
-    Regions,
-    /// The capacity-aware assignment alone, from the capacity-aware run's medoids.
-    Assignment,
+    KmedoidsParallel,
     /// Bounding spheres of k-medoids meshlets.
     Bounds,
     /// The parallel grower (`bsphere-parallel`).
@@ -104,12 +100,10 @@ pub enum Family {
 
 impl Family {
     /// Every family, in run order.
-    pub const ALL: [Family; 8] = [
+    pub const ALL: [Family; 6] = [
         Family::Adjacency,
-        Family::Flat,
-        Family::Capacity,
-        Family::Regions,
-        Family::Assignment,
+        Family::KmedoidsFlat,
+        Family::KmedoidsParallel,
         Family::Bounds,
         Family::Grower,
         Family::Lod,
@@ -178,44 +172,19 @@ pub fn run_except(
             ],
         ));
     }
-    let flat = runs(Family::Flat)
+    let flat = runs(Family::KmedoidsFlat)
         .then(|| check_flat(gpu, mesh, limits, &cfg))
         .transpose()?
         .map(|r| keep(&mut out, r));
-    let capacity_medoids = runs(Family::Capacity)
-        .then(|| check_capacity(gpu, mesh, limits, &cfg))
+    let parallel = runs(Family::KmedoidsParallel)
+        .then(|| check_parallel(gpu, mesh, limits, &cfg))
         .transpose()?
         .map(|r| keep(&mut out, r));
-    let regions = runs(Family::Regions)
-        .then(|| check_regions(gpu, mesh, limits, &cfg))
-        .transpose()?
-        .map(|r| keep(&mut out, r));
-    if runs(Family::Assignment) {
-        // The capacity-aware assignment alone, from the final medoids: a run runs it only in the
-        // rounds it tries (none on most surfaces) and keeps its result only when a round is
-        // accepted, so the whole-run check above can miss a difference here.
-        let medoids = capacity_medoids
-            .unwrap_or_else(|| kmedoids::cluster(mesh, limits, Mode::Capacity, &cfg).medoids);
-        let (a_cpu, cpu_s) = timed(|| {
-            let mut l = vec![crate::common::NONE; mesh.triangle_count()];
-            kmedoids::capacity::assign_capacity(mesh, &dual, limits, &medoids, &mut l);
-            l
-        });
-        let (a_gpu, gpu_s) = timed(|| super::capacity::assign(gpu, mesh, limits, &medoids));
-        let (a_gpu, _) = a_gpu?;
-        out.push(check(
-            Family::Assignment,
-            "capacity-aware assignment: labels from the final medoids",
-            cpu_s,
-            gpu_s,
-            vec![first_difference("labels", &a_gpu, &a_cpu)],
-        ));
-    }
     let (mut meshlets, mut gpu_spheres, mut cpu_spheres) = Default::default();
     if runs(Family::Bounds) {
         let ml = flat
-            .or(regions)
-            .unwrap_or_else(|| kmedoids::cluster(mesh, limits, Mode::Regions, &cfg).meshlets);
+            .or(parallel)
+            .unwrap_or_else(|| kmedoids::cluster(mesh, limits, Mode::Parallel, &cfg).meshlets);
         let (spheres, check) = check_bounds(gpu, mesh, &ml)?;
         out.push(check);
         (meshlets, gpu_spheres, cpu_spheres) = (ml, spheres.0, spheres.1);
@@ -249,7 +218,7 @@ fn check_flat(
     cfg: &Config,
 ) -> Result<(Meshlets, Check), GpuError> {
     let (cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, Mode::Flat, cfg));
-    let (g, gpu_s) = timed(|| super::kmedoids::cluster_flat(gpu, mesh, limits, cfg));
+    let (g, gpu_s) = timed(|| super::kmedoids_flat::cluster(gpu, mesh, limits, &cfg.flat));
     let g = g?.clustering;
     let counts = |c: &kmedoids::Clustering| {
         [
@@ -260,7 +229,7 @@ fn check_flat(
         ]
     };
     let check = check(
-        Family::Flat,
+        Family::KmedoidsFlat,
         "k-medoids: medoids, labels, distances, counts, objective, meshlets",
         cpu_s,
         gpu_s,
@@ -292,49 +261,10 @@ fn check_flat(
     Ok((cpu.meshlets, check))
 }
 
-/// The capacity-aware k-medoids (the default): host growth, GPU adjacency and medoid updates;
-/// returns the CPU's medoids.
-fn check_capacity(
-    gpu: &Gpu,
-    mesh: &Mesh,
-    limits: Limits,
-    cfg: &Config,
-) -> Result<(Vec<u32>, Check), GpuError> {
-    let (c_cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, Mode::Capacity, cfg));
-    let (c_gpu, gpu_s) = timed(|| super::kmedoids::cluster_capacity(gpu, mesh, limits, cfg));
-    let c_gpu = c_gpu?.clustering;
-    let check = check(
-        Family::Capacity,
-        "k-medoids (capacity-aware, the default): medoids, labels, distances, iterations, meshlets",
-        cpu_s,
-        gpu_s,
-        vec![
-            first_difference("medoids", &c_gpu.medoids, &c_cpu.medoids),
-            first_difference("labels", &c_gpu.labels, &c_cpu.labels),
-            first_difference("distances", &c_gpu.distances, &c_cpu.distances),
-            (c_gpu.iterations != c_cpu.iterations).then(|| {
-                format!(
-                    "iterations: GPU {}, CPU {}",
-                    c_gpu.iterations, c_cpu.iterations
-                )
-            }),
-        ]
-        .into_iter()
-        .chain(meshlet_differences(
-            mesh,
-            limits,
-            &c_gpu.meshlets,
-            &c_cpu.meshlets,
-        ))
-        .collect(),
-    );
-    Ok((c_cpu.medoids, check))
-}
-
 /// kmedoids-parallel, at the default region size and at small regions (many per mesh, so the
 /// per-region invocations and the bases between them are exercised): one check; returns the CPU's
 /// meshlets at the default size.
-fn check_regions(
+fn check_parallel(
     gpu: &Gpu,
     mesh: &Mesh,
     limits: Limits,
@@ -342,14 +272,13 @@ fn check_regions(
 ) -> Result<(Meshlets, Check), GpuError> {
     let (mut diffs, mut cpu_total, mut gpu_total) = (Vec::new(), 0.0, 0.0);
     let mut first = None;
-    for region_triangles in [cfg.region_triangles, 1024] {
-        let rcfg = Config {
-            region_triangles,
-            ..*cfg
-        };
-        let (r_cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, Mode::Regions, &rcfg));
+    for region_triangles in [cfg.parallel.region_triangles, 1024] {
+        let mut rcfg = *cfg;
+        rcfg.parallel.region_triangles = region_triangles;
+        let (r_cpu, cpu_s) = timed(|| kmedoids::cluster(mesh, limits, Mode::Parallel, &rcfg));
         let (r_gpu, gpu_s) = timed(|| {
-            super::regions::cluster_regions(gpu, MeshSource::Host(mesh), limits, &rcfg, true)
+            let source = MeshSource::Host(mesh);
+            super::kmedoids_parallel::cluster(gpu, source, limits, &rcfg.parallel, true)
         });
         let r_gpu = r_gpu?.0.clustering;
         cpu_total += cpu_s;
@@ -380,7 +309,7 @@ fn check_regions(
         first.get_or_insert(r_cpu.meshlets);
     }
     let check = check(
-            Family::Regions,
+            Family::KmedoidsParallel,
         "kmedoids-parallel: medoids, labels, distances, objective before the moves, their rounds, meshlets (default and 1024-triangle regions)",
         cpu_total,
         gpu_total,

@@ -13,7 +13,13 @@ fn source(file: &str) -> String {
         .iter()
         .filter(|(_, users)| users.contains(&file))
         .map(|(part, _)| read(part));
-    read("prelude.wgsl") + &read(file) + &parts.collect::<String>()
+    let generated = super::WGSL_GENERATED
+        .iter()
+        .filter(|(_, user)| *user == file)
+        .map(|(g, _)| {
+            std::fs::read_to_string(std::path::Path::new(env!("OUT_DIR")).join(g)).unwrap()
+        });
+    generated.collect::<String>() + &read("prelude.wgsl") + &read(file) + &parts.collect::<String>()
 }
 
 fn parse(file: &str) -> (naga::Module, naga::valid::ModuleInfo) {
@@ -143,29 +149,32 @@ fn every_wgsl_file_validates_and_emits_spirv() {
         assert_eq!(spv[0], 0x0723_0203, "{file}: SPIR-V magic");
         n += 1;
     }
-    assert_eq!(n, 15, "the kernel modules in wgsl/");
+    assert_eq!(n, 14, "the kernel modules in wgsl/");
 }
 
 #[test]
 fn every_module_matches_its_rust_interface() {
     use super::{
-        adjacency, assemble, bounds, capacity, coarse, copy, grow, kmedoids, morton, moves,
-        regions, scan, select,
+        adjacency, assemble, assign, bounds, coarse, copy, grow, kmedoids_flat, kmedoids_parallel,
+        kmedoids_parallel_moves, morton, scan, select,
     };
     let bad: Vec<String> = [
         interface::<adjacency::Params, adjacency::Buffers>("adjacency.wgsl"),
         interface::<assemble::Params, assemble::Buffers>("assemble.wgsl"),
         interface::<bounds::Params, bounds::Buffers>("bounds.wgsl"),
-        interface::<capacity::Params, capacity::Buffers>("capacity.wgsl"),
         interface::<copy::Params, copy::Buffers>("copy.wgsl"),
         interface::<grow::Params, grow::Buffers>("grow.wgsl"),
         interface::<morton::Params, morton::Buffers>("morton.wgsl"),
         interface::<coarse::Params, coarse::Buffers>("coarse.wgsl"),
-        interface::<regions::Params, regions::Buffers>("regions.wgsl"),
-        interface::<moves::Params, moves::Buffers>("moves.wgsl"),
-        interface::<kmedoids::Params, kmedoids::UpdateBuffers>("update.wgsl"),
-        interface::<kmedoids::Params, kmedoids::AssignBuffers>("assign.wgsl"),
-        interface::<kmedoids::Params, kmedoids::SplitBuffers>("split.wgsl"),
+        interface::<kmedoids_parallel::Params, kmedoids_parallel::Buffers>(
+            "kmedoids_parallel.wgsl",
+        ),
+        interface::<kmedoids_parallel_moves::Params, kmedoids_parallel_moves::Buffers>(
+            "kmedoids_parallel_moves.wgsl",
+        ),
+        interface::<assign::Params, kmedoids_flat::UpdateBuffers>("update.wgsl"),
+        interface::<assign::Params, assign::AssignBuffers>("assign.wgsl"),
+        interface::<assign::Params, kmedoids_flat::SplitBuffers>("split.wgsl"),
         interface::<scan::Params, scan::Buffers>("scan.wgsl"),
         interface::<select::Params, select::Buffers>("select.wgsl"),
     ]
@@ -193,13 +202,6 @@ fn the_prelude_part_is_the_rust_part() {
 }
 
 #[test]
-fn capacity_layout_constants_are_the_drivers() {
-    use super::capacity;
-    assert_eq!(constant("capacity.wgsl", "STATE") as usize, capacity::STATE);
-    assert_eq!(constant("capacity.wgsl", "SKIP") as usize, capacity::SKIP);
-}
-
-#[test]
 fn the_sort_block_is_the_drivers() {
     assert_eq!(
         constant("morton.wgsl", "BLOCK") as usize,
@@ -209,10 +211,10 @@ fn the_sort_block_is_the_drivers() {
 
 #[test]
 fn the_interface_check_catches_a_mismatch() {
-    // A binding set with kmedoids' names against assign.wgsl must fail, as must a wrong Params.
-    use super::kmedoids;
-    assert!(!interface::<kmedoids::Params, kmedoids::UpdateBuffers>("assign.wgsl").is_empty());
-    assert!(!interface::<super::scan::Params, kmedoids::AssignBuffers>("assign.wgsl").is_empty());
+    // A binding set with the update's names against assign.wgsl must fail, as must a wrong Params.
+    use super::{assign, kmedoids_flat};
+    assert!(!interface::<assign::Params, kmedoids_flat::UpdateBuffers>("assign.wgsl").is_empty());
+    assert!(!interface::<super::scan::Params, assign::AssignBuffers>("assign.wgsl").is_empty());
 }
 
 #[test]
@@ -251,15 +253,27 @@ fn device_minimums_are_what_the_widest_kernels_use() {
 #[test]
 fn the_prelude_fine_cell_bound_is_the_cpus() {
     assert_eq!(
-        constant("regions.wgsl", "FINE_MAX"),
-        crate::strategy::kmedoids::flat::FINE_MAX
+        constant("kmedoids_parallel.wgsl", "FINE_MAX"),
+        crate::strategy::kmedoids::morton::FINE_MAX
     );
 }
 
 #[test]
-fn the_grower_packs_over_the_cpus_window() {
-    assert_eq!(
-        constant("regions.wgsl", "PACK_WINDOW") as usize,
-        crate::strategy::kmedoids::regions::PACK_WINDOW
-    );
+fn the_region_kernel_reads_the_rust_layout() {
+    // The constants come from `parallel::layout` through build.rs, not a copy: each is the Rust
+    // value, and the kernel declares none of them itself.
+    use crate::strategy::kmedoids::parallel::layout::CONSTANTS;
+    for &(name, value) in CONSTANTS {
+        assert_eq!(constant("kmedoids_parallel.wgsl", name), value, "{name}");
+    }
+    let own = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl/kmedoids_parallel.wgsl"),
+    )
+    .unwrap();
+    for &(name, _) in CONSTANTS {
+        assert!(
+            !own.contains(&format!("const {name}:")),
+            "{name} is declared by hand"
+        );
+    }
 }

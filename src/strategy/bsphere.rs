@@ -34,14 +34,6 @@ impl Strategy for BoundingSphere {
         }
     }
 
-    fn summary(&self) -> &'static str {
-        if self.coherent {
-            "bsphere that closes a meshlet when its border empties: connected, tighter, more cullable meshlets"
-        } else {
-            "the paper's bounding sphere: grow by shared vertices and island closing, ties to the smallest sphere"
-        }
-    }
-
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         grow(mesh, limits, Scoring::Paper, self.coherent)
     }
@@ -538,10 +530,6 @@ pub struct BoundingSpherePaper;
 impl Strategy for BoundingSpherePaper {
     fn name(&self) -> &'static str {
         "bsphere-paper"
-    }
-
-    fn summary(&self) -> &'static str {
-        "bsphere as the paper's published code runs it: ties to scan order, island bonus for any meshlet"
     }
 
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {

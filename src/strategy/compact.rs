@@ -30,10 +30,6 @@ impl Strategy for Compact {
         "compact"
     }
 
-    fn summary(&self) -> &'static str {
-        "ours: fewest new vertices (dangling triangles free), island closing, nearest to centroid, corner-first seeds"
-    }
-
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         grow(mesh, limits, Scoring::Compact, false)
     }

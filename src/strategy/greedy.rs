@@ -21,10 +21,6 @@ impl Strategy for Greedy {
         "greedy"
     }
 
-    fn summary(&self) -> &'static str {
-        "the paper's greedy: BFS over vertices from a spatially sorted seed, free triangles added when vertex-bound"
-    }
-
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         let vt = vertex_triangles(mesh);
         let order = sorted_vertices(mesh);
@@ -140,10 +136,6 @@ impl Strategy for GreedyPaper {
         } else {
             "greedy-paper"
         }
-    }
-
-    fn summary(&self) -> &'static str {
-        "greedy as the paper's published code runs it: meshlets close only when full (may be disconnected)"
     }
 
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {

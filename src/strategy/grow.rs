@@ -42,10 +42,6 @@ impl Strategy for ParallelGrower {
         "bsphere-parallel"
     }
 
-    fn summary(&self) -> &'static str {
-        "many bsphere meshlets grown at once from grid seeds, conflicts by atomic claims (CPU reference of the GPU grower)"
-    }
-
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         let dual = dual_graph(mesh, &vertex_triangles(mesh));
         grow(mesh, &dual, limits, self.spacing).meshlets

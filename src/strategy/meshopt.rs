@@ -40,9 +40,6 @@ impl Strategy for Meshopt {
     fn name(&self) -> &'static str {
         "meshopt"
     }
-    fn summary(&self) -> &'static str {
-        "meshoptimizer 1.3 build_meshlets: the peer; adjacency- and distance-driven greedy growth"
-    }
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         let cw = self.cone_weight.clamp(0.0, 1.0); // the C++ asserts 0..=1
         convert(meshopt::build_meshlets(
@@ -61,9 +58,6 @@ pub struct MeshoptScan;
 impl Strategy for MeshoptScan {
     fn name(&self) -> &'static str {
         "meshopt-scan"
-    }
-    fn summary(&self) -> &'static str {
-        "meshoptimizer vertex-cache order, then its index-buffer scan (its analogue of nvidia+tipsify)"
     }
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         let ordered = meshopt::optimize_vertex_cache(&mesh.indices, mesh.vertex_count());
@@ -90,9 +84,6 @@ pub struct MeshoptSpatial {
 impl Strategy for MeshoptSpatial {
     fn name(&self) -> &'static str {
         "meshopt-spatial"
-    }
-    fn summary(&self) -> &'static str {
-        "meshoptimizer spatial builder: SAH-optimal clusters (for ray tracing), min = max triangles"
     }
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         let t = limits.max_triangles as usize;

@@ -1,13 +1,15 @@
 //! Meshlet strategies: each splits a mesh into meshlets under [`Limits`]. One file or folder per
 //! strategy family; all are selected by type ([`Kind`]) or by name ([`by_name`]), and every output
-//! goes through the validator in tests.
+//! goes through the validator in tests. Every strategy is one line of the `strategies!` table
+//! below (variant, name, summary, constructor): [`NAMES`], [`Kind::ALL`], `--help` and the
+//! README's strategy table (checked by a test) follow from it.
 //!
 //! | family | names | file | GPU kernel (driver, shader) |
 //! |---|---|---|---|
 //! | the JCGT paper's greedy | `greedy`, `greedy-paper` | `greedy.rs` | |
 //! | the paper's bounding sphere | `bsphere`, `bsphere-paper`, `bsphere-coherent` | `bsphere.rs` | |
 //! | many bsphere meshlets grown at once | `bsphere-parallel` | [`grow`] | `gpu/grow.rs`, `wgsl/grow.wgsl` |
-//! | k-medoids | `kmedoids`, `kmedoids-flat`, `kmedoids-paper` | [`kmedoids`] (a folder: one file per step) | `gpu/kmedoids.rs`, `gpu/capacity.rs`; `wgsl/{assign,update,split,capacity}.wgsl` |
+//! | k-medoids | `kmedoids`, `kmedoids-parallel`, `kmedoids-flat`, `kmedoids-paper` | [`kmedoids`] (a folder: a file per method or shared step; `parallel/` a file per step) | `kmedoids-parallel`: `gpu/kmedoids_parallel.rs`, `wgsl/kmedoids_parallel.wgsl`; `kmedoids-flat`: `gpu/kmedoids_flat.rs`, `wgsl/{assign,update,split}.wgsl` |
 //! | NVIDIA's scan | `nvidia`, `nvidia+tipsify` | `nvidia.rs` (tipsify: `mesh::tipsify`) | |
 //! | ours: compact, QEM merging | `compact`, `qem` | `compact.rs`, [`qem`] | |
 //! | meshoptimizer 1.3 (the peer) | `meshopt`, `meshopt-scan`, `meshopt-spatial` | `meshopt.rs` | |
@@ -44,8 +46,6 @@ use thiserror::Error;
 pub trait Strategy: Send + Sync {
     /// Name as selected on the command line.
     fn name(&self) -> &'static str;
-    /// One line on what it optimises, for `--help` and the README.
-    fn summary(&self) -> &'static str;
     /// Builds meshlets covering every triangle of `mesh` exactly once within `limits`.
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets;
 }
@@ -127,29 +127,6 @@ fn partitioned(name: &str) -> Option<(&str, &'static str)> {
     Some((base, full.as_str()))
 }
 
-/// Names accepted by [`by_name`], in table order (each also with one of [`REFINE_SUFFIXES`]).
-pub const NAMES: &[&str] = &[
-    "nvidia",
-    "nvidia+tipsify",
-    "greedy",
-    "greedy-paper",
-    "bsphere",
-    "bsphere-paper",
-    "bsphere-coherent",
-    "bsphere-parallel",
-    "kmedoids",
-    "kmedoids-flat",
-    "kmedoids-paper",
-    "kmedoids-tiled",
-    "kmedoids-parallel",
-    "compact",
-    "meshopt",
-    "meshopt-scan",
-    "meshopt-spatial",
-    "qem",
-    "partition",
-];
-
 /// Referenced vertices sorted along the mesh's longest bounding-box axis, low to high (ties by
 /// index): the paper's seed order for the greedy and bounding-sphere growers.
 pub(crate) fn sorted_vertices(mesh: &Mesh) -> Vec<u32> {
@@ -196,8 +173,17 @@ pub(crate) fn mark_used(mesh: &Mesh, t: u32, used: &mut [bool], live: &mut [u32]
 
 /// A name that no strategy answers to.
 #[derive(Debug, Error)]
-#[error("unknown strategy '{0}' (known: {known}; any of them followed by +refine, +refine-fast or +refine-max, or by +partition)", known = NAMES.join(", "))]
+#[error("unknown strategy '{0}'{hint} (known: {known}; any of them followed by +refine, +refine-fast or +refine-max, or by +partition)", hint = retired_hint(&self.0), known = NAMES.join(", "))]
 pub struct UnknownStrategy(pub String);
+
+/// ` (<the way on>)` for a retired name (also with a suffix), else nothing.
+fn retired_hint(name: &str) -> String {
+    let base = name.split('+').next().unwrap_or(name);
+    RETIRED
+        .iter()
+        .find(|(n, _)| *n == base)
+        .map_or(String::new(), |(_, hint)| format!(" ({hint})"))
+}
 
 /// Looks a strategy up by name; the ordering options wrap it in a post-pass. The typed way to
 /// the same strategies is [`Kind::strategy`] (or [`Kind::refined`]) and [`with_order`].
@@ -241,9 +227,6 @@ impl Strategy for Ordered {
     fn name(&self) -> &'static str {
         self.inner.name()
     }
-    fn summary(&self) -> &'static str {
-        self.inner.summary()
-    }
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         let mut ml = self.inner.build(mesh, limits);
         if self.local_order {
@@ -254,130 +237,150 @@ impl Strategy for Ordered {
     }
 }
 
-/// Every strategy, by type: what an engine names instead of a string. `Kind::ALL[i].name()` is
-/// `NAMES[i]`, and [`by_name`] goes through this enum.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Kind {
-    /// [`Nvidia`] without tipsify: `nvidia`.
-    Nvidia,
-    /// [`Nvidia`] over a tipsify-ordered index buffer: `nvidia+tipsify`.
-    NvidiaTipsify,
-    /// [`Greedy`]: `greedy`.
-    Greedy,
-    /// [`GreedyPaper`]: `greedy-paper`.
-    GreedyPaper,
-    /// [`BoundingSphere`]: `bsphere`.
-    Bsphere,
-    /// [`BoundingSpherePaper`]: `bsphere-paper`.
-    BspherePaper,
-    /// [`BoundingSphere`], connected growth only: `bsphere-coherent`.
-    BsphereCoherent,
-    /// [`ParallelGrower`]: `bsphere-parallel`.
-    BsphereParallel,
-    /// [`KMedoids`], capacity-aware (clusters grown to the limits, nothing split): `kmedoids`.
-    Kmedoids,
-    /// [`KMedoids`], flat: nearest-medoid assignment, overflowing clusters split and the mesh
-    /// re-clustered (what the GPU's flat kernels run): `kmedoids-flat`.
-    KmedoidsFlat,
-    /// [`KMedoids`] as the paper runs it (slow by design): `kmedoids-paper`.
-    KmedoidsPaper,
-    /// [`KMedoids`], capacity-aware on regions at once with border merges: `kmedoids-tiled`.
-    KmedoidsTiled,
-    /// [`KMedoids`] on regions at once, grown by integer keys (the same on the GPU):
-    /// `kmedoids-parallel`.
-    KmedoidsParallel,
-    /// [`Compact`]: `compact`.
-    Compact,
-    /// [`Meshopt`] (meshoptimizer's `build_meshlets`): `meshopt`.
-    Meshopt,
-    /// [`MeshoptScan`]: `meshopt-scan`.
-    MeshoptScan,
-    /// [`MeshoptSpatial`]: `meshopt-spatial`.
-    MeshoptSpatial,
-    /// [`qem::Qem`]: `qem`.
-    Qem,
-    /// [`refine::partition::Partitioned`] over [`Meshopt`]: `partition`.
-    Partition,
+/// The strategy table: one line per strategy, `Variant => "name", "summary", |opts| constructor;`
+/// (with the variant's doc above it). Writes [`Kind`], [`Kind::ALL`], [`NAMES`],
+/// [`Kind::name`], [`Kind::summary`] and [`Kind::strategy`].
+macro_rules! strategies {
+    ($($(#[$doc:meta])* $kind:ident => $name:literal, $summary:literal, |$o:ident| $make:expr;)*) => {
+        /// Every strategy, by type: what an engine names instead of a string. `Kind::ALL[i].name()`
+        /// is `NAMES[i]`, and [`by_name`] goes through this enum.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum Kind {
+            $($(#[$doc])* $kind,)*
+        }
+
+        impl Kind {
+            /// Every kind, in table order.
+            pub const ALL: [Kind; [$($name),*].len()] = [$(Kind::$kind),*];
+
+            /// The name the command line and the files use.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(Kind::$kind => $name,)*
+                }
+            }
+
+            /// One line on what it optimises, for `--help` and the README.
+            pub fn summary(self) -> &'static str {
+                match self {
+                    $(Kind::$kind => $summary,)*
+                }
+            }
+
+            /// The strategy, with the tunables in `opts` it reads (the ordering options are
+            /// applied by [`with_order`], not here).
+            pub fn strategy(self, opts: &Options) -> Box<dyn Strategy> {
+                match self {
+                    $(Kind::$kind => {
+                        let $o = opts;
+                        Box::new($make)
+                    })*
+                }
+            }
+        }
+
+        /// Names accepted by [`by_name`], in table order (each also with one of
+        /// [`REFINE_SUFFIXES`] or [`PARTITION_SUFFIX`]).
+        pub const NAMES: &[&str] = &[$($name),*];
+    };
 }
 
-impl Kind {
-    /// Every kind, in [`NAMES`] (table) order.
-    pub const ALL: [Kind; 19] = [
-        Kind::Nvidia,
-        Kind::NvidiaTipsify,
-        Kind::Greedy,
-        Kind::GreedyPaper,
-        Kind::Bsphere,
-        Kind::BspherePaper,
-        Kind::BsphereCoherent,
-        Kind::BsphereParallel,
-        Kind::Kmedoids,
-        Kind::KmedoidsFlat,
-        Kind::KmedoidsPaper,
-        Kind::KmedoidsTiled,
-        Kind::KmedoidsParallel,
-        Kind::Compact,
-        Kind::Meshopt,
-        Kind::MeshoptScan,
-        Kind::MeshoptSpatial,
-        Kind::Qem,
-        Kind::Partition,
-    ];
-
-    /// The name the command line and the files use.
-    pub fn name(self) -> &'static str {
-        NAMES[self as usize]
+/// A k-medoids strategy: `mode` with the settings in `opts`.
+fn kmedoids_with(mode: kmedoids::Mode, opts: &Options) -> KMedoids {
+    KMedoids {
+        mode,
+        config: opts.kmedoids,
     }
+}
 
+strategies! {
+    /// [`Nvidia`] without tipsify.
+    Nvidia => "nvidia",
+        "NVIDIA's scan of the index buffer as given: fastest, quality follows the input order",
+        |_o| Nvidia { tipsify_cache: None };
+    /// [`Nvidia`] over a tipsify-ordered index buffer.
+    NvidiaTipsify => "nvidia+tipsify",
+        "tipsify vertex-cache order, then the NVIDIA scan: cheap, and better locality than raw order",
+        |o| Nvidia { tipsify_cache: Some(o.cache_size) };
+    /// [`Greedy`].
+    Greedy => "greedy",
+        "the paper's greedy: BFS over vertices from a spatially sorted seed, free triangles added when vertex-bound",
+        |_o| Greedy;
+    /// [`GreedyPaper`].
+    GreedyPaper => "greedy-paper",
+        "greedy as the paper's published code runs it: meshlets close only when full (may be disconnected)",
+        |_o| GreedyPaper { close_on_empty_queue: false };
+    /// [`BoundingSphere`].
+    Bsphere => "bsphere",
+        "the paper's bounding sphere: grow by shared vertices and island closing, ties to the smallest sphere",
+        |_o| BoundingSphere { coherent: false };
+    /// [`BoundingSpherePaper`].
+    BspherePaper => "bsphere-paper",
+        "bsphere as the paper's published code runs it: ties to scan order, island bonus for any meshlet",
+        |_o| BoundingSpherePaper;
+    /// [`BoundingSphere`], connected growth only.
+    BsphereCoherent => "bsphere-coherent",
+        "bsphere that closes a meshlet when its border empties: connected, tighter, more cullable meshlets",
+        |_o| BoundingSphere { coherent: true };
+    /// [`ParallelGrower`].
+    BsphereParallel => "bsphere-parallel",
+        "many bsphere meshlets grown at once from grid seeds, conflicts by atomic claims (CPU reference of the GPU grower)",
+        |_o| ParallelGrower { spacing: grow::DEFAULT_SPACING };
+    /// [`KMedoids`], sequential (clusters grown to the limits, nothing split).
+    Kmedoids => "kmedoids",
+        "k-medoids whose clusters grow to the limits and take triangles only while they have room",
+        |o| kmedoids_with(kmedoids::Mode::Sequential, o);
+    /// [`KMedoids`] on regions at once, every step a kernel (the same on the GPU).
+    KmedoidsParallel => "kmedoids-parallel",
+        "k-medoids on regions of the mesh at once, each grown by integer keys (the same on the GPU)",
+        |o| kmedoids_with(kmedoids::Mode::Parallel, o);
+    /// [`KMedoids`], flat: nearest-medoid assignment, overflowing clusters split and the mesh
+    /// re-clustered (what the GPU's flat kernels run).
+    KmedoidsFlat => "kmedoids-flat",
+        "k-medoids on the triangle dual graph (hop distance), overflowing clusters split a fraction at a time",
+        |o| kmedoids_with(kmedoids::Mode::Flat, o);
+    /// [`KMedoids`] as the paper runs it (slow by design).
+    KmedoidsPaper => "kmedoids-paper",
+        "k-medoids as the paper runs it: one cluster added and everything re-run per overflow",
+        |o| kmedoids_with(kmedoids::Mode::Paper, o);
+    /// [`Compact`].
+    Compact => "compact",
+        "ours: fewest new vertices (dangling triangles free), island closing, nearest to centroid, corner-first seeds",
+        |_o| Compact;
+    /// [`Meshopt`] (meshoptimizer's `build_meshlets`).
+    Meshopt => "meshopt",
+        "meshoptimizer 1.3 build_meshlets: the peer; adjacency- and distance-driven greedy growth",
+        |o| Meshopt { cone_weight: o.cone_weight };
+    /// [`MeshoptScan`].
+    MeshoptScan => "meshopt-scan",
+        "meshoptimizer vertex-cache order, then its index-buffer scan (its analogue of nvidia+tipsify)",
+        |_o| MeshoptScan;
+    /// [`MeshoptSpatial`].
+    MeshoptSpatial => "meshopt-spatial",
+        "meshoptimizer spatial builder: SAH-optimal clusters (for ray tracing), min = max triangles",
+        |o| MeshoptSpatial { fill_weight: o.fill_weight };
+    /// [`qem::Qem`].
+    Qem => "qem",
+        "hierarchical face clustering (Garland et al. 2001): cheapest merge of plane fit plus irregularity first (Mlakar et al. 2024, §3.1)",
+        |_o| qem::Qem;
+    /// [`refine::partition::Partitioned`] over [`Meshopt`].
+    Partition => "partition",
+        "meshoptimizer's meshlets (or any strategy's), re-partitioned globally by balanced Lloyd and packed along ejection chains (fewer meshlets)",
+        |o| refine::partition::Partitioned {
+            inner: Kind::Meshopt.strategy(o),
+            config: refine::partition::Config::default(),
+            name: "partition",
+        };
+}
+
+/// Names that no longer build anything, each with the way on (the unknown-strategy error says
+/// it).
+pub const RETIRED: &[(&str, &str)] = &[("kmedoids-tiled", "retired: use kmedoids-parallel")];
+
+impl Kind {
     /// The kind named `name` (without a refine suffix).
     pub fn from_name(name: &str) -> Option<Kind> {
         NAMES.iter().position(|&n| n == name).map(|i| Kind::ALL[i])
-    }
-
-    /// The strategy, with the tunables in `opts` it reads (the ordering options are applied by
-    /// [`with_order`], not here).
-    pub fn strategy(self, opts: &Options) -> Box<dyn Strategy> {
-        let kmedoids = |mode| KMedoids {
-            mode,
-            config: opts.kmedoids,
-        };
-        match self {
-            Kind::Nvidia => Box::new(Nvidia {
-                tipsify_cache: None,
-            }),
-            Kind::NvidiaTipsify => Box::new(Nvidia {
-                tipsify_cache: Some(opts.cache_size),
-            }),
-            Kind::Greedy => Box::new(Greedy),
-            Kind::GreedyPaper => Box::new(GreedyPaper {
-                close_on_empty_queue: false,
-            }),
-            Kind::Bsphere => Box::new(BoundingSphere { coherent: false }),
-            Kind::BspherePaper => Box::new(BoundingSpherePaper),
-            Kind::BsphereCoherent => Box::new(BoundingSphere { coherent: true }),
-            Kind::BsphereParallel => Box::new(ParallelGrower {
-                spacing: grow::DEFAULT_SPACING,
-            }),
-            Kind::Kmedoids => Box::new(kmedoids(kmedoids::Mode::Capacity)),
-            Kind::KmedoidsFlat => Box::new(kmedoids(kmedoids::Mode::Flat)),
-            Kind::KmedoidsPaper => Box::new(kmedoids(kmedoids::Mode::Paper)),
-            Kind::KmedoidsTiled => Box::new(kmedoids(kmedoids::Mode::Tiled)),
-            Kind::KmedoidsParallel => Box::new(kmedoids(kmedoids::Mode::Regions)),
-            Kind::Compact => Box::new(Compact),
-            Kind::Meshopt => Box::new(Meshopt {
-                cone_weight: opts.cone_weight,
-            }),
-            Kind::MeshoptScan => Box::new(MeshoptScan),
-            Kind::MeshoptSpatial => Box::new(MeshoptSpatial {
-                fill_weight: opts.fill_weight,
-            }),
-            Kind::Qem => Box::new(qem::Qem),
-            Kind::Partition => Box::new(refine::partition::Partitioned {
-                inner: Kind::Meshopt.strategy(opts),
-                config: refine::partition::Config::default(),
-                name: "partition",
-            }),
-        }
     }
 
     /// The strategy followed by [`partition`](refine::partition), named e.g. `greedy+partition`
@@ -447,6 +450,29 @@ mod tests {
         }
         assert!("meshopt2".parse::<Kind>().is_err());
         assert!(by_name("meshopt+refine+refine", &opts).is_err());
+    }
+
+    #[test]
+    fn retired_names_are_unknown_with_the_way_on() {
+        let opts = Options::default();
+        for (name, hint) in RETIRED {
+            assert!(Kind::from_name(name).is_none());
+            for full in [name.to_string(), format!("{name}+refine")] {
+                let e = by_name(&full, &opts).err().expect("retired").to_string();
+                assert!(
+                    e.starts_with(&format!("unknown strategy '{full}' ({hint})")),
+                    "{e}"
+                );
+            }
+        }
+        let e = by_name("kmedoids-x", &opts)
+            .err()
+            .expect("unknown")
+            .to_string();
+        assert!(
+            e.starts_with("unknown strategy 'kmedoids-x' (known: "),
+            "{e}"
+        );
     }
 
     #[test]

@@ -23,14 +23,6 @@ impl Strategy for Nvidia {
         }
     }
 
-    fn summary(&self) -> &'static str {
-        if self.tipsify_cache.is_some() {
-            "tipsify vertex-cache order, then the NVIDIA scan: cheap, and better locality than raw order"
-        } else {
-            "NVIDIA's scan of the index buffer as given: fastest, quality follows the input order"
-        }
-    }
-
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         let mut b = MeshletBuilder::new(mesh.vertex_count(), limits);
         match self.tipsify_cache {

@@ -42,9 +42,6 @@ impl Strategy for Qem {
     fn name(&self) -> &'static str {
         "qem"
     }
-    fn summary(&self) -> &'static str {
-        "hierarchical face clustering (Garland et al. 2001): cheapest merge of plane fit plus irregularity first (Mlakar et al. 2024, §3.1)"
-    }
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         let owner = cluster(mesh, limits);
         let order: Vec<u32> = (0..owner.len() as u32).collect();

@@ -1,4 +1,4 @@
-//! The coarse regions that `kmedoids-tiled` and `kmedoids-parallel` cluster at once (CPU
+//! The coarse regions that `kmedoids-parallel` clusters at once (CPU
 //! reference of `wgsl/coarse.wgsl`, driven on the GPU by `gpu::coarse`).
 //!
 //! The flat method's seeding and assignment ([`super::flat`], [`mod@super::assign`]) at a coarse
@@ -19,7 +19,7 @@
 //! not depend on the order it is taken in.
 
 use super::assign::{assign, UNREACHED};
-use super::flat::morton_order;
+use super::morton::morton_order;
 use crate::adjacency::pieces;
 use crate::common::{sorted, Csr};
 use crate::mesh::Mesh;

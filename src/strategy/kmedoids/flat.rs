@@ -1,6 +1,6 @@
 //! The flat and the paper's k-medoids (`kmedoids-flat`, `kmedoids-paper`): nearest-medoid
 //! assignment with no regard to the limits, then overflowing clusters split until they fit. The
-//! GPU runs the flat method step for step (`gpu::kmedoids::cluster_flat`).
+//! GPU runs the flat method step for step (`gpu::kmedoids_flat::cluster`).
 //!
 //! 1. [`initial_medoids`]: k = ceil(T / per_cluster) triangles spread in Morton order of
 //!    centroids; every dual-graph component gets one ([`add_component_medoids`]).
@@ -24,14 +24,58 @@
 //! round, so far fewer global re-runs are needed; the paper's mode is the paper's loop.
 
 use super::assign::{assign, UNREACHED};
+use super::morton::morton_order;
 use super::split::{farthest_members, overflowing, split_choice};
 use super::update::{update_cached, UpdateCache};
-use super::{mean, pack, Clustering, Config, Mode};
-use crate::common::{morton3, sorted, Csr};
+use super::{mean, pack, Clustering, Mode};
+use crate::common::{sorted, Csr};
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
-use rayon::prelude::*;
-use std::time::Instant;
+use std::time::{Duration, Instant};
+
+/// Settings of `kmedoids-flat`; `kmedoids-paper` reads them too (its iterations, and its splits
+/// once its budget is spent).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    /// Most assign/update iterations per (re)clustering (steps 2-4). The medoids of the shared
+    /// meshes settle within a few; 16 bounds the rare oscillation between two medoids.
+    pub max_iterations: u32,
+    /// Stop when the mean medoid shift (hops) is at most this (step 4); 0 runs to a fixed point.
+    pub shift_threshold: f64,
+    /// Iterations after each split round (step 5): neighbours re-balance a little between
+    /// rounds, and two do most of that.
+    pub split_iterations: u32,
+    /// Fraction of the overflowing clusters, largest first, split per round (step 5): splitting
+    /// all at once splits clusters that a neighbour's split would have relieved.
+    pub split_fraction: f64,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            max_iterations: 16,
+            shift_threshold: 0.0,
+            split_iterations: 2,
+            split_fraction: 0.25,
+        }
+    }
+}
+
+/// Settings of `kmedoids-paper` beside [`Config`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PaperConfig {
+    /// After this long, the remaining splits are done the flat way: the paper's loop re-runs
+    /// everything per added cluster, which on large meshes takes hours.
+    pub budget: Duration,
+}
+
+impl Default for PaperConfig {
+    fn default() -> Self {
+        Self {
+            budget: Duration::from_secs(300),
+        }
+    }
+}
 
 /// Triangles per initial cluster.
 pub fn cluster_size(limits: Limits, mode: Mode) -> usize {
@@ -40,23 +84,28 @@ pub fn cluster_size(limits: Limits, mode: Mode) -> usize {
         Mode::Paper => limits.max_triangles as usize,
         // A closed 64-vertex patch holds about 1.5 x 64 triangles (Euler: T ~ 2V minus the
         // boundary), so starting at that size leaves far fewer clusters to split.
-        Mode::Flat | Mode::Capacity | Mode::Tiled | Mode::Regions => (limits.max_triangles
-            as usize)
+        Mode::Flat | Mode::Sequential | Mode::Parallel => (limits.max_triangles as usize)
             .min(3 * limits.max_vertices as usize / 2)
             .max(1),
     }
 }
 
-/// Runs the flat or the paper's method (`mode`) over the dual graph; `t0` is when the run began
-/// (the adjacency counts into the initial clustering's time).
+/// Runs the flat method, or with `paper` the paper's, over the dual graph; `t0` is when the run
+/// began (the adjacency counts into the initial clustering's time).
 pub fn cluster(
     mesh: &Mesh,
     dual: &Csr,
     limits: Limits,
-    mode: Mode,
     cfg: &Config,
+    paper: Option<&PaperConfig>,
     t0: Instant,
 ) -> Clustering {
+    let mode = if paper.is_some() {
+        Mode::Paper
+    } else {
+        Mode::Flat
+    };
+    let budget = paper.map_or(Duration::ZERO, |p| p.budget);
     let per_cluster = cluster_size(limits, mode);
     let mut medoids = initial_medoids(mesh, per_cluster);
     let mut iterations = 0;
@@ -92,7 +141,7 @@ pub fn cluster(
         if over.is_empty() {
             break;
         }
-        if paper && start.elapsed() > cfg.paper_budget {
+        if paper && start.elapsed() > budget {
             paper = false;
             budget_exhausted = true;
         }
@@ -145,88 +194,6 @@ pub fn initial_medoids(mesh: &Mesh, per_cluster: usize) -> Vec<u32> {
     sorted((0..k).map(|j| order[(j * t + t / 2) / k]).collect())
 }
 
-/// Triangles in the Morton order of their centroids (10 bits per axis over the bounding box's
-/// longest side), ties to the lower id.
-pub fn morton_order(mesh: &Mesh) -> Vec<u32> {
-    let (lo, hi) = mesh.bounding_box();
-    let frame = MortonFrame::new(lo, hi);
-    // (key, id) pairs are distinct, so the parallel unstable sort has one result.
-    let mut keyed: Vec<(u32, u32)> = (0..mesh.triangle_count())
-        .into_par_iter()
-        .map(|i| {
-            let [a, b, c] = mesh.triangle(i).map(|v| mesh.position(v));
-            (frame.key(a, b, c), i as u32)
-        })
-        .collect();
-    keyed.par_sort_unstable();
-    keyed.into_par_iter().map(|(_, i)| i).collect()
-}
-
-/// The frame of the Morton keys, from the mesh's bounding box: a triangle's corner sum minus
-/// `lo3`, times `factor`, is its centroid in 0..=1023 along the box's longest side. Only `+`, `-`
-/// and `x` touch a triangle, in a fixed order, so `wgsl/morton.wgsl` computes the same keys on
-/// any device (the divisions happen once, here, and reach the GPU as these two values).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MortonFrame {
-    /// Three times the box's low corner.
-    pub lo3: glam::Vec3,
-    /// 1023 over three times the box's longest side.
-    pub factor: f32,
-    /// [`FINE_MAX`] over three times the box's longest side.
-    pub fine: f32,
-}
-
-/// The largest coordinate of a fine centroid cell ([`MortonFrame::fine_cell`], 15 bits per axis):
-/// `kmedoids-parallel`'s growth key. The Morton cells (10 bits) are as large as a triangle of a
-/// mesh of some million triangles, and ties in the key then leave clusters less round, so more of
-/// them (the bit counts measured are in `docs/gpu-clustering.md`); 15 bits is the most whose
-/// squared distances still fit a `u32` (three squares of `2^15 - 1` stay under `2^32`).
-/// `wgsl/prelude.wgsl` holds the same value.
-pub const FINE_MAX: u32 = (1 << 15) - 1;
-
-impl MortonFrame {
-    /// The frame of the box `lo`..`hi`.
-    pub fn new(lo: glam::Vec3, hi: glam::Vec3) -> Self {
-        let scale = (hi - lo).max_element().max(f32::MIN_POSITIVE);
-        Self {
-            lo3: lo * 3.0,
-            factor: 1023.0 / (3.0 * scale),
-            fine: FINE_MAX as f32 / (3.0 * scale),
-        }
-    }
-
-    /// The fine grid cell (0..=[`FINE_MAX`] per axis) of the centroid of `a`, `b`, `c`: as
-    /// [`Self::cell`], with `fine` for the factor.
-    pub fn fine_cell(&self, a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> [u32; 3] {
-        self.quantise(a, b, c, self.fine, FINE_MAX)
-    }
-
-    /// The corner sum minus `lo3`, times `factor`, truncated to `0..=top` per axis.
-    fn quantise(
-        &self,
-        a: glam::Vec3,
-        b: glam::Vec3,
-        c: glam::Vec3,
-        factor: f32,
-        top: u32,
-    ) -> [u32; 3] {
-        let q = (((a + b) + c - self.lo3) * factor)
-            .clamp(glam::Vec3::ZERO, glam::Vec3::splat(top as f32));
-        [q.x as u32, q.y as u32, q.z as u32]
-    }
-
-    /// The grid cell (0..=1023 per axis) of the centroid of the triangle `a`, `b`, `c`.
-    pub fn cell(&self, a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> [u32; 3] {
-        self.quantise(a, b, c, self.factor, 1023)
-    }
-
-    /// Morton key (30 bits) of the triangle with corners `a`, `b`, `c`.
-    pub fn key(&self, a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> u32 {
-        let [x, y, z] = self.cell(a, b, c);
-        morton3(x, y, z) as u32
-    }
-}
-
 /// Assigns, then adds a medoid (the lowest unreached triangle) to every dual-graph component that has
 /// none, until all triangles are reached.
 fn cover_components(dual: &Csr, medoids: &mut Vec<u32>) {
@@ -267,39 +234,9 @@ pub fn add_component_medoids(dual: &Csr, labels: &[u32], medoids: &mut Vec<u32>)
     true
 }
 
-/// A packed centre: `[x | y << 16, z]`, 15 bits per axis.
-pub type Centre = [u32; 2];
-
-/// The three coordinates of a packed centre.
-pub(crate) fn unpack(c: Centre) -> [u32; 3] {
-    [c[0] & 0xffff, c[0] >> 16, c[1]]
-}
-
-/// Squared distance between two cells.
-pub(crate) fn distance2(a: [u32; 3], b: [u32; 3]) -> u32 {
-    (0..3).map(|j| a[j].abs_diff(b[j]).pow(2)).sum()
-}
-
-/// Each triangle's fine centroid cell in the Morton frame ([`MortonFrame::fine_cell`], 15 bits
-/// per axis along the box's longest side), packed as a [`Centre`]: the geometric term of
-/// `kmedoids-parallel`'s growth key and of the boundary moves' rule.
-/// Only `+`, `-` and `x` touch a triangle, so `wgsl/morton.wgsl` computes the same words.
-pub fn packed_centres(mesh: &Mesh) -> Vec<Centre> {
-    let (lo, hi) = mesh.bounding_box();
-    let frame = MortonFrame::new(lo, hi);
-    (0..mesh.triangle_count())
-        .into_par_iter()
-        .map(|t| {
-            let [a, b, c] = mesh.triangle(t).map(|v| mesh.position(v));
-            let [x, y, z] = frame.fine_cell(a, b, c);
-            [x | y << 16, z]
-        })
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
-    use super::super::cluster;
+    use super::super::{cluster, Config};
     use super::*;
     use crate::mesh::generate;
     use crate::meshlet::validate;

@@ -1,8 +1,11 @@
 //! One cluster's induced subgraph of the dual graph, with local node numbers: the medoid (all
 //! members' distance sums at once) and breadth-first distances. Every k-medoids step that looks
-//! inside a cluster reads it.
+//! inside a cluster reads it; the medoid step of the sequential and the parallel method
+//! ([`medoids_and_distances`]) is here too.
 
+use super::assign::members;
 use crate::common::Csr;
+use rayon::prelude::*;
 
 /// A cluster's induced subgraph with local indices (member `i` of the ascending member list is
 /// node `i`).
@@ -237,6 +240,34 @@ pub(crate) fn member_distances(sub: &LocalGraph, at: usize) -> Vec<u32> {
         }
     }
     d
+}
+
+/// The paper's medoid of cluster `c` (members `m`, ascending) and each member's hop distance to
+/// it inside the cluster.
+pub(crate) fn medoid_of(dual: &Csr, labels: &[u32], c: u32, m: &[u32]) -> (u32, Vec<u32>) {
+    let sub = LocalGraph::new(dual, labels, c, m);
+    let best = sub.medoid_index();
+    (m[best], member_distances(&sub, best))
+}
+
+/// The paper's medoid of each of the `k` clusters (smallest sum of in-cluster hop distances, ties
+/// to the lowest id) and every triangle's in-cluster hop distance to it, from one local graph per
+/// cluster (members in other pieces continue the count). One invocation per cluster on the GPU.
+pub fn medoids_and_distances(dual: &Csr, labels: &[u32], k: usize) -> (Vec<u32>, Vec<u32>) {
+    let mem = members(labels, k);
+    let per: Vec<(u32, Vec<u32>)> = (0..k)
+        .into_par_iter()
+        .map(|c| medoid_of(dual, labels, c as u32, mem.row(c)))
+        .collect();
+    let mut distances = vec![0; labels.len()];
+    let mut medoids = Vec::with_capacity(k);
+    for (c, (m, d)) in per.into_iter().enumerate() {
+        medoids.push(m);
+        for (&t, &x) in mem.row(c).iter().zip(&d) {
+            distances[t as usize] = x;
+        }
+    }
+    (medoids, distances)
 }
 
 #[cfg(test)]

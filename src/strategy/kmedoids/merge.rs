@@ -3,7 +3,7 @@
 //! nearest cluster with room; then clusters are renumbered by medoid and distances refreshed.
 
 use super::assign::{members, UNREACHED};
-use super::local_graph::{member_distances, LocalGraph};
+use super::local_graph::LocalGraph;
 use super::seed::centroid;
 use crate::adjacency::pieces;
 use crate::common::{morton3, sorted, union_len, Csr};
@@ -376,28 +376,4 @@ pub(crate) fn renumber(medoids: &mut Vec<u32>, labels: &mut [u32]) {
         *l = new_id[*l as usize];
     }
     *medoids = order.iter().map(|&c| medoids[c as usize]).collect();
-}
-
-/// Hop distances from each cluster's medoid inside the cluster (what `pack` orders by).
-pub(crate) fn refresh_distances(
-    dual: &Csr,
-    medoids: &[u32],
-    labels: &[u32],
-    distances: &mut [u32],
-) {
-    let mem = members(labels, medoids.len());
-    let rows: Vec<(u32, Vec<u32>)> = (0..medoids.len() as u32)
-        .into_par_iter()
-        .map(|c| {
-            let m = mem.row(c as usize);
-            let sub = LocalGraph::new(dual, labels, c, m);
-            let at = m.binary_search(&medoids[c as usize]).expect("member");
-            (c, member_distances(&sub, at))
-        })
-        .collect();
-    for (c, d) in rows {
-        for (&t, &x) in mem.row(c as usize).iter().zip(&d) {
-            distances[t as usize] = x;
-        }
-    }
 }

@@ -1,4 +1,4 @@
-//! k-medoids on the triangle dual graph (the JCGT paper's section 3), as one family of three
+//! k-medoids on the triangle dual graph (the JCGT paper's section 3), as one family of four
 //! methods over shared steps.
 //!
 //! Triangles are nodes, edge-adjacent triangles are neighbours, distance is hop count; a medoid is
@@ -6,30 +6,26 @@
 //! k = ceil(T / max_triangles), assigns every triangle to its nearest medoid, and adds one cluster
 //! per overflow with a global re-run. Background: `docs/kmedoids.md`.
 //!
-//! | method ([`Mode`]) | name | driver | on the GPU |
-//! |---|---|---|---|
-//! | [`Mode::Capacity`] (the default) | `kmedoids` | [`capacity`]: clusters grow to the limits, nothing is split | `gpu::kmedoids::cluster_capacity` |
-//! | [`Mode::Flat`] | `kmedoids-flat` | [`flat`]: nearest-medoid assignment, overflows split a fraction at a time | `gpu::kmedoids::cluster_flat` |
-//! | [`Mode::Tiled`] | `kmedoids-tiled` | [`tiled`]: the capacity-aware method on many regions at once, border clusters merged in matching rounds | (none: the per-region growth is host code) |
-//! | [`Mode::Regions`] | `kmedoids-parallel` | [`regions`]: regions at once, each grown by integer keys a kernel runs | `gpu::regions` |
-//! | [`Mode::Paper`] | `kmedoids-paper` | [`flat`]: one cluster added and everything re-run per overflow | (none: slow by design) |
+//! | method ([`Mode`]) | name | driver | settings | on the GPU |
+//! |---|---|---|---|---|
+//! | [`Mode::Sequential`] (the default) | `kmedoids` | [`sequential`]: clusters grow to the limits one at a time, nothing is split | [`sequential::Config`] | none: a CPU method |
+//! | [`Mode::Parallel`] | `kmedoids-parallel` | [`parallel`]: coarse regions at once, every step a kernel | [`parallel::Config`] | `gpu::kmedoids_parallel` |
+//! | [`Mode::Flat`] | `kmedoids-flat` | [`flat`]: nearest-medoid assignment, overflows split a fraction at a time | [`flat::Config`] | `gpu::kmedoids_flat` (the baseline) |
+//! | [`Mode::Paper`] | `kmedoids-paper` | [`flat`]: one cluster added and everything re-run per overflow | [`flat::Config`], [`flat::PaperConfig`] | none: slow by design |
 //!
 //! The files, lowest first (a file reads only those above it in this list):
 //! - [`mod@assign`]: the flat multi-source BFS and member lists (CPU reference of `wgsl/assign.wgsl`);
+//! - [`morton`]: the Morton frame and the centroid cells (CPU reference of `wgsl/morton.wgsl`);
 //! - `local_graph`: one cluster's induced subgraph: medoids and distances;
 //! - [`update`]: the medoid update with its cache (CPU reference of `wgsl/update.wgsl`);
 //! - [`split`]: the flat method's overflow statistics (CPU reference of `wgsl/split.wgsl`);
-//! - [`seed`]: capacity-aware seeding growth and its orphans;
-//! - [`merge`]: merging neighbours and small pieces, renumbering;
-//! - [`capacity`]: the default's driver and its capacity-aware assignment (CPU reference of
-//!   `wgsl/capacity.wgsl`);
-//! - [`flat`]: the flat and paper drivers, the Morton frame and the centroid cells;
-//! - [`moves`]: boundary moves, the parallel method's medoid iteration;
-//! - [`coarse`]: the coarse regions of the two region-parallel methods (CPU reference of
-//!   `wgsl/coarse.wgsl`);
-//! - [`tiled`]: the region-parallel driver over the capacity-aware one;
-//! - [`regions`]: the region-parallel driver with a kernel-shaped grower (CPU reference of
-//!   `wgsl/regions.wgsl`);
+//! - [`seed`]: the sequential method's seeding growth and its orphans;
+//! - [`merge`]: the sequential method's merges of neighbours and small pieces, renumbering;
+//! - [`sequential`]: the default's driver and its capacity-aware assignment;
+//! - [`flat`]: the flat and paper drivers;
+//! - [`coarse`]: the coarse regions of `kmedoids-parallel` (CPU reference of `wgsl/coarse.wgsl`);
+//! - [`parallel`]: the region-parallel method, a folder with one file per step (CPU reference of
+//!   `wgsl/kmedoids_parallel.wgsl` and `wgsl/kmedoids_parallel_moves.wgsl`);
 //! - this file: the strategy, its settings, [`cluster`] and [`pack`].
 //!
 //! Every step is a function over flat arrays (CSR adjacency, u32 labels and distances), so a
@@ -38,113 +34,94 @@
 //! order, so the output is the same for any thread count and on the GPU.
 
 pub mod assign;
-pub mod capacity;
 pub mod coarse;
 pub mod flat;
 mod local_graph;
 pub mod merge;
-pub mod moves;
-pub mod regions;
+pub mod morton;
+pub mod parallel;
 pub mod seed;
+pub mod sequential;
 pub mod split;
-pub mod tiled;
 pub mod update;
 
 pub use assign::{assign, members, UNREACHED};
+pub use local_graph::medoids_and_distances;
 pub use seed::Grow;
 
 use super::Strategy;
 use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::mesh::Mesh;
 use crate::meshlet::{Limits, Meshlets};
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Which k-medoids method runs; the strategy name selects it, so it is not a setting.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
-    /// Grow clusters to the limits and assign with capacity, so nothing is split
-    /// ([`capacity`], `kmedoids`, the default).
-    Capacity,
+    /// Grow clusters to the limits one at a time and assign with capacity, so nothing is split
+    /// ([`sequential`], `kmedoids`, the default).
+    Sequential,
+    /// Coarse regions at once, each grown by integer keys, every step a kernel
+    /// ([`parallel`], `kmedoids-parallel`).
+    Parallel,
     /// Split the largest overflowing clusters a fraction at a time, then a few global iterations
     /// ([`flat`], `kmedoids-flat`).
     Flat,
     /// Add one cluster at a time and re-run everything (the paper's method; slow, kept for
     /// comparison: `kmedoids-paper`).
     Paper,
-    /// The capacity-aware method on regions of the mesh at once, then border merges
-    /// ([`tiled`], `kmedoids-tiled`).
-    Tiled,
-    /// Regions at once, each grown by integer keys one GPU invocation runs
-    /// ([`regions`], `kmedoids-parallel`).
-    Regions,
 }
 
 impl Mode {
+    /// Every method, in the strategy table's order.
+    pub const ALL: [Mode; 4] = [Mode::Sequential, Mode::Parallel, Mode::Flat, Mode::Paper];
+
     /// The strategy name of this method.
     pub fn name(self) -> &'static str {
         match self {
-            Mode::Capacity => "kmedoids",
+            Mode::Sequential => "kmedoids",
+            Mode::Parallel => "kmedoids-parallel",
             Mode::Flat => "kmedoids-flat",
             Mode::Paper => "kmedoids-paper",
-            Mode::Tiled => "kmedoids-tiled",
-            Mode::Regions => "kmedoids-parallel",
+        }
+    }
+
+    /// One line on what the method optimises, for `--help` and the README.
+    pub fn summary(self) -> &'static str {
+        match self {
+            Mode::Sequential => "k-medoids whose clusters grow to the limits and take triangles only while they have room",
+            Mode::Parallel => "k-medoids on regions of the mesh at once, each grown by integer keys (the same on the GPU)",
+            Mode::Flat => "k-medoids on the triangle dual graph (hop distance), overflowing clusters split a fraction at a time",
+            Mode::Paper => "k-medoids as the paper runs it: one cluster added and everything re-run per overflow",
         }
     }
 }
 
-/// Triangles per region of `kmedoids-parallel` and `kmedoids-tiled` by default: on the shared meshes, regions of this
-/// size cost about a percent of meshlets over one region per mesh while leaving dozens of regions
-/// from a million triangles up (the region-size sweep of `meshletlab bench kmedoids`).
-pub const DEFAULT_REGION_TRIANGLES: u32 = 16384;
+/// Where a method's parallel steps run. The output is the same either way.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Threading {
+    /// On the current rayon pool: the global one, or a caller's under `pool.install`.
+    #[default]
+    Pool,
+    /// On a one-thread pool of its own (one-thread timings and determinism checks).
+    OneThread,
+}
 
-/// Rounds of boundary moves of `kmedoids-tiled` and `kmedoids-parallel` by default: two take
-/// their objective (mean hop distance to the medoid) below the sequential method's on the shared
-/// meshes, where the later rounds gain less for the same cost (the sweep of
-/// `meshletlab bench kmedoids`).
-pub const DEFAULT_MOVE_ROUNDS: u32 = 2;
-
-/// k-medoids tunables; each names the methods that read it. The method itself is a [`Mode`],
-/// chosen by the strategy name, never by these settings.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The k-medoids settings: one block per method (each documents what its fields feed and why
+/// its defaults are what they are), plus where the parallel steps run. The method itself is a
+/// [`Mode`], chosen by the strategy name; a method reads only its own block.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Config {
-    /// Most assign/update iterations per (re)clustering (flat, paper); most re-assignment rounds
-    /// (capacity).
-    pub max_iterations: u32,
-    /// Stop when the mean medoid shift (hops) is at most this (flat, paper).
-    pub shift_threshold: f64,
-    /// Iterations after each split round (flat).
-    pub split_iterations: u32,
-    /// Fraction of the overflowing clusters (largest first) split per round (flat).
-    pub split_fraction: f64,
-    /// After this long, finish the remaining splits the flat way (paper).
-    pub paper_budget: Duration,
-    /// Run on the global rayon pool (true) or on one thread (false); results are identical.
-    pub parallel: bool,
-    /// What a growing cluster prefers (capacity, parallel).
-    pub grow: Grow,
-    /// Triangles per region, each clustered on its own (parallel, regions): smaller regions give more
-    /// parallel work and more partly filled clusters at their borders.
-    pub region_triangles: u32,
-    /// Most rounds of boundary moves, the medoid iteration that lowers the objective without
-    /// changing the count (parallel, regions; [`moves`]). The first rounds gain the most; the
-    /// cost and the gain per round are in `results/kmedoids.md`'s run-time-against-error sweep.
-    pub move_rounds: u32,
-}
-
-impl Default for Config {
-    fn default() -> Self {
-        Self {
-            max_iterations: 16,
-            shift_threshold: 0.0,
-            split_iterations: 2,
-            split_fraction: 0.25,
-            paper_budget: Duration::from_secs(300),
-            parallel: true,
-            grow: Default::default(),
-            region_triangles: DEFAULT_REGION_TRIANGLES,
-            move_rounds: DEFAULT_MOVE_ROUNDS,
-        }
-    }
+    /// `kmedoids`.
+    pub sequential: sequential::Config,
+    /// `kmedoids-parallel`.
+    pub parallel: parallel::Config,
+    /// `kmedoids-flat`, and `kmedoids-paper`'s iterations and its splits after the budget.
+    pub flat: flat::Config,
+    /// `kmedoids-paper`'s budget.
+    pub paper: flat::PaperConfig,
+    /// Where the parallel steps run.
+    pub threading: Threading,
 }
 
 /// The k-medoids strategy: one [`Mode`] with its [`Config`].
@@ -160,26 +137,11 @@ impl Strategy for KMedoids {
         self.mode.name()
     }
 
-    fn summary(&self) -> &'static str {
-        match self.mode {
-            Mode::Flat => "k-medoids on the triangle dual graph (hop distance), overflowing clusters split a fraction at a time",
-            Mode::Paper => "k-medoids as the paper runs it: one cluster added and everything re-run per overflow",
-            Mode::Capacity => "k-medoids whose clusters grow to the limits and take triangles only while they have room",
-            Mode::Tiled => "the capacity-aware k-medoids on regions of the mesh at once, border clusters merged in parallel rounds",
-            Mode::Regions => "k-medoids on regions of the mesh at once, each grown by integer keys (the same on the GPU, one invocation per region)",
-        }
-    }
-
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         let run = || cluster(mesh, limits, self.mode, &self.config).meshlets;
-        if self.config.parallel {
-            run()
-        } else {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(1)
-                .build()
-                .expect("one-thread pool")
-                .install(run)
+        match self.config.threading {
+            Threading::Pool => run(),
+            Threading::OneThread => crate::common::one_thread_pool().install(run),
         }
     }
 }
@@ -202,14 +164,27 @@ fn cluster_on_pool(mesh: &Mesh, limits: Limits, mode: Mode, cfg: &Config) -> Clu
     let vt = vertex_triangles(mesh);
     let dual = dual_graph(mesh, &vt);
     match mode {
-        Mode::Capacity => {
-            let g = capacity::cluster(mesh, &dual, &vt, limits, cfg.grow, cfg.max_iterations);
+        Mode::Sequential => {
+            let g = sequential::cluster(mesh, &dual, &vt, limits, &cfg.sequential);
             Clustering::from_grown(mesh, limits, g, t0.elapsed().as_secs_f64())
         }
-        Mode::Flat | Mode::Paper => flat::cluster(mesh, &dual, limits, mode, cfg, t0),
-        Mode::Tiled => tiled::cluster(mesh, &dual, &vt, limits, cfg, t0),
-        Mode::Regions => regions::cluster(mesh, &dual, &vt, limits, cfg, t0),
+        Mode::Parallel => parallel::cluster(mesh, &dual, &vt, limits, &cfg.parallel, t0),
+        Mode::Flat => flat::cluster(mesh, &dual, limits, &cfg.flat, None, t0),
+        Mode::Paper => flat::cluster(mesh, &dual, limits, &cfg.flat, Some(&cfg.paper), t0),
     }
+}
+
+/// What a growing method (sequential or parallel, CPU or GPU) produced.
+pub struct Grown {
+    /// Medoid of each cluster, ascending.
+    pub medoids: Vec<u32>,
+    /// Cluster of each triangle.
+    pub labels: Vec<u32>,
+    /// Hop distance of each triangle to its medoid inside its cluster.
+    pub distances: Vec<u32>,
+    /// Re-assignment rounds tried (sequential; 0 where too few clusters were light for a round
+    /// to pay) or boundary-move rounds that moved triangles (parallel).
+    pub iterations: u32,
 }
 
 /// Everything a k-medoids run produces, for tests, benches and GPU parity. (No `PartialEq`: it
@@ -224,12 +199,12 @@ pub struct Clustering {
     pub distances: Vec<u32>,
     /// Assign/update iterations run in total.
     pub iterations: u32,
-    /// Split rounds (flat), clusters added (paper) or border-merge rounds that merged (tiled).
+    /// Split rounds (flat) or clusters added (paper).
     pub splits: u32,
     /// Whether the paper's method ran out of budget and finished the flat way.
     pub budget_exhausted: bool,
     /// Mean hop distance after the initial clustering, before any split (the k-medoids
-    /// objective); for the parallel method, that before its boundary moves ([`moves`]).
+    /// objective); for the parallel method, that before its boundary moves ([`parallel::moves`]).
     pub initial_mean_distance: f64,
     /// Iterations of the initial clustering.
     pub initial_iterations: u32,
@@ -243,16 +218,16 @@ pub struct Clustering {
 }
 
 impl Clustering {
-    /// A capacity-aware run's clusters (CPU or GPU), packed into meshlets; `seconds` is its wall
-    /// time. It has no initial clustering and no splits: its objective is that of the result.
-    pub fn from_grown(mesh: &Mesh, limits: Limits, g: capacity::Grown, seconds: f64) -> Self {
+    /// A growing run's clusters, packed into meshlets; `seconds` is its wall time. It has no
+    /// initial clustering and no splits: its objective is that of the result.
+    pub fn from_grown(mesh: &Mesh, limits: Limits, g: Grown, seconds: f64) -> Self {
         let meshlets = pack(mesh, &g.labels, &g.distances, g.medoids.len(), limits);
         Self::grown(g, meshlets, seconds)
     }
 
-    /// Grown clusters (capacity-aware or `kmedoids-parallel`, CPU or GPU) and their meshlets:
-    /// no initial clustering and no splits, so the objective is that of the result.
-    pub fn grown(g: capacity::Grown, meshlets: Meshlets, seconds: f64) -> Self {
+    /// Grown clusters (`kmedoids` or `kmedoids-parallel`, CPU or GPU) and their meshlets: no
+    /// initial clustering and no splits, so the objective is that of the result.
+    pub fn grown(g: Grown, meshlets: Meshlets, seconds: f64) -> Self {
         Clustering {
             initial_mean_distance: mean(&g.distances),
             medoids: g.medoids,

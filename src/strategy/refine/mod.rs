@@ -201,9 +201,6 @@ impl Strategy for Refined {
     fn name(&self) -> &'static str {
         self.name
     }
-    fn summary(&self) -> &'static str {
-        "any strategy, then boundary moves and dissolving the emptiest meshlets (fewer meshlets)"
-    }
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         let ml = self.inner.build(mesh, limits);
         refine(mesh, &ml, limits, self.config)

@@ -209,9 +209,6 @@ impl Strategy for Partitioned {
     fn name(&self) -> &'static str {
         self.name
     }
-    fn summary(&self) -> &'static str {
-        "meshoptimizer's meshlets (or any strategy's), re-partitioned globally by balanced Lloyd and packed along ejection chains (fewer meshlets)"
-    }
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
         let ml = self.inner.build(mesh, limits);
         partition(mesh, &ml, limits, self.config)

@@ -1,6 +1,6 @@
-//! The boundary moves on the device (`wgsl/moves.wgsl`, with the shared medoid of
+//! The boundary moves on the device (`wgsl/kmedoids_parallel_moves.wgsl`, with the shared medoid of
 //! `wgsl/medoid.wgsl`): the medoid iteration of `kmedoids-parallel`. The CPU reference is
-//! [`crate::strategy::kmedoids::moves`]; labels, distances, medoids and the counters of
+//! [`crate::strategy::kmedoids::parallel::moves`]; labels, distances, medoids and the counters of
 //! [`Moves`] are identical.
 //!
 //! Every round is a fixed sequence of dispatches recorded into the caller's batch, so the moves
@@ -11,10 +11,10 @@ use super::adjacency::DeviceAdjacency;
 use super::scan::ScanJob;
 use super::{binding_set, param_block, wgsl, Batch, Gpu, GpuError, Kernels, Scan};
 use crate::meshlet::Limits;
-use crate::strategy::kmedoids::moves::Moves;
+use crate::strategy::kmedoids::parallel::moves::Moves;
 
 param_block! {
-    /// `struct Params` of `wgsl/moves.wgsl`.
+    /// `struct Params` of `wgsl/kmedoids_parallel_moves.wgsl`.
     pub struct Params {
         /// Triangles.
         t,
@@ -36,7 +36,7 @@ param_block! {
 }
 
 binding_set! {
-    /// The storage buffers of `wgsl/moves.wgsl`, in binding order.
+    /// The storage buffers of `wgsl/kmedoids_parallel_moves.wgsl`, in binding order.
     pub struct Buffers {
         adjacency;
         /// Cluster of each triangle.
@@ -72,7 +72,7 @@ pub struct DeviceClusters<'a> {
     pub arena: &'a wgpu::Buffer,
     /// Scratch of at least 9 T words.
     pub cstate: &'a wgpu::Buffer,
-    /// The triangles' packed centroid cells (`strategy::kmedoids::flat::packed_centres`), two
+    /// The triangles' packed centroid cells (`strategy::kmedoids::morton::packed_centres`), two
     /// words each from word `centres_at`: step 2's distance rule reads them.
     pub centres: &'a wgpu::Buffer,
     /// Where the cells start in `centres`.
@@ -112,7 +112,7 @@ impl DeviceMoves {
         let kernels = Kernels::new::<Buffers>(
             gpu,
             "moves",
-            wgsl!("moves.wgsl", "medoid.wgsl"),
+            wgsl!("kmedoids_parallel_moves.wgsl", "medoid.wgsl"),
             &[
                 "tally",
                 "count_members",

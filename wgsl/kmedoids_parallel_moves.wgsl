@@ -1,5 +1,5 @@
 // Boundary moves, the medoid iteration of kmedoids-parallel on the device, mirroring
-// src/strategy/kmedoids/moves.rs (driver: src/gpu/moves.rs). Each round runs
+// src/strategy/kmedoids/parallel/moves.rs (driver: src/gpu/kmedoids_parallel_moves.rs). Each round runs
 //   tally          the per-cluster sums set to zero, "changed" moved to "changed last round"
 //                  (per cluster)
 //   count_members  members and distinct vertices per cluster (move_boundaries' vertex counts)
@@ -48,7 +48,7 @@ struct Params {
 @group(0) @binding(13) var<storage, read_write> state: array<atomic<u32>>;
 // The medoids, at `medoid_at`.
 @group(0) @binding(14) var<storage, read_write> info: array<u32>;
-// The triangles' packed centroid cells (x | y << 16, z) at `centres_at` (flat::packed_centres).
+// The triangles' packed centroid cells (x | y << 16, z) at `centres_at` (morton::packed_centres).
 @group(0) @binding(15) var<storage, read> centres: array<u32>;
 
 fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART]; }

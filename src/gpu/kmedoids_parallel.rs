@@ -1,5 +1,5 @@
-//! `kmedoids-parallel` on the device (`wgsl/regions.wgsl`); the CPU reference is
-//! [`crate::strategy::kmedoids::regions`], and labels, distances, medoids and meshlets are
+//! `kmedoids-parallel` on the device (`wgsl/kmedoids_parallel.wgsl`); the CPU reference is
+//! [`crate::strategy::kmedoids::parallel`], and labels, distances, medoids and meshlets are
 //! identical.
 //!
 //! Every step is a kernel, from a mesh uploaded from the host or already on the device: the
@@ -7,7 +7,7 @@
 //! reaches, members sorted by region) and the packed centroid cells, then the per-triangle setup
 //! and one invocation per region growing its clusters; after the host reads the cluster count of
 //! each region and writes their prefix sums, the global labels, one invocation per cluster for
-//! its medoid and distances, the boundary moves ([`super::moves`], in the same submission), and
+//! its medoid and distances, the boundary moves ([`super::kmedoids_parallel_moves`], in the same submission), and
 //! the assembly (`wgsl/assemble.wgsl`). The host reads back only control words: the box, the
 //! seeds, the BFS's frontier sizes, hooking-round counts where a piece has no seed, one count per
 //! region, one medoid per cluster and the moves' counters.
@@ -15,20 +15,21 @@
 use super::adjacency::{AdjacencyKernels, Timing};
 use super::assemble::{Assembly, DeviceMeshlets, Groups};
 use super::coarse::DeviceRegions;
-use super::kmedoids::{MeshSource, Placed};
+use super::kmedoids_parallel_moves::{DeviceClusters, DeviceMoves};
 use super::morton::DeviceInput;
-use super::moves::{DeviceClusters, DeviceMoves};
+use super::source::{MeshSource, Placed};
 use super::{
     binding_set, param_block, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan,
 };
 use crate::meshlet::Limits;
 use crate::strategy::kmedoids::coarse::region_count;
-use crate::strategy::kmedoids::moves::Moves;
-use crate::strategy::kmedoids::{mean, regions, Clustering, Config};
+use crate::strategy::kmedoids::parallel::moves::Moves;
+use crate::strategy::kmedoids::parallel::{self, layout, Config};
+use crate::strategy::kmedoids::{mean, Clustering};
 use std::time::Instant;
 
 param_block! {
-    /// `struct Params` of `wgsl/regions.wgsl`.
+    /// `struct Params` of `wgsl/kmedoids_parallel.wgsl`.
     pub struct Params {
         /// Triangles.
         t,
@@ -46,7 +47,7 @@ param_block! {
 }
 
 binding_set! {
-    /// The storage buffers of `wgsl/regions.wgsl`, in binding order.
+    /// The storage buffers of `wgsl/kmedoids_parallel.wgsl`, in binding order.
     pub struct Buffers {
         adjacency;
         /// Region offsets, cluster counts, bases, medoids.
@@ -94,7 +95,7 @@ fn fits(gpu: &Gpu, what: &'static str, len: usize) -> Result<(), GpuError> {
 /// Runs `kmedoids-parallel` on `gpu` over a mesh on the host or already on the device; with
 /// `read_back` the labels, distances and meshlets come back to the host, else only the medoids
 /// (one word per cluster) do, and the meshlets stay on the device.
-pub fn cluster_regions(
+pub fn cluster(
     gpu: &Gpu,
     source: MeshSource<'_>,
     limits: Limits,
@@ -103,11 +104,14 @@ pub fn cluster_regions(
 ) -> Result<(GpuRegions, DeviceMeshlets), GpuError> {
     let start = Instant::now();
     let (t, n) = source.counts();
-    fits(gpu, "regions' triangle state", 8 * t)?;
-    fits(gpu, "regions' corner state", 9 * t)?;
-    fits(gpu, "regions' canonical corners and centres", 5 * t)?;
+    let tri_len = layout::TRI_SECTIONS as usize * t;
+    let corner_len = 3 * layout::CORNER_SECTIONS as usize * t;
+    let canon_len = layout::CANON_WORDS as usize * t;
+    fits(gpu, "regions' triangle state", tri_len)?;
+    fits(gpu, "regions' corner state", corner_len)?;
+    fits(gpu, "regions' canonical corners and centres", canon_len)?;
     let k_regions = region_count(t, cfg.region_triangles as usize);
-    let arena_len = 8 * t + 3 * k_regions * limits.max_triangles as usize;
+    let arena_len = layout::arena_words(t, k_regions, limits.max_triangles as usize);
     fits(gpu, "regions' lists", arena_len)?;
     if t.div_ceil(k_regions) >= 1 << 24 {
         // Regions hold at most ceil(T / k) plus the small pieces they take in; checked exactly
@@ -126,16 +130,16 @@ pub fn cluster_regions(
     let kernels = Kernels::new::<Buffers>(
         gpu,
         "regions",
-        wgsl!("regions.wgsl", "medoid.wgsl"),
+        wgsl!(generated "kmedoids_parallel_layout.wgsl"; "kmedoids_parallel.wgsl", "medoid.wgsl"),
         &["init", "grow", "grow_rows", "relabel", "medoid"],
     );
     let info_len = 3 * k_regions + 2 + t;
     let (bufs, up) = timed(|| {
         (
             gpu.zeros("region info", info_len),
-            gpu.zeros("region triangle state", 8 * t),
-            gpu.zeros("canonical corners and centres", 5 * t),
-            gpu.zeros("corner state", 9 * t),
+            gpu.zeros("region triangle state", tri_len),
+            gpu.zeros("canonical corners and centres", canon_len),
+            gpu.zeros("corner state", corner_len),
             gpu.zeros("region lists", arena_len),
             gpu.zeros("labels", t),
             gpu.zeros("distances", t),
@@ -154,7 +158,7 @@ pub fn cluster_regions(
         &adj,
         cfg.region_triangles as usize,
         [&tri, &info],
-        Some((&canon, 3 * t)),
+        Some((&canon, layout::CANON_CELLS as usize * t)),
     )?;
     let mut timing = Timing {
         upload: upload + adj_timing.upload + up + coarse.timing.upload,
@@ -240,7 +244,7 @@ pub fn cluster_regions(
                 arena: &arena,
                 cstate: &cstate,
                 centres: &canon,
-                centres_at: 3 * t,
+                centres_at: layout::CANON_CELLS as usize * t,
             };
             DeviceMoves::new(gpu, &adj, &clusters, limits, cfg.move_rounds)
         })
@@ -285,7 +289,7 @@ pub fn cluster_regions(
             ..Moves::default()
         },
     };
-    let clustering = regions::clustering(
+    let clustering = parallel::clustering(
         medoids,
         labels,
         distances,

@@ -1,8 +1,7 @@
-//! The k-medoids family on the GPU: [`cluster_flat`] runs `kmedoids-flat` step for step as its CPU
-//! reference ([`crate::strategy::kmedoids::flat`]) with `wgsl/assign.wgsl`, `wgsl/update.wgsl` and
-//! `wgsl/split.wgsl`, with identical medoids, labels, distances, iteration and split counts and
-//! meshlets; [`cluster_capacity`] runs the default `kmedoids`
-//! ([`crate::strategy::kmedoids::capacity`]) with its parallel steps as kernels.
+//! `kmedoids-flat` on the GPU, the baseline data-parallel k-medoids: [`cluster`] runs it step
+//! for step as its CPU reference ([`crate::strategy::kmedoids::flat`]) with `wgsl/assign.wgsl`
+//! ([`super::assign`]), `wgsl/update.wgsl` and `wgsl/split.wgsl`, with identical medoids, labels,
+//! distances, iteration and split counts and meshlets.
 //!
 //! The loop is driven from the host, but the per-triangle data (dual graph, labels, distances,
 //! members) stays on the GPU. One iteration (medoid update, then assignment) is one submission and
@@ -16,39 +15,18 @@
 
 use super::adjacency::{AdjacencyKernels, DeviceAdjacency, Timing};
 use super::assemble::{Assembly, DeviceMeshlets, Groups};
+use super::assign::{Bfs, Params, COUNTERS};
 use super::morton::{self, DeviceInput};
 use super::scan::ScanJob;
-use super::{
-    binding_set, param_block, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan, PART,
-};
-use super::{DeviceMesh, Split};
+use super::source::{MeshSource, Placed};
+use super::{binding_set, timed, timed_read, wgsl, Batch, Gpu, GpuError, Kernels, Scan, PART};
 use crate::adjacency::Csr;
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
-use crate::strategy::kmedoids::capacity::{assign_capacity, cluster_with};
-use crate::strategy::kmedoids::flat::{add_component_medoids, cluster_size};
+use crate::strategy::kmedoids::flat::{add_component_medoids, cluster_size, Config};
 use crate::strategy::kmedoids::split::{overflowing_from_counts, split_choice};
-use crate::strategy::kmedoids::{Clustering, Config, Mode};
+use crate::strategy::kmedoids::{Clustering, Mode};
 use std::time::Instant;
-
-param_block! {
-    /// `struct Params` of the k-medoids family: `wgsl/update.wgsl`, `assign.wgsl` and
-    /// `split.wgsl` (one dispatch's parameters serve all three).
-    pub struct Params {
-        /// Triangles.
-        t,
-        /// Clusters.
-        k,
-        /// BFS level (assign's `push`).
-        d,
-        /// Counter slot this dispatch counts into.
-        slot,
-        /// Meshlet vertex limit.
-        max_v,
-        /// Meshlet triangle limit.
-        max_t,
-    }
-}
 
 binding_set! {
     /// The storage buffers of `wgsl/update.wgsl` (the medoid update), in binding order.
@@ -85,28 +63,6 @@ binding_set! {
 }
 
 binding_set! {
-    /// The storage buffers of `wgsl/assign.wgsl` (the multi-source BFS), in binding order.
-    pub struct AssignBuffers {
-        /// Dual-graph offsets.
-        dual_off: Read,
-        /// Dual-graph items, first part.
-        dual_a: Read,
-        /// Dual-graph items, second part.
-        dual_b: Read,
-        /// Out: cluster per triangle.
-        labels: ReadWrite,
-        /// Out: hop distance per triangle.
-        dist: ReadWrite,
-        /// Medoid per cluster.
-        medoids: Read,
-        /// Update counters and the frontier-size ring.
-        counters: ReadWrite,
-        /// Two frontier lists.
-        frontier: ReadWrite,
-    }
-}
-
-binding_set! {
     /// The storage buffers of `wgsl/split.wgsl` (split statistics), in binding order.
     pub struct SplitBuffers {
         /// Member offsets per cluster.
@@ -132,20 +88,12 @@ binding_set! {
     }
 }
 
-/// Frontier-size counters (a ring in `wgsl/assign.wgsl`, after 8 update counters).
-const RING: usize = 64;
-const SIZES: usize = 8;
 /// Update counters (see `wgsl/update.wgsl`): shift sum, medoids changed, one-thread updates,
 /// updates skipped as unchanged.
 const SHIFT: usize = 0;
 const CHANGED: usize = 1;
 const LARGE: usize = 2;
 const SKIPPED: usize = 3;
-const COUNTERS: usize = SIZES + RING;
-/// Most BFS levels recorded in one submission (fewer than the ring, so no slot is reused before
-/// the host reads it).
-const MAX_LEVELS: usize = RING - 4;
-
 /// A GPU k-medoids run: the same [`Clustering`] as the CPU, plus GPU facts.
 pub struct GpuClustering {
     /// The result (its `initial_seconds` is wall time on the host, as on the CPU).
@@ -207,178 +155,6 @@ struct Run<'a> {
     skipped: u64,
 }
 
-/// The multi-source BFS of `wgsl/assign.wgsl` (CPU reference [`crate::strategy::kmedoids::assign`])
-/// over its caller's label, distance and medoid buffers: many levels per submission, the frontier
-/// sizes read back together, more levels recorded only when the frontier outlasts them.
-pub(crate) struct Bfs<'a> {
-    gpu: &'a Gpu,
-    kernels: &'a Kernels<Params>,
-    bind: wgpu::BindGroup,
-    /// Update counters, then the frontier-size ring.
-    counters: wgpu::Buffer,
-    t: usize,
-    /// BFS levels run in total.
-    rounds: std::cell::Cell<u32>,
-    /// See [`GpuClustering::deep_submissions`].
-    deep: std::cell::Cell<u32>,
-    /// BFS levels to record up front: the last assignment's depth plus two.
-    levels: std::cell::Cell<usize>,
-    /// Kernel seconds of every batch run through [`Bfs::run`].
-    kernel: std::cell::Cell<f64>,
-}
-
-impl<'a> Bfs<'a> {
-    /// A BFS over `adj`'s dual graph writing `labels` and `dist` (one word per triangle each)
-    /// from the seeds in `medoids`; `counters` holds [`COUNTERS`] words.
-    pub(crate) fn new(
-        gpu: &'a Gpu,
-        kernels: &'a Kernels<Params>,
-        adj: &DeviceAdjacency,
-        buffers: [&wgpu::Buffer; 3],
-        counters: wgpu::Buffer,
-    ) -> Self {
-        let [labels, dist, medoids] = buffers;
-        let frontier = gpu.zeros("frontier", 2 * adj.triangles);
-        let bind = kernels.bind(
-            gpu,
-            &AssignBuffers {
-                dual_off: &adj.dual_offsets,
-                dual_a: &adj.dual_items.a,
-                dual_b: &adj.dual_items.b,
-                labels,
-                dist,
-                medoids,
-                counters: &counters,
-                frontier: &frontier,
-            },
-        );
-        Self {
-            gpu,
-            kernels,
-            bind,
-            counters,
-            t: adj.triangles,
-            rounds: std::cell::Cell::new(0),
-            deep: std::cell::Cell::new(0),
-            levels: std::cell::Cell::new(16),
-            kernel: std::cell::Cell::new(0.0),
-        }
-    }
-
-    /// The assign kernels (cached per device).
-    pub(crate) fn kernels(gpu: &Gpu) -> Kernels<Params> {
-        Kernels::new::<AssignBuffers>(
-            gpu,
-            "assign",
-            wgsl!("assign.wgsl"),
-            &["clear", "seed", "push"],
-        )
-    }
-
-    /// The counter words to allocate for [`Bfs::new`].
-    pub(crate) const COUNTERS: usize = COUNTERS;
-
-    fn params(&self, k: usize, d: u32) -> Params {
-        Params {
-            t: self.t as u32,
-            k: k as u32,
-            d,
-            slot: 0,
-            max_v: 0,
-            max_t: 0,
-        }
-    }
-
-    /// Records the multi-source BFS from the k medoids: clear, seed and the expected number of
-    /// levels (the host checks the frontier sizes afterwards, [`Bfs::finish`]).
-    fn record<'b>(&'b self, b: &mut Batch<'b>, k: usize) {
-        let p = self.params(k, 0);
-        b.groups(
-            self.kernels,
-            "clear",
-            &self.bind,
-            p,
-            self.gpu.stride_groups(self.t),
-        );
-        b.groups(
-            self.kernels,
-            "seed",
-            &self.bind,
-            p,
-            self.gpu.stride_groups(k),
-        );
-        self.record_levels(b, k, 0, self.levels.get().min(MAX_LEVELS));
-    }
-
-    fn record_levels<'b>(&'b self, b: &mut Batch<'b>, k: usize, from: usize, n: usize) {
-        let groups = self.gpu.stride_groups(self.t);
-        for d in from..from + n {
-            b.groups(
-                self.kernels,
-                "push",
-                &self.bind,
-                self.params(k, d as u32),
-                groups,
-            );
-        }
-    }
-
-    /// The multi-source BFS alone from the first `k` medoids; returns the number of unreached
-    /// triangles.
-    pub(crate) fn assign(&self, k: usize) -> Result<usize, GpuError> {
-        let mut b = Batch::new(self.gpu);
-        self.record(&mut b, k);
-        Ok(self.finish(b, k)?.0)
-    }
-
-    /// Runs `b` (which ends with [`Bfs::record`]) and reads the update counters and the
-    /// frontier sizes in the same round trip; records more levels while the frontier is not
-    /// empty. Returns the unreached triangles and the counters.
-    fn finish(&self, b: Batch<'_>, k: usize) -> Result<(usize, Vec<u32>), GpuError> {
-        let counters = self.run(b, &[(&self.counters, 0, COUNTERS)])?.remove(0);
-        let mut recorded = self.levels.get().min(MAX_LEVELS);
-        let mut sizes = counters.clone();
-        // Level d's frontier size is slot d % RING; level 0's is k.
-        let mut reached = k;
-        let mut d = 1;
-        loop {
-            if d > recorded {
-                // Deeper than recorded: more levels, another round trip.
-                let more = MAX_LEVELS;
-                let mut b = Batch::new(self.gpu);
-                self.record_levels(&mut b, k, recorded, more);
-                sizes = self.run(b, &[(&self.counters, 0, COUNTERS)])?.remove(0);
-                recorded += more;
-                self.deep.set(self.deep.get() + 1);
-            }
-            let n = sizes[SIZES + d % RING] as usize;
-            reached += n;
-            if n == 0 {
-                self.rounds.set(self.rounds.get() + d as u32);
-                self.levels.set(d + 2);
-                return Ok((self.t - reached, counters));
-            }
-            d += 1;
-        }
-    }
-
-    /// Kernel seconds of every batch this BFS ran.
-    pub(crate) fn kernel_seconds(&self) -> f64 {
-        self.kernel.get()
-    }
-
-    /// Runs `b`, adding its kernel time, and returns the `reads`.
-    fn run(
-        &self,
-        b: Batch<'_>,
-        reads: &[(&wgpu::Buffer, usize, usize)],
-    ) -> Result<Vec<Vec<u32>>, GpuError> {
-        let (time, out) = b.run_read(reads)?;
-        self.kernel.set(self.kernel.get() + time);
-        Ok(out)
-    }
-}
-
 /// The update kernels' entry points.
 const UPDATE_ENTRIES: &[&str] = &[
     "clear_counters",
@@ -434,88 +210,6 @@ impl Modules {
     }
 }
 
-/// Capacity-aware k-medoids (the default `kmedoids`, [`crate::strategy::kmedoids::capacity`])
-/// with the GPU running its parallel steps: the adjacency, every medoid update (one workgroup
-/// per cluster: the `update` kernel of `wgsl/update.wgsl` with every cluster marked changed)
-/// and the capacity-aware assignment ([`super::capacity`], level by level to the fixed point that
-/// equals the CPU's sequential order; it runs only where the CPU's would, in the rounds that
-/// `worth_a_round` allows). The seeding growth, the merges and the packing are
-/// sequential by nature and run on the host between them, over the adjacency read back from the
-/// GPU. The output equals the CPU's (medoids, labels, distances, iterations, meshlets).
-pub fn cluster_capacity(
-    gpu: &Gpu,
-    mesh: &Mesh,
-    limits: Limits,
-    cfg: &Config,
-) -> Result<GpuClustering, GpuError> {
-    let start = Instant::now();
-    let (adj, adj_timing) = adjacency(gpu, mesh)?;
-    let (host, read_s) = timed(|| adj.read(gpu));
-    let host = host?;
-    let modules = Modules::new(gpu);
-    let (family, scan) = modules.family();
-    let mut run = Run::new(gpu, family, scan, &adj, limits, adj_timing)?;
-    run.timing.readback += read_s;
-    let failed = std::cell::RefCell::new(None);
-    // Built on the first round: most meshes run none (`worth_a_round`), and its kernels and three
-    // per-triangle buffers would cost them for nothing.
-    let mut cap: Option<super::capacity::CapacityAssign> = None;
-    let g = cluster_with(
-        mesh,
-        &host.dual,
-        &host.vertex_triangles,
-        limits,
-        cfg.grow,
-        cfg.max_iterations,
-        &mut |labels, medoids| {
-            if failed.borrow().is_some() {
-                return (medoids.to_vec(), None);
-            }
-            let m = run.medoids_of(labels, medoids).unwrap_or_else(|e| {
-                *failed.borrow_mut() = Some(e);
-                medoids.to_vec()
-            });
-            (m, None)
-        },
-        &mut |medoids, labels| {
-            if failed.borrow().is_some() {
-                return;
-            }
-            if !super::capacity::CapacityAssign::fits(medoids.len(), limits) {
-                // Cluster lists beyond one binding: the CPU step, whose labels are the same.
-                assign_capacity(mesh, &host.dual, limits, medoids, labels);
-                return;
-            }
-            let cap = cap.get_or_insert_with(|| {
-                super::capacity::CapacityAssign::new(gpu, mesh.triangle_count())
-            });
-            match cap.run(gpu, &adj, limits, medoids) {
-                Ok(l) => labels.copy_from_slice(&l),
-                Err(e) => *failed.borrow_mut() = Some(e),
-            }
-        },
-    );
-    if let Some(e) = failed.into_inner() {
-        return Err(e);
-    }
-    Ok(GpuClustering {
-        clustering: Clustering::from_grown(mesh, limits, g, start.elapsed().as_secs_f64()),
-        timing: Timing {
-            readback: run.timing.readback + run.readback.get(),
-            kernel: run.timing.kernel
-                + run.bfs.kernel.get()
-                + cap.as_ref().map_or(0.0, |c| c.kernel_seconds),
-            ..run.timing
-        },
-        adjacency_kernel: adj_timing.kernel,
-        large_updates: run.large,
-        bfs_rounds: cap.as_ref().map_or(0, |c| c.stats.levels as u32),
-        deep_submissions: 0,
-        updates: run.updates,
-        seconds: start.elapsed().as_secs_f64(),
-    })
-}
-
 /// Checks that `t` triangles fit the k-medoids buffers (two words per triangle in one binding).
 fn check_triangles(t: usize) -> Result<(), GpuError> {
     if 2 * t > PART {
@@ -528,92 +222,19 @@ fn check_triangles(t: usize) -> Result<(), GpuError> {
     Ok(())
 }
 
-/// Checks the mesh fits the k-medoids buffers, then builds its adjacency on the GPU.
-fn adjacency(gpu: &Gpu, mesh: &Mesh) -> Result<(DeviceAdjacency, Timing), GpuError> {
-    check_triangles(mesh.triangle_count())?;
-    AdjacencyKernels::new(gpu).build(gpu, mesh)
-}
-
 /// Runs the flat k-medoids (`kmedoids-flat`) on the GPU; `cfg`'s flat settings apply.
-pub fn cluster_flat(
+pub fn cluster(
     gpu: &Gpu,
     mesh: &Mesh,
     limits: Limits,
     cfg: &Config,
 ) -> Result<GpuClustering, GpuError> {
-    cluster_flat_with(gpu, MeshSource::Host(mesh), limits, cfg, true).map(|(c, _)| c)
+    cluster_with(gpu, MeshSource::Host(mesh), limits, cfg, true).map(|(c, _)| c)
 }
 
-/// Where a GPU run reads its mesh: uploaded from the host, or already on the device.
-#[derive(Clone, Copy)]
-pub enum MeshSource<'a> {
-    /// A mesh on the host (its index buffer and positions are uploaded).
-    Host(&'a Mesh),
-    /// A mesh the caller holds on the device: nothing of it is read on the host.
-    Device(DeviceMesh<'a>),
-}
-
-/// A [`MeshSource`] on the device ([`MeshSource::place`]).
-pub(crate) struct Placed<'a> {
-    /// The index buffer.
-    pub indices: Split,
-    /// The positions, three f32 per vertex.
-    pub positions: Positions<'a>,
-    /// Seconds spent uploading.
-    pub upload: f64,
-}
-
-/// Positions uploaded by this run, or the caller's.
-pub(crate) enum Positions<'a> {
-    /// Uploaded from a host mesh.
-    Owned(wgpu::Buffer),
-    /// The caller's buffer.
-    Borrowed(&'a wgpu::Buffer),
-}
-
-impl std::ops::Deref for Positions<'_> {
-    type Target = wgpu::Buffer;
-    fn deref(&self) -> &wgpu::Buffer {
-        match self {
-            Positions::Owned(b) => b,
-            Positions::Borrowed(b) => b,
-        }
-    }
-}
-
-impl<'a> MeshSource<'a> {
-    /// Triangles and vertices.
-    pub fn counts(&self) -> (usize, usize) {
-        match self {
-            MeshSource::Host(m) => (m.triangle_count(), m.vertex_count()),
-            MeshSource::Device(d) => (d.triangles, d.vertices),
-        }
-    }
-
-    /// The mesh on the device: a host mesh's index buffer and positions uploaded, or the
-    /// caller's buffers.
-    pub(crate) fn place(self, gpu: &Gpu) -> Result<Placed<'a>, GpuError> {
-        let (placed, upload) = timed(|| -> Result<_, GpuError> {
-            Ok(match self {
-                MeshSource::Host(m) => (
-                    Split::upload(gpu, "indices", &m.indices)?,
-                    Positions::Owned(gpu.upload("positions", &m.positions)),
-                ),
-                MeshSource::Device(d) => (d.split_indices(gpu)?, Positions::Borrowed(d.positions)),
-            })
-        });
-        let (indices, positions) = placed?;
-        Ok(Placed {
-            indices,
-            positions,
-            upload,
-        })
-    }
-}
-
-/// [`cluster_flat`] that also returns the meshlets on the device (`wgsl/assemble.wgsl`); with
+/// [`cluster`] that also returns the meshlets on the device (`wgsl/assemble.wgsl`); with
 /// `read_back` false the labels, distances and meshlets are not read (left empty).
-pub fn cluster_flat_with(
+pub fn cluster_with(
     gpu: &Gpu,
     source: MeshSource<'_>,
     limits: Limits,
@@ -961,38 +582,6 @@ impl<'a> Run<'a> {
             return Ok(medoids);
         }
         self.read(&self.medoids, 0, k)
-    }
-
-    /// The paper's medoid of every cluster of `labels` (`medoids[c]`: any member of cluster c): the
-    /// update kernel with every cluster marked changed (nothing ever calls `remember` in this
-    /// use, so no triangle remembers a medoid and `dirty_mark` marks every cluster).
-    fn medoids_of(&mut self, labels: &[u32], medoids: &[u32]) -> Result<Vec<u32>, GpuError> {
-        let k = medoids.len();
-        self.upload_medoids(medoids)?;
-        let (_, s) = timed(|| {
-            self.gpu
-                .queue
-                .write_buffer(&self.labels, 0, bytemuck::cast_slice(labels))
-        });
-        self.timing.upload += s;
-        self.bind_mem_scan(k);
-        let (kern, bind, t) = (self.family.update, &self.bind, self.t);
-        let mem_scan = &self.mem_scan.as_ref().expect("bound").1;
-        let p = self.params(k, 0, 0);
-        let mut b = Batch::new(self.gpu);
-        b.threads(kern, "clear_counters", bind, p, COUNTERS);
-        b.threads(kern, "dirty_clear", bind, p, k);
-        b.threads(kern, "medoid_index", bind, p, k);
-        b.threads(kern, "dirty_mark", bind, p, t);
-        self.record_members(&mut b, k, mem_scan);
-        b.groups(kern, "update", bind, p, k as u32);
-        let mut out = self.run(
-            b,
-            &[(&self.result, 0, k), (&self.bfs.counters, 0, COUNTERS)],
-        )?;
-        self.large += out[1][LARGE];
-        self.updates += k as u64;
-        Ok(out.swap_remove(0))
     }
 
     /// Sum of hop distances (the k-medoids objective times T).

@@ -1,5 +1,5 @@
-//! Boundary moves: the medoid iteration of `kmedoids-tiled` and `kmedoids-parallel`,
-//! data-parallel and within the limits (the CPU reference of `wgsl/moves.wgsl`).
+//! Step 5 of `kmedoids-parallel`, boundary moves: its medoid iteration, data-parallel and within
+//! the limits (the CPU reference of `wgsl/kmedoids_parallel_moves.wgsl`).
 //!
 //! The paper's iteration (section 3) re-assigns every triangle to its nearest medoid and moves
 //! each medoid to its cluster's centre, with no regard to the limits. Here, with the medoids held
@@ -12,7 +12,7 @@
 //!    counting only neighbours that are not candidates themselves, so the one it attaches to
 //!    stays, and only clusters whose medoid's centroid cell is no farther from the triangle's
 //!    than its own medoid's (squared distances between
-//!    [`packed_centres`](super::flat::packed_centres) cells, integers on every device): by hop
+//!    [`packed_centres`](super::super::morton::packed_centres) cells, integers on every device): by hop
 //!    distance alone triangles moved along long thin fans towards a medoid across them, and the
 //!    bounding spheres grew. Kept only if taking it out leaves every other member's distance as
 //!    it was: each of its neighbours one level further out has another parent in the cluster
@@ -35,11 +35,10 @@
 //! Measured while designing it (the counts in `results/kmedoids.md`): the objective keeps falling
 //! for a dozen rounds or more, by less each round, so [`move_boundaries`] takes a round limit.
 
-use super::assign::{members, UNREACHED};
-use super::capacity::medoid_of;
-use super::flat::{distance2, unpack, Centre};
-use super::local_graph::LocalGraph;
-use super::mean;
+use super::super::assign::{members, UNREACHED};
+use super::super::local_graph::{medoid_of, LocalGraph};
+use super::super::mean;
+use super::super::morton::{distance2, unpack, Centre};
 use crate::common::Csr;
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
@@ -75,7 +74,7 @@ struct Proposal {
 /// Runs at most `max_rounds` rounds of steps 1-4 over `labels` and `distances` (hop distances to
 /// `medoids` inside each cluster, as the paper's medoid update gives them), then step 5: the
 /// paper's medoid of every cluster that changed, and its members' distances. `centres`: every
-/// triangle's centroid cell ([`packed_centres`](super::flat::packed_centres)).
+/// triangle's centroid cell ([`packed_centres`](super::super::morton::packed_centres)).
 #[allow(clippy::too_many_arguments)]
 pub fn move_boundaries(
     mesh: &Mesh,
@@ -359,8 +358,9 @@ fn bfs_distances(dual: &Csr, labels: &[u32], m: &[u32], root: u32) -> Vec<u32> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::flat::packed_centres;
-    use super::super::{cluster, Config, Mode};
+    use super::super::super::morton::packed_centres;
+    use super::super::super::{cluster, Config, Mode};
+    use super::super::Config as ParallelConfig;
     use super::*;
     use crate::adjacency::{cluster_pieces, dual_graph, vertex_triangles};
     use crate::mesh::generate;
@@ -373,11 +373,13 @@ mod tests {
         for limits in [Limits::new(64, 126).unwrap(), Limits::new(16, 12).unwrap()] {
             let run = |rounds| {
                 let cfg = Config {
-                    region_triangles: 500,
-                    move_rounds: rounds,
+                    parallel: ParallelConfig {
+                        region_triangles: 500,
+                        move_rounds: rounds,
+                    },
                     ..Config::default()
                 };
-                cluster(&m, limits, Mode::Tiled, &cfg)
+                cluster(&m, limits, Mode::Parallel, &cfg)
             };
             let (before, after) = (run(0), run(4));
             assert!(after.iterations > before.iterations, "no round moved");

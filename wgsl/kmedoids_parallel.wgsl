@@ -1,5 +1,5 @@
-// kmedoids-parallel on the device, mirroring src/strategy/kmedoids/regions.rs step by step
-// (driver: src/gpu/regions.rs):
+// kmedoids-parallel on the device, mirroring src/strategy/kmedoids/parallel/ step by step
+// (driver: src/gpu/kmedoids_parallel.rs):
 //   init      canonical_corners, and the State words of grow_region set to their start values
 //             (per triangle)
 //   grow      grow_region with Packing::nearest (nearest_piece), absorb_pockets (shed_front),
@@ -10,7 +10,7 @@
 //   relabel   step 3: cluster c of region r becomes base[r] + c (per triangle)
 //   medoid    medoids_and_distances: the paper's medoid of one cluster (least_sum_128's reach
 //             sets, or a BFS per member for wider clusters) and its members' hop distances (one
-//             invocation per cluster; the steps are in medoid.wgsl, shared with moves.wgsl)
+//             invocation per cluster; the steps are in medoid.wgsl, shared with kmedoids_parallel_moves.wgsl)
 // The CPU keeps a region's state in lc arrays; here the same words live in global arrays
 // indexed by triangle id or canonical corner (the region's own), and its lists at its member
 // offset (`RS`) in `arena`.
@@ -31,18 +31,18 @@ struct Params { t: u32, regions: u32, max_v: u32, max_t: u32, k: u32, pad: u32 }
 @group(0) @binding(9) var<storage, read_write> info: array<u32>;
 // Members of each region, ascending.
 @group(0) @binding(10) var<storage, read> items: array<u32>;
-// Per triangle, eight sections of T: region, lc cluster, frontier cluster, hops, aux, piece,
-// position in the seed order, free neighbours while on the frontier (State::free).
+// Per triangle, TRI_SECTIONS sections of T (parallel::layout): region, lc cluster, frontier
+// cluster, hops, aux, piece, position in the seed order, free neighbours while on the frontier.
 @group(0) @binding(11) var<storage, read_write> tri: array<u32>;
-// [0, 3T) per corner: the canonical corner; [3T, 5T) per triangle: its fine centroid cell, two
-// words (x | y << 16, z), from morton.wgsl (flat::packed_centres).
+// [0, 3T) per corner: the canonical corner; from CANON_CELLS * T per triangle: its fine centroid
+// cell, two words (x | y << 16, z), from morton.wgsl (morton::packed_centres).
 @group(0) @binding(12) var<storage, read_write> canon: array<u32>;
-// Per canonical corner, three sections of 3T: mark, first, wmark. Once `grow` is done, the
+// Per canonical corner, CORNER_SECTIONS sections of 3T: mark, first, wmark. Once `grow` is done, the
 // medoid kernel's scratch (9 words per member at 9x the cluster's member offset).
 @group(0) @binding(13) var<storage, read_write> cstate: array<u32>;
-// Per region at its member offset, sections of T: order, front, pockets' triangles, pockets,
-// pieces left, members by cluster (seq), cluster starts, piece starts; then per region `max_t`
-// words each: grown, vertex counts, histogram.
+// Per region at its member offset, ARENA_TRIANGLE_SECTIONS sections of T: order, front, pockets'
+// triangles, pockets, pieces left, members by cluster (seq), cluster starts, piece starts; then
+// ARENA_ROWS rows of `max_t` words per region: grown, vertex counts, histogram.
 @group(0) @binding(14) var<storage, read_write> arena: array<u32>;
 @group(0) @binding(15) var<storage, read_write> labels: array<u32>;
 @group(0) @binding(16) var<storage, read_write> dist: array<u32>;
@@ -51,37 +51,44 @@ fn idx(i: u32) -> u32 { if (i < PART) { return idx_a[i]; } return idx_b[i - PART
 fn vtn(i: u32) -> u32 { if (i < PART) { return vt_a[i]; } return vt_b[i - PART]; }
 fn nb(i: u32) -> u32 { if (i < PART) { return dual_a[i]; } return dual_b[i - PART]; }
 
-// tri sections.
-fn region(x: u32) -> u32 { return tri[x]; }
-fn lab(x: u32) -> u32 { return tri[p.t + x]; }
-fn set_lab(x: u32, v: u32) { tri[p.t + x] = v; }
-fn inq(x: u32) -> u32 { return tri[2u * p.t + x]; }
-fn hop(x: u32) -> u32 { return tri[3u * p.t + x]; }
-fn aux(x: u32) -> u32 { return tri[4u * p.t + x]; }
-fn set_aux(x: u32, v: u32) { tri[4u * p.t + x] = v; }
-fn piece(x: u32) -> u32 { return tri[5u * p.t + x]; }
+// tri sections (parallel::layout's TRI_*).
+fn tw(section: u32, x: u32) -> u32 { return section * p.t + x; }
+fn region(x: u32) -> u32 { return tri[tw(TRI_REGION, x)]; }
+fn lab(x: u32) -> u32 { return tri[tw(TRI_LABEL, x)]; }
+fn set_lab(x: u32, v: u32) { tri[tw(TRI_LABEL, x)] = v; }
+fn inq(x: u32) -> u32 { return tri[tw(TRI_INQ, x)]; }
+fn set_inq(x: u32, v: u32) { tri[tw(TRI_INQ, x)] = v; }
+fn hop(x: u32) -> u32 { return tri[tw(TRI_HOP, x)]; }
+fn aux(x: u32) -> u32 { return tri[tw(TRI_AUX, x)]; }
+fn set_aux(x: u32, v: u32) { tri[tw(TRI_AUX, x)] = v; }
+fn piece(x: u32) -> u32 { return tri[tw(TRI_PIECE, x)]; }
+fn set_piece(x: u32, v: u32) { tri[tw(TRI_PIECE, x)] = v; }
 // Position in the region's seed order.
-fn opos(x: u32) -> u32 { return tri[6u * p.t + x]; }
-fn free_of(x: u32) -> u32 { return tri[7u * p.t + x]; }
-fn set_free(x: u32, v: u32) { tri[7u * p.t + x] = v; }
+fn opos(x: u32) -> u32 { return tri[tw(TRI_OPOS, x)]; }
+fn free_of(x: u32) -> u32 { return tri[tw(TRI_FREE, x)]; }
+fn set_free(x: u32, v: u32) { tri[tw(TRI_FREE, x)] = v; }
 
-// cstate sections.
-fn mark(k: u32) -> u32 { return cstate[k]; }
-fn first_pos(k: u32) -> u32 { return cstate[3u * p.t + k]; }
-fn wmark(k: u32) -> u32 { return cstate[6u * p.t + k]; }
+// cstate sections (CORNER_*, each 3T).
+fn cw(section: u32, k: u32) -> u32 { return section * 3u * p.t + k; }
+fn mark(k: u32) -> u32 { return cstate[cw(CORNER_MARK, k)]; }
+fn first_pos(k: u32) -> u32 { return cstate[cw(CORNER_FIRST, k)]; }
+fn wmark(k: u32) -> u32 { return cstate[cw(CORNER_WMARK, k)]; }
 
-// arena sections (per-region offsets added by the callers).
-fn s_order() -> u32 { return 0u; }
-fn s_front() -> u32 { return p.t; }
-fn s_q() -> u32 { return 2u * p.t; }
-fn s_pockets() -> u32 { return 3u * p.t; }
-fn s_left() -> u32 { return 4u * p.t; }
-fn s_seq() -> u32 { return 5u * p.t; }
-fn s_cstart() -> u32 { return 6u * p.t; }
-fn s_pstart() -> u32 { return 7u * p.t; }
-fn s_grown(r: u32) -> u32 { return 8u * p.t + r * p.max_t; }
-fn s_vcount(r: u32) -> u32 { return 8u * p.t + (p.regions + r) * p.max_t; }
-fn s_hist(r: u32) -> u32 { return 8u * p.t + (2u * p.regions + r) * p.max_t; }
+// arena sections (ARENA_*; per-region offsets added by the callers).
+fn s_order() -> u32 { return ARENA_ORDER * p.t; }
+fn s_front() -> u32 { return ARENA_FRONT * p.t; }
+fn s_q() -> u32 { return ARENA_Q * p.t; }
+fn s_pockets() -> u32 { return ARENA_POCKETS * p.t; }
+fn s_left() -> u32 { return ARENA_LEFT * p.t; }
+fn s_seq() -> u32 { return ARENA_SEQ * p.t; }
+fn s_cstart() -> u32 { return ARENA_CSTART * p.t; }
+fn s_pstart() -> u32 { return ARENA_PSTART * p.t; }
+fn s_rows(row: u32, r: u32) -> u32 {
+    return ARENA_TRIANGLE_SECTIONS * p.t + (row * p.regions + r) * p.max_t;
+}
+fn s_grown(r: u32) -> u32 { return s_rows(0u, r); }
+fn s_vcount(r: u32) -> u32 { return s_rows(1u, r); }
+fn s_hist(r: u32) -> u32 { return s_rows(2u, r); }
 
 // ---- init ------------------------------------------------------------------------------------
 
@@ -101,15 +108,15 @@ fn init(@builtin(global_invocation_id) gid: vec3<u32>) {
         var i = 0u;
         if (idx(3u * u) != v) { i = 1u; if (idx(3u * u + 1u) != v) { i = 2u; } }
         canon[3u * t + j] = 3u * u + i;
-        cstate[3u * t + j] = NONE;
-        cstate[3u * p.t + 3u * t + j] = 0u;
-        cstate[6u * p.t + 3u * t + j] = 0u;
+        cstate[cw(CORNER_MARK, 3u * t + j)] = NONE;
+        cstate[cw(CORNER_FIRST, 3u * t + j)] = 0u;
+        cstate[cw(CORNER_WMARK, 3u * t + j)] = 0u;
     }
     set_lab(t, NONE);
-    tri[2u * p.t + t] = NONE;
-    tri[3u * p.t + t] = 0u;
+    set_inq(t, NONE);
+    tri[tw(TRI_HOP, t)] = 0u;
     set_aux(t, 0u);
-    tri[5u * p.t + t] = NONE;
+    set_piece(t, NONE);
     set_free(t, 0u);
 }
 
@@ -122,12 +129,8 @@ var<private> RS: u32;
 var<private> C: u32;
 // Set in a piece's free count when the piece is part of a mesh piece cut by the region's border.
 const CUT: u32 = 0x80000000u;
-// A pocket stamp whose free component is too large to absorb.
-const BIG: u32 = 0x80000000u;
 // Pocket evaluations so far (the wmark stamp).
 var<private> SERIAL: u32;
-// Pieces a packing cluster weighs for its next piece (regions::PACK_WINDOW).
-const PACK_WINDOW: u32 = 32u;
 
 fn in_region(x: u32) -> bool { return region(x) == R; }
 
@@ -153,7 +156,7 @@ fn free_neighbours(x: u32) -> u32 {
 }
 
 fn centre(x: u32) -> vec3<u32> {
-    return unpack_cell(canon[3u * p.t + 2u * x], canon[3u * p.t + 2u * x + 1u]);
+    return unpack_cell(canon[CANON_CELLS * p.t + 2u * x], canon[CANON_CELLS * p.t + 2u * x + 1u]);
 }
 
 // Strict order of the growth key (added vertices, free neighbours, squared distance to the
@@ -251,7 +254,7 @@ fn absorb(len: u32) -> vec2<u32> {
                     for (var j = 0u; j < 3u; j++) {
                         let k = canon[3u * x + j];
                         if (wmark(k) != SERIAL) {
-                            cstate[6u * p.t + k] = SERIAL;
+                            cstate[cw(CORNER_WMARK, k)] = SERIAL;
                             if (mark(k) == C) {
                                 arena[H + first_pos(k)] += 1u;
                             } else {
@@ -316,14 +319,10 @@ fn absorb(len: u32) -> vec2<u32> {
     return vec2<u32>(glen, earliest);
 }
 
-// Marks the pocket being tried by the front rule in `aux`, beside its stamp (regions.rs TRYING).
-const TRYING: u32 = 0x40000000u;
-// Marks the front rule's per-attempt stamps in `hop`, apart from hop counts (regions.rs ATTEMPT).
-const ATTEMPT: u32 = 0x80000000u;
 
-fn set_hop(x: u32, v: u32) { tri[3u * p.t + x] = v; }
-fn set_first(k: u32, v: u32) { cstate[3u * p.t + k] = v; }
-fn set_wmark(k: u32, v: u32) { cstate[6u * p.t + k] = v; }
+fn set_hop(x: u32, v: u32) { tri[tw(TRI_HOP, x)] = v; }
+fn set_first(k: u32, v: u32) { cstate[cw(CORNER_FIRST, k)] = v; }
+fn set_wmark(k: u32, v: u32) { cstate[cw(CORNER_WMARK, k)] = v; }
 fn in_pocket(y: u32) -> bool {
     return in_region(y) && lab(y) == NONE && aux(y) == ((C + 1u) | TRYING);
 }
@@ -551,7 +550,7 @@ fn grow_one(r: u32) {
         let root = items[RS + i];
         if (piece(root) != NONE) { continue; }
         let start = olen;
-        tri[5u * p.t + root] = np;
+        set_piece(root, np);
         arena[O + olen] = root;
         olen += 1u;
         var head = start;
@@ -563,7 +562,7 @@ fn grow_one(r: u32) {
                 let x = nb(e);
                 if (!in_region(x)) { cut = CUT; }
                 if (in_region(x) && piece(x) == NONE) {
-                    tri[5u * p.t + x] = np;
+                    set_piece(x, np);
                     arena[O + olen] = x;
                     olen += 1u;
                 }
@@ -582,7 +581,7 @@ fn grow_one(r: u32) {
         }
         np += 1u;
     }
-    for (var o = 0u; o < n; o++) { tri[6u * p.t + arena[O + o]] = o; }
+    for (var o = 0u; o < n; o++) { tri[tw(TRI_OPOS, arena[O + o])] = o; }
     var cursor = 0u;
     var open = false;
     var nv = 0u;
@@ -617,8 +616,8 @@ fn grow_one(r: u32) {
         }
         arena[F] = seed;
         var flen = 1u;
-        tri[2u * p.t + seed] = C;
-        tri[3u * p.t + seed] = 0u;
+        set_inq(seed, C);
+        set_hop(seed, 0u);
         set_free(seed, free_neighbours(seed));
         while (glen < p.max_t) {
             var cen = centre(seed);
@@ -647,8 +646,8 @@ fn grow_one(r: u32) {
             for (var j = 0u; j < 3u; j++) {
                 let k = canon[3u * x + j];
                 if (mark(k) != C) {
-                    cstate[k] = C;
-                    cstate[3u * p.t + k] = glen;
+                    cstate[cw(CORNER_MARK, k)] = C;
+                    set_first(k, glen);
                     nv += 1u;
                 }
             }
@@ -666,8 +665,8 @@ fn grow_one(r: u32) {
                 if (inq(y) == C) {
                     set_free(y, free_of(y) - 1u);
                 } else {
-                    tri[2u * p.t + y] = C;
-                    tri[3u * p.t + y] = hop(x) + 1u;
+                    set_inq(y, C);
+                    set_hop(y, hop(x) + 1u);
                     set_free(y, free_neighbours(y));
                     arena[F + flen] = y;
                     flen += 1u;
@@ -694,8 +693,8 @@ fn grow_one(r: u32) {
 // needs); per cluster, head, tail, size and the merge order live in the sections growth used for
 // the seed order, the frontier, the pockets' triangles and the pockets.
 
-fn next_of(x: u32) -> u32 { return tri[2u * p.t + x]; }
-fn set_next(x: u32, v: u32) { tri[2u * p.t + x] = v; }
+fn next_of(x: u32) -> u32 { return tri[tw(TRI_INQ, x)]; }
+fn set_next(x: u32, v: u32) { tri[tw(TRI_INQ, x)] = v; }
 fn head(c: u32) -> u32 { return arena[s_order() + RS + c]; }
 fn tail(c: u32) -> u32 { return arena[s_front() + RS + c]; }
 fn size(c: u32) -> u32 { return arena[s_q() + RS + c]; }
@@ -714,7 +713,7 @@ fn stamp_corners(x: u32) -> u32 {
     for (var j = 0u; j < 3u; j++) {
         let k = canon[3u * x + j];
         if (wmark(k) != SERIAL) {
-            cstate[6u * p.t + k] = SERIAL;
+            cstate[cw(CORNER_WMARK, k)] = SERIAL;
             nv += 1u;
         }
     }
@@ -842,12 +841,12 @@ fn merge_neighbours() {
 // them). The order is the merge order's section; the plan (a's pieces ascending, their targets)
 // is in the grown and vertex-count rows.
 
-fn pk_word(section: u32, c: u32) -> u32 { return section * p.t + items[RS + c]; }
+fn pk_word(section: u32, c: u32) -> u32 { return tw(section, items[RS + c]); }
 fn pk_centre(c: u32) -> vec3<u32> {
-    return unpack_cell(tri[pk_word(3u, c)], tri[pk_word(4u, c)]);
+    return unpack_cell(tri[pk_word(TRI_HOP, c)], tri[pk_word(TRI_AUX, c)]);
 }
-fn pk_radius(c: u32) -> u32 { return tri[pk_word(6u, c)]; }
-fn pk_verts(c: u32) -> u32 { return tri[pk_word(7u, c)]; }
+fn pk_radius(c: u32) -> u32 { return tri[pk_word(TRI_OPOS, c)]; }
+fn pk_verts(c: u32) -> u32 { return tri[pk_word(TRI_FREE, c)]; }
 fn extra_t(c: u32) -> u32 { return arena[s_seq() + RS + c]; }
 fn extra_v(c: u32) -> u32 { return arena[s_cstart() + RS + c]; }
 
@@ -879,7 +878,7 @@ fn planned(q: u32, np: u32) -> u32 {
 
 // A member's planned target while its cluster is being dissolved, in its first corner's mark
 // word (growth no longer reads marks).
-fn target_of(x: u32) -> u32 { return cstate[3u * x]; }
+fn target_of(x: u32) -> u32 { return cstate[cw(CORNER_MARK, 3u * x)]; }
 
 // After member x, the next of cluster b's members and then of a's members planned for b (a ==
 // NONE: b's alone); NONE at the end.
@@ -909,9 +908,9 @@ fn centre_radius(b: u32, a: u32) -> vec4<u32> {
 
 fn set_centre_radius(b: u32) {
     let cr = centre_radius(b, NONE);
-    tri[pk_word(3u, b)] = cr.x | (cr.y << 16u);
-    tri[pk_word(4u, b)] = cr.z;
-    tri[pk_word(6u, b)] = cr.w;
+    tri[pk_word(TRI_HOP, b)] = cr.x | (cr.y << 16u);
+    tri[pk_word(TRI_AUX, b)] = cr.z;
+    tri[pk_word(TRI_OPOS, b)] = cr.w;
 }
 
 fn pack_pieces() {
@@ -925,7 +924,7 @@ fn pack_pieces() {
         arena[s_cstart() + RS + c] = 0u;
         if (size(c) == 0u) { continue; }
         set_centre_radius(c);
-        tri[pk_word(7u, c)] = cluster_verts(c, NONE);
+        tri[pk_word(TRI_FREE, c)] = cluster_verts(c, NONE);
     }
     let o = order_by_size(k);
     for (var oi = 0u; oi < o; oi++) {
@@ -1000,7 +999,7 @@ fn pack_pieces() {
         if (!ok) { continue; }
         x = head(a);
         while (x != NONE) {
-            cstate[3u * x] = planned(piece(x), np);
+            cstate[cw(CORNER_MARK, 3u * x)] = planned(piece(x), np);
             x = next_of(x);
         }
         // The radii the targets gain, each target counted once (at its first piece).
@@ -1025,7 +1024,7 @@ fn pack_pieces() {
         for (var i = 0u; i < np; i++) {
             let b = arena[TG + i];
             set_centre_radius(b);
-            tri[pk_word(7u, b)] = cluster_verts(b, NONE);
+            tri[pk_word(TRI_FREE, b)] = cluster_verts(b, NONE);
         }
     }
 }
@@ -1067,7 +1066,7 @@ fn dissolve_clusters() {
         var qn = 0u;
         var x = head(a);
         while (x != NONE) {
-            cstate[3u * x] = 0u;
+            cstate[cw(CORNER_MARK, 3u * x)] = 0u;
             var outside = false;
             for (var e = dual_off[x]; e < dual_off[x + 1u]; e++) {
                 let y = nb(e);
@@ -1080,7 +1079,7 @@ fn dissolve_clusters() {
                     i -= 1u;
                 }
                 arena[Q + i] = x;
-                cstate[3u * x] = 1u;
+                cstate[cw(CORNER_MARK, 3u * x)] = 1u;
                 qn += 1u;
             }
             x = next_of(x);
@@ -1091,7 +1090,7 @@ fn dissolve_clusters() {
             let m = arena[Q + qh];
             qh = (qh + 1u) % p.max_t;
             qn -= 1u;
-            cstate[3u * m] = 0u;
+            cstate[cw(CORNER_MARK, 3u * m)] = 0u;
             var best = NONE;
             var best_add = 0u;
             for (var e = dual_off[m]; e < dual_off[m + 1u]; e++) {
@@ -1113,9 +1112,9 @@ fn dissolve_clusters() {
             moved += 1u;
             for (var e = dual_off[m]; e < dual_off[m + 1u]; e++) {
                 let y = nb(e);
-                if (in_region(y) && lab(y) == a && cstate[3u * y] == 0u) {
+                if (in_region(y) && lab(y) == a && cstate[cw(CORNER_MARK, 3u * y)] == 0u) {
                     arena[Q + (qh + qn) % p.max_t] = y;
-                    cstate[3u * y] = 1u;
+                    cstate[cw(CORNER_MARK, 3u * y)] = 1u;
                     qn += 1u;
                 }
             }
@@ -1130,7 +1129,7 @@ fn dissolve_clusters() {
                 if (done) {
                     append(b, x);
                     // Added once: extra_v(b) is zeroed below after b's first member.
-                    tri[pk_word(7u, b)] = pk_verts(b) + extra_v(b);
+                    tri[pk_word(TRI_FREE, b)] = pk_verts(b) + extra_v(b);
                 } else {
                     set_lab(x, a);
                 }

@@ -1,6 +1,7 @@
-//! Capacity-aware k-medoids (the default `kmedoids`): clusters are grown to the limits instead of
-//! being split until they fit; the driver of steps 1-5 and step 3, the capacity-aware assignment
-//! (CPU reference of `wgsl/capacity.wgsl`).
+//! `kmedoids`, the sequential default: capacity-aware k-medoids, whose clusters are grown to the
+//! limits instead of being split until they fit; the driver of steps 1-5 and step 3, the
+//! capacity-aware assignment. A CPU method: its growth and merges are sequential by nature (the
+//! GPU method is `kmedoids-parallel`, [`super::parallel`]).
 //!
 //! The flat method ([`super::flat`], `kmedoids-flat`) assigns every triangle to its nearest
 //! medoid with no regard to the limits, then splits overflowing clusters and re-runs the whole
@@ -37,108 +38,41 @@
 //! is the paper's. Every cluster is edge-connected (it grows across edges) and the merge keeps it
 //! so wherever the mesh is. Determinism: the growth and the merge are sequential in a fixed order;
 //! the medoid update is a parallel map. The same input gives the same output for any thread count.
-//!
-//! On the GPU (`gpu::kmedoids::cluster_capacity`) the adjacency, the medoid updates (step 2,
-//! parallel per cluster) and the capacity-aware assignment (step 3: every cluster walks a level at
-//! once, repeated to the fixed point that equals the sequential order; only in the rounds step 5
-//! runs) run as kernels and the rest on the host between them, through [`cluster_with`]; the
-//! output is identical.
 
-use super::assign::members;
-use super::local_graph::{member_distances, LocalGraph};
-use super::merge::{merge_neighbours, pack_pieces, refresh_distances, renumber, Pieces};
+use super::local_graph::medoids_and_distances;
+use super::merge::{merge_neighbours, pack_pieces, renumber, Pieces};
 use super::seed::{seed_clusters, seed_order, Grow, FREE};
+use super::Grown;
 use crate::common::Csr;
 use crate::mesh::Mesh;
 use crate::meshlet::Limits;
-use rayon::prelude::*;
 
-/// What a capacity-aware run produced.
-pub struct Grown {
-    /// Medoid of each cluster, ascending.
-    pub medoids: Vec<u32>,
-    /// Cluster of each triangle.
-    pub labels: Vec<u32>,
-    /// Hop distance of each triangle to its medoid inside its cluster.
-    pub distances: Vec<u32>,
-    /// Re-assignment rounds tried (capacity-aware assignments run; 0 where `worth_a_round` found
-    /// too few light clusters for a round to pay).
-    pub iterations: u32,
+/// Settings of `kmedoids`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    /// Most re-assignment rounds (steps 2-4 again, step 5), where `worth_a_round` lets any run.
+    /// Each round either lowers the objective or ends the loop, and the meshes whose rounds are
+    /// accepted stop within a few, so 16 is a bound that does not bind.
+    pub max_rounds: u32,
+    /// What a growing cluster prefers among equally cheap triangles (step 1): its centroid (the
+    /// default: rounder clusters, smaller spheres) or the fewest hops from its seed (a few fewer
+    /// meshlets).
+    pub grow: Grow,
 }
 
-/// Runs steps 1-5 with at most `max_iterations` update/assign rounds (none where
-/// `worth_a_round` says they cannot pay).
-pub fn cluster(
-    mesh: &Mesh,
-    dual: &Csr,
-    vt: &Csr,
-    limits: Limits,
-    grow: Grow,
-    max_iterations: u32,
-) -> Grown {
-    cluster_with(
-        mesh,
-        dual,
-        vt,
-        limits,
-        grow,
-        max_iterations,
-        &mut |labels, medoids| medoids_and_distances(dual, labels, medoids.len()),
-        &mut |medoids, labels| assign_capacity(mesh, dual, limits, medoids, labels),
-    )
-}
-
-/// The paper's medoid of every cluster: `(labels, any member of each cluster) -> (medoids, each
-/// triangle's hop distance to its new medoid if computed)`, same cluster order.
-/// [`medoids_and_distances`] on the CPU; the GPU's `update` kernel in
-/// `gpu::kmedoids::cluster_capacity` (no distances: the host finds them). Both are exact, so the
-/// results are identical.
-pub type MedoidUpdate<'a> = dyn FnMut(&[u32], &[u32]) -> (Vec<u32>, Option<Vec<u32>>) + 'a;
-
-/// Step 2 on the CPU: each of the `k` clusters' paper medoid (as [`super::update::update`]
-/// finds it) and every member's distance to it, from one local graph per cluster (a separate
-/// update and distance pass built each twice).
-pub fn medoids_and_distances(dual: &Csr, labels: &[u32], k: usize) -> (Vec<u32>, Option<Vec<u32>>) {
-    let mem = members(labels, k);
-    let rows: Vec<(u32, Vec<u32>)> = (0..k)
-        .into_par_iter()
-        .map(|c| medoid_of(dual, labels, c as u32, mem.row(c)))
-        .collect();
-    let mut distances = vec![0; labels.len()];
-    for (c, (_, d)) in rows.iter().enumerate() {
-        for (&t, &x) in mem.row(c).iter().zip(d) {
-            distances[t as usize] = x;
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            max_rounds: 16,
+            grow: Grow::default(),
         }
     }
-    (rows.into_iter().map(|r| r.0).collect(), Some(distances))
 }
 
-/// The paper's medoid of cluster `c` (members `m`, ascending) and each member's hop distance to
-/// it inside the cluster.
-pub(crate) fn medoid_of(dual: &Csr, labels: &[u32], c: u32, m: &[u32]) -> (u32, Vec<u32>) {
-    let sub = LocalGraph::new(dual, labels, c, m);
-    let best = sub.medoid_index();
-    (m[best], member_distances(&sub, best))
-}
-
-/// Step 3, the capacity-aware assignment: `(medoids, labels all FREE) -> labels`.
-/// [`assign_capacity`] on the CPU; `gpu::capacity::CapacityAssign` on the GPU, with identical
-/// labels.
-pub type Assign<'a> = dyn FnMut(&[u32], &mut [u32]) + 'a;
-
-/// [`cluster`] with the medoid update (step 2) and the capacity-aware assignment (step 3)
-/// supplied: the steps that run on the GPU there.
-#[allow(clippy::too_many_arguments)]
-pub fn cluster_with(
-    mesh: &Mesh,
-    dual: &Csr,
-    vt: &Csr,
-    limits: Limits,
-    grow: Grow,
-    max_iterations: u32,
-    medoids_of: &mut MedoidUpdate<'_>,
-    assign: &mut Assign<'_>,
-) -> Grown {
+/// Runs steps 1-5 with at most `cfg.max_rounds` update/assign rounds (none where
+/// `worth_a_round` says they cannot pay).
+pub fn cluster(mesh: &Mesh, dual: &Csr, vt: &Csr, limits: Limits, cfg: &Config) -> Grown {
+    let (grow, max_iterations) = (cfg.grow, cfg.max_rounds);
     let order = seed_order(dual);
     let pieces = Pieces::new(dual, vt);
     // Steps 1 and 4 over the free triangles of `labels`, clusters numbered on from `medoids`.
@@ -150,7 +84,7 @@ pub fn cluster_with(
     let mut labels = vec![FREE; mesh.triangle_count()];
     let mut medoids = Vec::new();
     grow_and_merge(&mut labels, &mut medoids);
-    let mut best = finish(dual, medoids, labels, medoids_of);
+    let mut best = finish(dual, medoids, labels);
     let mut iterations = 0;
     let rounds = if worth_a_round(&best.1, best.0.len(), limits) {
         max_iterations
@@ -162,14 +96,14 @@ pub fn cluster_with(
         // `best`'s medoids are already the paper's medoids of its clusters (step 2 is `finish`).
         let mut labels = vec![FREE; mesh.triangle_count()];
         let mut medoids = best.0.clone();
-        assign(&medoids, &mut labels);
+        assign_capacity(mesh, dual, limits, &medoids, &mut labels);
         // Triangles no cluster had room for start new clusters, grown as in the seeding.
         grow_and_merge(&mut labels, &mut medoids);
         if medoids.len() > best.0.len() {
             // More clusters: rejected before the exact medoids are paid for.
             break;
         }
-        let next = finish(dual, medoids, labels, medoids_of);
+        let next = finish(dual, medoids, labels);
         let better = (next.0.len(), objective(&next.2)) < (best.0.len(), objective(&best.2));
         if !better {
             break;
@@ -210,20 +144,10 @@ fn objective(distances: &[u32]) -> u64 {
 
 /// Medoids made exact (the paper's, in their final clusters), clusters numbered by ascending
 /// medoid, and in-cluster distances.
-fn finish(
-    dual: &Csr,
-    medoids: Vec<u32>,
-    mut labels: Vec<u32>,
-    medoids_of: &mut MedoidUpdate<'_>,
-) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
-    let (mut medoids, distances) = medoids_of(&labels, &medoids);
+fn finish(dual: &Csr, medoids: Vec<u32>, mut labels: Vec<u32>) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
+    let (mut medoids, distances) = medoids_and_distances(dual, &labels, medoids.len());
     // Renumbering changes cluster ids, not a triangle's distance to its medoid.
     renumber(&mut medoids, &mut labels);
-    let distances = distances.unwrap_or_else(|| {
-        let mut d = vec![0; labels.len()];
-        refresh_distances(dual, &medoids, &labels, &mut d);
-        d
-    });
     (medoids, labels, distances)
 }
 
@@ -289,6 +213,7 @@ pub fn assign_capacity(
 
 #[cfg(test)]
 mod tests {
+    use super::super::assign::members;
     use super::*;
     use crate::adjacency::{cluster_pieces, dual_graph, vertex_triangles};
     use crate::mesh::generate;
@@ -309,8 +234,30 @@ mod tests {
             ] {
                 let vt = vertex_triangles(m);
                 let dual = dual_graph(m, &vt);
-                let a = crate::test_pool(1).install(|| cluster(m, &dual, &vt, limits, grow, 4));
-                let b = crate::test_pool(4).install(|| cluster(m, &dual, &vt, limits, grow, 4));
+                let a = crate::test_pool(1).install(|| {
+                    cluster(
+                        m,
+                        &dual,
+                        &vt,
+                        limits,
+                        &Config {
+                            max_rounds: 4,
+                            grow,
+                        },
+                    )
+                });
+                let b = crate::test_pool(4).install(|| {
+                    cluster(
+                        m,
+                        &dual,
+                        &vt,
+                        limits,
+                        &Config {
+                            max_rounds: 4,
+                            grow,
+                        },
+                    )
+                });
                 assert_eq!(
                     (&a.medoids, &a.labels, &a.distances),
                     (&b.medoids, &b.labels, &b.distances)
@@ -364,7 +311,7 @@ mod tests {
         let vt = vertex_triangles(&m);
         let dual = dual_graph(&m, &vt);
         assert_eq!(
-            cluster(&m, &dual, &vt, limits, Grow::Centre, 16).iterations,
+            cluster(&m, &dual, &vt, limits, &Config::default()).iterations,
             0
         );
         // A tube of three-vertex rings fills 32 vertices with about 60 triangles, so every
@@ -374,7 +321,8 @@ mod tests {
         let dual = dual_graph(&m, &vt);
         let limits = Limits::new(32, 126).unwrap();
         let run = |threads| {
-            crate::test_pool(threads).install(|| cluster(&m, &dual, &vt, limits, Grow::Centre, 16))
+            crate::test_pool(threads)
+                .install(|| cluster(&m, &dual, &vt, limits, &Config::default()))
         };
         let (a, b) = (run(1), run(3));
         assert!(a.iterations > 0);
