@@ -253,7 +253,7 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
     let files = mesh_files(&cfg.common.meshes_dir()?)?;
     std::fs::create_dir_all(&cfg.common.out)
         .with_context(|| format!("{}: cannot create", cfg.common.out.display()))?;
-    let pools = [pool(1)?, pool(2)?];
+    let pools = [crate::common::one_thread_pool(), pool(2)?];
     let mut meshes: Vec<(String, Mesh)> = Vec::new();
     for f in &files {
         meshes.push((mesh_name(f), mesh::load(f)?));

@@ -20,6 +20,7 @@ use super::table::{
     Style, Table,
 };
 use super::{is_lavapipe, machine_note, median, today, Common, Tag};
+use crate::common::one_thread_pool;
 use crate::lod::flat::{self, Flat};
 use crate::lod::{self, Grouping, Level, LodInfo, NO_GROUP};
 use crate::mesh::{self, Mesh};
@@ -165,19 +166,20 @@ impl Dag {
     }
 }
 
-/// Builds our DAG with `strategy` at `limits` on `threads` rayon threads; (DAG levels, stuck
-/// groups, seconds).
+/// The two-thread pool our builds are timed on beside [`one_thread_pool`].
+fn two_thread_pool() -> Result<rayon::ThreadPool> {
+    Ok(rayon::ThreadPoolBuilder::new().num_threads(2).build()?)
+}
+
+/// Builds our DAG with `strategy` at `limits` in `pool`; (DAG levels, stuck groups, seconds).
 fn ours(
     mesh: &Mesh,
     strategy: &str,
     limits: Limits,
-    threads: usize,
+    pool: &rayon::ThreadPool,
     lod_cfg: &lod::Config,
 ) -> Result<(Vec<Level>, usize, f64)> {
     let s = strategy::by_name(strategy, &Options::default())?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()?;
     let t = Instant::now();
     let dag = pool.install(|| lod::build(mesh, s.as_ref(), limits, lod_cfg));
     let secs = t.elapsed().as_secs_f64();
@@ -327,6 +329,7 @@ fn bench_mesh(
 ) -> Result<MeshResult> {
     // Builds, interleaved: every configuration once per round.
     let confs = configs();
+    let (one, two) = (one_thread_pool(), two_thread_pool()?);
     let mut times: Vec<(Vec<f64>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); confs.len()];
     let mut built: Vec<Option<(Vec<Level>, usize)>> = (0..confs.len()).map(|_| None).collect();
     for _ in 0..cfg.runs().max(1) {
@@ -338,8 +341,8 @@ fn bench_mesh(
                         grouping: *grouping,
                         ..cfg.lod()
                     };
-                    let (levels, stuck, t2) = ours(m, "meshopt", *l, 2, &lc)?;
-                    let (levels1, _, t1) = ours(m, "meshopt", *l, 1, &lc)?;
+                    let (levels, stuck, t2) = ours(m, "meshopt", *l, &two, &lc)?;
+                    let (levels1, _, t1) = ours(m, "meshopt", *l, &one, &lc)?;
                     anyhow::ensure!(
                         levels1 == levels,
                         "{name} {label}: 1 and 2 threads built different DAGs"
@@ -444,7 +447,13 @@ fn bench_mesh(
 /// Level-0 strategy comparison on one mesh: per strategy, mean selected triangles per distance of
 /// its 64/126 DAG (equal error: the same threshold and views).
 fn strategy_curve(cfg: &Config, m: &Mesh, strategy: &str) -> Result<(Vec<f64>, usize, f64)> {
-    let (levels, _, secs) = ours(m, strategy, Limits::DEFAULT, 2, &cfg.lod())?;
+    let (levels, _, secs) = ours(
+        m,
+        strategy,
+        Limits::DEFAULT,
+        &two_thread_pool()?,
+        &cfg.lod(),
+    )?;
     let fl = Flat::from_levels(m, &levels);
     let total: usize = levels.iter().map(lod::level_triangles).sum();
     let curve = cfg
@@ -651,7 +660,13 @@ pub fn run(cfg: &Config) -> Result<()> {
                 "dragon x16 ({} triangles): ours",
                 m.triangle_count()
             ));
-            let (levels, stuck, t2) = ours(&m, "meshopt", Limits::DEFAULT, 2, &cfg.lod())?;
+            let (levels, stuck, t2) = ours(
+                &m,
+                "meshopt",
+                Limits::DEFAULT,
+                &two_thread_pool()?,
+                &cfg.lod(),
+            )?;
             let d_ours = Dag {
                 label: "ours 64/126".into(),
                 levels,
