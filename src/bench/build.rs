@@ -15,7 +15,6 @@ use crate::mesh::{self, Mesh};
 use crate::meshlet::Limits;
 use crate::strategy::{self, Options};
 use anyhow::{bail, Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -230,17 +229,8 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
         .filter(&keep)
         .map(|n| strategy::by_name(n, &cfg.options))
         .collect::<Result<Vec<_>, _>>()?;
-    let pb = if cfg.quiet {
-        ProgressBar::hidden()
-    } else {
-        let per_mesh = strategies.len() + presets.len() * preset_strategies.len();
-        ProgressBar::new((files.len() * per_mesh) as u64)
-    };
-    pb.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
-            .expect("static template")
-            .progress_chars("=> "),
-    );
+    let per_mesh = strategies.len() + presets.len() * preset_strategies.len();
+    let pb = super::progress::bar(cfg.quiet, (files.len() * per_mesh) as u64);
     let mut rows = Vec::new();
     let mut preset_rows = Vec::new();
     for f in &files {

@@ -24,7 +24,6 @@ use crate::mesh::{self, Mesh};
 use crate::meshlet::{Limits, Meshlets};
 use crate::strategy::{self, Options};
 use anyhow::{Context as _, Result};
-use indicatif::ProgressBar;
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -259,11 +258,7 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
         meshes.push((mesh_name(f), mesh::load(f)?));
     }
     meshes.push(scene(&files)?);
-    let bar = if cfg.common.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(meshes.len() as u64)
-    };
+    let bar = super::progress::bar(cfg.common.quiet, meshes.len() as u64);
     let paper = Limits::new(64, 84).expect("paper limits");
     let big = Limits::new(128, 128).expect("128/128");
     let mut rows = Vec::new();

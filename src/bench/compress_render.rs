@@ -25,7 +25,6 @@ use crate::render::compressed::{decoded_reference, prepare, FORMATS};
 use crate::render::{Camera, Context, Pass, Pipeline, Shading, HEIGHT, WIDTH};
 use crate::strategy::{self, Options};
 use anyhow::{bail, Context as _, Result};
-use indicatif::ProgressBar;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -266,11 +265,7 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
     std::fs::create_dir_all(&cfg.common.out)
         .with_context(|| format!("{}: cannot create", cfg.common.out.display()))?;
     let ctx = Context::new(false)?;
-    let bar = if cfg.common.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(files.len() as u64 + 1)
-    };
+    let bar = super::progress::bar(cfg.common.quiet, files.len() as u64 + 1);
     let mut rows = Vec::new();
     for f in &files {
         let name = mesh_name(f);

@@ -619,15 +619,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     } else {
         None
     };
-    let pb = if cfg.common.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(files.len() as u64)
-    };
-    pb.set_style(
-        indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}")
-            .expect("valid template"),
-    );
+    let pb = super::progress::bar(cfg.common.quiet, files.len() as u64);
     let mut results = Vec::new();
     let mut meshes = Vec::new();
     for f in &files {

@@ -15,6 +15,7 @@ pub mod kmedoids;
 pub mod lod;
 pub mod paper;
 pub mod plot;
+pub mod progress;
 pub mod render;
 pub mod render_occlusion;
 pub mod robustness;

@@ -22,7 +22,6 @@ use crate::meshlet::{validate, Limits, Meshlets};
 use crate::render::{Camera, Context, Pass, Pipeline, RenderError, Shading, HEIGHT, WIDTH};
 use crate::strategy::{self, Options};
 use anyhow::{Context as _, Result};
-use indicatif::ProgressBar;
 use std::fmt::Write as _;
 
 /// The paper's Table 6: ns per triangle of its linear regressions on an RTX 2080 Ti (range over its
@@ -215,11 +214,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     let files = mesh_files(&meshes)?;
     std::fs::create_dir_all(&cfg.common.out)?;
     let per_mesh = cfg.strategy.len() + cfg.experiment_strategies().len();
-    let pb = if cfg.common.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new((files.len() * per_mesh) as u64)
-    };
+    let pb = super::progress::bar(cfg.common.quiet, (files.len() * per_mesh) as u64);
     let mut rows = Vec::new();
     let mut variants = Vec::new();
     for path in &files {

@@ -62,18 +62,8 @@ pub fn run(cfg: &Config) -> Result<Report> {
         super::smoke::prepare(&cfg.out)?;
     }
     let exe = std::env::current_exe().context("cannot find the meshletlab binary")?;
-    let pb = if cfg.quiet {
-        indicatif::ProgressBar::hidden()
-    } else {
-        indicatif::ProgressBar::new(cfg.cases())
-    };
-    pb.set_style(
-        indicatif::ProgressStyle::with_template(
-            "[{bar:30}] {pos}/{len} cases ({per_sec}, {eta} left)",
-        )
-        .expect("static template")
-        .progress_chars("=> "),
-    );
+    let pb = super::progress::bar(cfg.quiet, cfg.cases());
+    pb.set_message("cases");
     let progress = {
         let pb = pb.clone();
         Box::new(move |n: u64| {
