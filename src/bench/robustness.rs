@@ -2,7 +2,7 @@
 //! results/robustness.md and robustness.csv: cases per format and mutation, their outcomes, the
 //! typed-error kinds each format gave, the heaviest and slowest case, and every defect found.
 
-use super::{machine_note, today};
+use super::write_header;
 use crate::fuzz::harness::{self, Report, Verdict};
 use crate::fuzz::{memory_bound, Mutation, Target, HANG_SECONDS};
 use anyhow::{Context, Result};
@@ -106,18 +106,23 @@ fn csv(r: &Report) -> String {
 fn markdown(cfg: &Config, r: &Report) -> Result<String> {
     let mut md = String::new();
     let t = r.totals();
-    writeln!(md, "# Robustness: a mutation fuzzer over every reader\n")?;
+    write_header(
+        &mut md,
+        "Robustness: a mutation fuzzer over every reader",
+        &format!(
+            "meshletlab bench robustness --cases {} --seed {}",
+            cfg.cases(),
+            r.seed
+        ),
+        "",
+    );
     writeln!(
         md,
-        "Written by `meshletlab bench robustness --cases {} --seed {}` on {} ({}; {}); {} worker processes, {:.0} s ({:.0} cases/s).\n",
-        cfg.cases(),
-        r.seed,
-        today(),
-        machine_note(),
+        "{}; {} worker processes, {:.0} s ({:.0} cases/s).\n",
         if cfg!(debug_assertions) {
-            "built with overflow checks and debug assertions: an overflow is a counted panic"
+            "Built with overflow checks and debug assertions: an overflow is a counted panic"
         } else {
-            "**built without overflow checks: an arithmetic overflow would wrap unseen; use `make bench-robustness` (profile fuzz)**"
+            "**Built without overflow checks: an arithmetic overflow would wrap unseen; use `make bench-robustness` (profile fuzz)**"
         },
         cfg.workers(),
         r.seconds,
