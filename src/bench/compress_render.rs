@@ -290,19 +290,272 @@ fn geomean(xs: &[f64]) -> f64 {
     (xs.iter().map(|x| x.ln()).sum::<f64>() / xs.len().max(1) as f64).exp()
 }
 
-fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
-    let mut meshes: Vec<&str> = Vec::new();
-    for r in rows {
-        if !meshes.contains(&r.mesh.as_str()) {
-            meshes.push(&r.mesh);
+/// What the report's sections read: the rows, the meshes in run order (the scene last) and the
+/// variants in the order the first mesh lists them.
+struct Report<'a> {
+    cfg: &'a Config,
+    ctx: &'a Context,
+    rows: &'a [Row],
+    meshes: Vec<&'a str>,
+    variants: Vec<&'a str>,
+    scene: &'a str,
+}
+
+impl<'a> Report<'a> {
+    fn new(cfg: &'a Config, ctx: &'a Context, rows: &'a [Row]) -> Self {
+        let mut meshes: Vec<&str> = Vec::new();
+        for r in rows {
+            if !meshes.contains(&r.mesh.as_str()) {
+                meshes.push(&r.mesh);
+            }
+        }
+        let variants: Vec<&str> = rows
+            .iter()
+            .filter(|r| r.mesh == meshes[0])
+            .map(|r| r.variant.as_str())
+            .collect();
+        let scene = *meshes.last().expect("the scene");
+        Self {
+            cfg,
+            ctx,
+            rows,
+            meshes,
+            variants,
+            scene,
         }
     }
-    let variants: Vec<&str> = rows
-        .iter()
-        .filter(|r| r.mesh == meshes[0])
-        .map(|r| r.variant.as_str())
-        .collect();
-    let scene = *meshes.last().expect("the scene");
+
+    /// The row of `variant` on `mesh`, which every run measures.
+    fn row(&self, mesh: &str, variant: &str) -> &'a Row {
+        find(self.rows, mesh, variant).expect("row")
+    }
+
+    /// Writes the setup: device, views, meshlets, scene and the shader decoders.
+    fn write_setup(&self, md: &mut String) -> Result<()> {
+        writeln!(md, "Device: **{}**. {}×{}, 4× MSAA, D32 depth, back faces culled by the rasteriser. {} framed random views per mesh (seed {}), interleaved across variants, one discarded warm-up frame per variant; GPU time from timestamps around the draw. Meshlets: meshopt 64/126 at the paper's tolerance (14-bit quantisation of the bounding box), the same for every variant. Scene: the ten shared meshes, each scaled to a unit diagonal, {} times over on a grid, as one mesh. Every compressed variant's first view was checked pixel for pixel against the uncompressed pass over its CPU-decoded meshlets before timing.\n", self.ctx.name, WIDTH, HEIGHT, self.cfg.views(), self.cfg.seed, self.cfg.scene_copies())?;
+        if is_lavapipe(&self.ctx.name) {
+            writeln!(md, "**Lavapipe's figures.** The \"GPU\" here is this machine's CPU cores running LLVM-compiled shaders and a software rasteriser at 1280×720 with 4× MSAA: rasterisation and shading take most of every frame, so decoding costs show up diluted, and a real GPU's balance (where the paper's laced wires take 2.5× SC compact's time) is not what these ratios measure. The memory columns are device-independent.\n")?;
+        }
+        writeln!(md, "Shader decoders: laced wires in the mesh shader ({}; parallel: item offsets by popcount, wire bases and lace cursors by prefix sums, delta wires by one prefix sum of their differences, strip corners by a scan over composed corner maps; four symbols per invocation, so no serial chain beyond four steps and a 32-wide scan per 128 symbols), SC and IX compact in the mesh shader, GI and TS compact by vertex pulling in the vertex shader. Culling: only laced wires carry culling data (8-byte records); the split layout has its exact spheres and cones.\n", if self.ctx.mesh_subgroups { format!("scans with subgroup operations, {} wide", self.ctx.subgroup_size) } else { "scans in workgroup memory".to_string() })?;
+        Ok(())
+    }
+
+    /// Writes the bytes-per-triangle table (paper Table 2) and the scene's memory figures.
+    fn write_bytes(&self, md: &mut String) -> Result<()> {
+        writeln!(
+            md,
+            "## Bytes resident on the device per triangle (paper Table 2)\n"
+        )?;
+        let mut head = String::from("| mesh | triangles |");
+        let mut sep = String::from("|---|---:|");
+        let sized: Vec<&str> = self
+            .variants
+            .iter()
+            .copied()
+            .filter(|v| !v.ends_with(" + culling"))
+            .collect();
+        for v in &sized {
+            write!(head, " {v} |")?;
+            sep.push_str("---:|");
+        }
+        writeln!(md, "{head}\n{sep}")?;
+        for mesh in &self.meshes {
+            let first = self.row(mesh, self.variants[0]);
+            write!(md, "| {mesh} | {} |", first.triangles)?;
+            for v in &sized {
+                let r = self.row(mesh, v);
+                write!(md, " {:.2} |", r.bytes as f64 / r.triangles as f64)?;
+            }
+            writeln!(md)?;
+        }
+        let lw = self.row(self.scene, "laced-wires");
+        let sc = self.row(self.scene, "sc-compact");
+        let widest = self
+            .rows
+            .iter()
+            .filter(|r| r.mesh == self.scene)
+            .max_by_key(|r| r.largest_binding)
+            .expect("rows");
+        writeln!(md, "\nThe scene's largest storage binding is {}'s, {:.0} MiB of the device's {:.0} MiB limit (the pass draws one binding per buffer, unchunked): the scene is sized to fit it. The paper's scenes go to 109 M triangles on a 24 GB GPU.", widest.variant, widest.largest_binding as f64 / 1048576.0, self.ctx.max_storage_range as f64 / 1048576.0)?;
+        writeln!(
+            md,
+            "\nOn the scene laced wires hold **{:.0} %** of SC compact's bytes (paper: {:.0} %).\n",
+            100.0 * lw.bytes as f64 / sc.bytes as f64,
+            100.0 * paper::LACED_MEMORY_OF_SC
+        )?;
+        Ok(())
+    }
+
+    /// Writes the ms-per-frame table, median and p95 per mesh and variant.
+    fn write_frame_times(&self, md: &mut String) -> Result<()> {
+        writeln!(md, "## ms per frame: median (p95)\n")?;
+        let timed: Vec<&str> = self
+            .variants
+            .iter()
+            .copied()
+            .filter(|v| find(self.rows, self.meshes[0], v).is_some_and(|r| !r.ms.is_empty()))
+            .collect();
+        let mut head = String::from("| mesh |");
+        let mut sep = String::from("|---|");
+        for v in &timed {
+            write!(head, " {v} |")?;
+            sep.push_str("---:|");
+        }
+        writeln!(md, "{head}\n{sep}")?;
+        for mesh in &self.meshes {
+            write!(md, "| {mesh} |")?;
+            for v in &timed {
+                let r = self.row(mesh, v);
+                write!(md, " {:.2} ({:.2}) |", r.median(), p95(&r.ms))?;
+            }
+            writeln!(md)?;
+        }
+        Ok(())
+    }
+
+    /// Writes the culled-meshlets table: laced wires' records against the split layout's bounds.
+    fn write_culled(&self, md: &mut String) -> Result<()> {
+        writeln!(md, "\nMeshlets culled per frame (mean over the views): laced wires' 8-byte records against the split layout's exact spheres and apex cones.\n")?;
+        writeln!(
+            md,
+            "| mesh | meshlets | uncompressed split + culling | laced-wires + culling |"
+        )?;
+        writeln!(md, "|---|---:|---:|---:|")?;
+        for mesh in &self.meshes {
+            let a = self.row(mesh, "uncompressed split + culling");
+            let b = self.row(mesh, "laced-wires + culling");
+            writeln!(
+                md,
+                "| {mesh} | {} | {:.0} | {:.0} |",
+                a.meshlets, a.culled, b.culled
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Writes the frame-time ratios against the targets, per mesh and as geometric means.
+    fn write_ratios(&self, md: &mut String) -> Result<()> {
+        let ratios: [(&str, &str, &str); 5] = [
+            ("laced wires / SC compact", "laced-wires", "sc-compact"),
+            (
+                "laced wires + culling / SC compact",
+                "laced-wires + culling",
+                "sc-compact",
+            ),
+            (
+                "laced wires / uncompressed split",
+                "laced-wires",
+                "uncompressed split",
+            ),
+            (
+                "laced wires + culling / uncompressed split + culling",
+                "laced-wires + culling",
+                "uncompressed split + culling",
+            ),
+            (
+                "SC compact / uncompressed split",
+                "sc-compact",
+                "uncompressed split",
+            ),
+        ];
+        writeln!(md, "\n## Frame-time ratios (targets: laced wires ≤ 2× SC compact, ≤ 1.5× the uncompressed split layout, goal ≤ 1.15×)\n")?;
+        writeln!(md, "Paper (RTX 4090, large scene): laced wires {:.2} ms against {:.1} ms for SC compact, {:.2}×.\n", paper::LACED_MS, paper::SC_COMPACT_MS, paper::LACED_MS / paper::SC_COMPACT_MS)?;
+        let mut head = String::from("| mesh |");
+        let mut sep = String::from("|---|");
+        for (label, ..) in &ratios {
+            write!(head, " {label} |")?;
+            sep.push_str("---:|");
+        }
+        writeln!(md, "{head}\n{sep}")?;
+        let ratio =
+            |mesh: &str, a: &str, b: &str| self.row(mesh, a).median() / self.row(mesh, b).median();
+        for mesh in &self.meshes {
+            write!(md, "| {mesh} |")?;
+            for (_, a, b) in &ratios {
+                write!(md, " {:.2}× |", ratio(mesh, a, b))?;
+            }
+            writeln!(md)?;
+        }
+        write!(md, "| geometric mean |")?;
+        for (_, a, b) in &ratios {
+            let xs: Vec<f64> = self.meshes.iter().map(|m| ratio(m, a, b)).collect();
+            write!(md, " **{:.2}×** |", geomean(&xs))?;
+        }
+        writeln!(md)?;
+        Ok(())
+    }
+
+    /// Writes the size-against-speed table (paper Table 6) and its plot.
+    fn write_tradeoff(&self, md: &mut String) -> Result<()> {
+        writeln!(md, "\n## Size against speed (paper Table 6)\n")?;
+        writeln!(md, "Scene ({} triangles): bits per triangle resident against million triangles per second (triangles / median frame time; with culling, triangles of culled meshlets count as handled). Kuth et al. decode strip-compressed meshlets at about {} G triangles/s on an RX 7900 XTX.\n", self.row(self.scene, "laced-wires").triangles, paper::KUTH_GTRIS)?;
+        writeln!(md, "| variant | bits per triangle | M triangles/s |")?;
+        writeln!(md, "|---|---:|---:|")?;
+        let mut series = Vec::new();
+        for v in &self.variants {
+            let r = self.row(self.scene, v);
+            if r.ms.is_empty() {
+                writeln!(md, "| {v} | {:.1} | — |", r.bits_per_triangle())?;
+                continue;
+            }
+            let speed = r.triangles as f64 / r.median() / 1e3;
+            writeln!(md, "| {v} | {:.1} | {:.1} |", r.bits_per_triangle(), speed)?;
+            series.push(Series {
+                label: v.to_string(),
+                points: vec![(r.bits_per_triangle(), speed)],
+            });
+        }
+        line_chart(
+            &self
+                .cfg
+                .common
+                .out
+                .join(self.cfg.tag.name("compress_render_tradeoff.svg")),
+            &format!("{}: size against speed ({})", self.scene, self.ctx.name),
+            "bits per triangle resident",
+            "M triangles / s",
+            &series,
+            Axes::default(),
+        )?;
+        writeln!(
+            md,
+            "\n![size against speed]({})",
+            self.cfg.tag.name("compress_render_tradeoff.svg")
+        )?;
+        Ok(())
+    }
+
+    /// Writes compress-render.csv: one line per mesh and variant.
+    fn write_csv(&self) -> Result<()> {
+        let mut csv = String::from(
+            "mesh,triangles,meshlets,variant,bytes,ms_median,ms_p95,meshlets_culled_per_frame\n",
+        );
+        for r in self.rows {
+            let (m, p) = if r.ms.is_empty() {
+                (String::new(), String::new())
+            } else {
+                (format!("{:.4}", r.median()), format!("{:.4}", p95(&r.ms)))
+            };
+            writeln!(
+                csv,
+                "{},{},{},{},{},{m},{p},{:.1}",
+                r.mesh, r.triangles, r.meshlets, r.variant, r.bytes, r.culled
+            )?;
+        }
+        crate::atomic::write(
+            self.cfg
+                .common
+                .out
+                .join(self.cfg.tag.name("compress-render.csv")),
+            csv,
+        )?;
+        Ok(())
+    }
+}
+
+/// Writes compress-render.md, its plot and compress-render.csv.
+fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
+    let report = Report::new(cfg, ctx, rows);
     let mut md = String::new();
     write_header(
         &mut md,
@@ -310,187 +563,12 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
         "meshletlab bench compress-render",
         "",
     );
-    writeln!(md, "Device: **{}**. {}×{}, 4× MSAA, D32 depth, back faces culled by the rasteriser. {} framed random views per mesh (seed {}), interleaved across variants, one discarded warm-up frame per variant; GPU time from timestamps around the draw. Meshlets: meshopt 64/126 at the paper's tolerance (14-bit quantisation of the bounding box), the same for every variant. Scene: the ten shared meshes, each scaled to a unit diagonal, {} times over on a grid, as one mesh. Every compressed variant's first view was checked pixel for pixel against the uncompressed pass over its CPU-decoded meshlets before timing.\n", ctx.name, WIDTH, HEIGHT, cfg.views(), cfg.seed, cfg.scene_copies())?;
-    if is_lavapipe(&ctx.name) {
-        writeln!(md, "**Lavapipe's figures.** The \"GPU\" here is this machine's CPU cores running LLVM-compiled shaders and a software rasteriser at 1280×720 with 4× MSAA: rasterisation and shading take most of every frame, so decoding costs show up diluted, and a real GPU's balance (where the paper's laced wires take 2.5× SC compact's time) is not what these ratios measure. The memory columns are device-independent.\n")?;
-    }
-    writeln!(md, "Shader decoders: laced wires in the mesh shader ({}; parallel: item offsets by popcount, wire bases and lace cursors by prefix sums, delta wires by one prefix sum of their differences, strip corners by a scan over composed corner maps; four symbols per invocation, so no serial chain beyond four steps and a 32-wide scan per 128 symbols), SC and IX compact in the mesh shader, GI and TS compact by vertex pulling in the vertex shader. Culling: only laced wires carry culling data (8-byte records); the split layout has its exact spheres and cones.\n", if ctx.mesh_subgroups { format!("scans with subgroup operations, {} wide", ctx.subgroup_size) } else { "scans in workgroup memory".to_string() })?;
-    writeln!(
-        md,
-        "## Bytes resident on the device per triangle (paper Table 2)\n"
-    )?;
-    let mut head = String::from("| mesh | triangles |");
-    let mut sep = String::from("|---|---:|");
-    let sized: Vec<&str> = variants
-        .iter()
-        .copied()
-        .filter(|v| !v.ends_with(" + culling"))
-        .collect();
-    for v in &sized {
-        write!(head, " {v} |")?;
-        sep.push_str("---:|");
-    }
-    writeln!(md, "{head}\n{sep}")?;
-    for mesh in &meshes {
-        let first = find(rows, mesh, variants[0]).expect("row");
-        write!(md, "| {mesh} | {} |", first.triangles)?;
-        for v in &sized {
-            let r = find(rows, mesh, v).expect("row");
-            write!(md, " {:.2} |", r.bytes as f64 / r.triangles as f64)?;
-        }
-        writeln!(md)?;
-    }
-    let lw = find(rows, scene, "laced-wires").expect("row");
-    let sc = find(rows, scene, "sc-compact").expect("row");
-    let widest = rows
-        .iter()
-        .filter(|r| r.mesh == scene)
-        .max_by_key(|r| r.largest_binding)
-        .expect("rows");
-    writeln!(md, "\nThe scene's largest storage binding is {}'s, {:.0} MiB of the device's {:.0} MiB limit (the pass draws one binding per buffer, unchunked): the scene is sized to fit it. The paper's scenes go to 109 M triangles on a 24 GB GPU.", widest.variant, widest.largest_binding as f64 / 1048576.0, ctx.max_storage_range as f64 / 1048576.0)?;
-    writeln!(
-        md,
-        "\nOn the scene laced wires hold **{:.0} %** of SC compact's bytes (paper: {:.0} %).\n",
-        100.0 * lw.bytes as f64 / sc.bytes as f64,
-        100.0 * paper::LACED_MEMORY_OF_SC
-    )?;
-    writeln!(md, "## ms per frame: median (p95)\n")?;
-    let timed: Vec<&str> = variants
-        .iter()
-        .copied()
-        .filter(|v| find(rows, meshes[0], v).is_some_and(|r| !r.ms.is_empty()))
-        .collect();
-    let mut head = String::from("| mesh |");
-    let mut sep = String::from("|---|");
-    for v in &timed {
-        write!(head, " {v} |")?;
-        sep.push_str("---:|");
-    }
-    writeln!(md, "{head}\n{sep}")?;
-    for mesh in &meshes {
-        write!(md, "| {mesh} |")?;
-        for v in &timed {
-            let r = find(rows, mesh, v).expect("row");
-            write!(md, " {:.2} ({:.2}) |", r.median(), p95(&r.ms))?;
-        }
-        writeln!(md)?;
-    }
-    writeln!(md, "\nMeshlets culled per frame (mean over the views): laced wires' 8-byte records against the split layout's exact spheres and apex cones.\n")?;
-    writeln!(
-        md,
-        "| mesh | meshlets | uncompressed split + culling | laced-wires + culling |"
-    )?;
-    writeln!(md, "|---|---:|---:|---:|")?;
-    for mesh in &meshes {
-        let a = find(rows, mesh, "uncompressed split + culling").expect("row");
-        let b = find(rows, mesh, "laced-wires + culling").expect("row");
-        writeln!(
-            md,
-            "| {mesh} | {} | {:.0} | {:.0} |",
-            a.meshlets, a.culled, b.culled
-        )?;
-    }
-    // The targets as ratios of medians, per mesh and as geometric means.
-    let ratios: [(&str, &str, &str); 5] = [
-        ("laced wires / SC compact", "laced-wires", "sc-compact"),
-        (
-            "laced wires + culling / SC compact",
-            "laced-wires + culling",
-            "sc-compact",
-        ),
-        (
-            "laced wires / uncompressed split",
-            "laced-wires",
-            "uncompressed split",
-        ),
-        (
-            "laced wires + culling / uncompressed split + culling",
-            "laced-wires + culling",
-            "uncompressed split + culling",
-        ),
-        (
-            "SC compact / uncompressed split",
-            "sc-compact",
-            "uncompressed split",
-        ),
-    ];
-    writeln!(md, "\n## Frame-time ratios (targets: laced wires ≤ 2× SC compact, ≤ 1.5× the uncompressed split layout, goal ≤ 1.15×)\n")?;
-    writeln!(md, "Paper (RTX 4090, large scene): laced wires {:.2} ms against {:.1} ms for SC compact, {:.2}×.\n", paper::LACED_MS, paper::SC_COMPACT_MS, paper::LACED_MS / paper::SC_COMPACT_MS)?;
-    let mut head = String::from("| mesh |");
-    let mut sep = String::from("|---|");
-    for (label, ..) in &ratios {
-        write!(head, " {label} |")?;
-        sep.push_str("---:|");
-    }
-    writeln!(md, "{head}\n{sep}")?;
-    let ratio = |mesh: &str, a: &str, b: &str| {
-        find(rows, mesh, a).expect("row").median() / find(rows, mesh, b).expect("row").median()
-    };
-    for mesh in &meshes {
-        write!(md, "| {mesh} |")?;
-        for (_, a, b) in &ratios {
-            write!(md, " {:.2}× |", ratio(mesh, a, b))?;
-        }
-        writeln!(md)?;
-    }
-    write!(md, "| geometric mean |")?;
-    for (_, a, b) in &ratios {
-        let xs: Vec<f64> = meshes.iter().map(|m| ratio(m, a, b)).collect();
-        write!(md, " **{:.2}×** |", geomean(&xs))?;
-    }
-    writeln!(md)?;
-    writeln!(md, "\n## Size against speed (paper Table 6)\n")?;
-    writeln!(md, "Scene ({} triangles): bits per triangle resident against million triangles per second (triangles / median frame time; with culling, triangles of culled meshlets count as handled). Kuth et al. decode strip-compressed meshlets at about {} G triangles/s on an RX 7900 XTX.\n", lw.triangles, paper::KUTH_GTRIS)?;
-    writeln!(md, "| variant | bits per triangle | M triangles/s |")?;
-    writeln!(md, "|---|---:|---:|")?;
-    let mut series = Vec::new();
-    for v in &variants {
-        let r = find(rows, scene, v).expect("row");
-        if r.ms.is_empty() {
-            writeln!(md, "| {v} | {:.1} | — |", r.bits_per_triangle())?;
-            continue;
-        }
-        let speed = r.triangles as f64 / r.median() / 1e3;
-        writeln!(md, "| {v} | {:.1} | {:.1} |", r.bits_per_triangle(), speed)?;
-        series.push(Series {
-            label: v.to_string(),
-            points: vec![(r.bits_per_triangle(), speed)],
-        });
-    }
-    line_chart(
-        &cfg.common
-            .out
-            .join(cfg.tag.name("compress_render_tradeoff.svg")),
-        &format!("{scene}: size against speed ({})", ctx.name),
-        "bits per triangle resident",
-        "M triangles / s",
-        &series,
-        Axes::default(),
-    )?;
-    writeln!(
-        md,
-        "\n![size against speed]({})",
-        cfg.tag.name("compress_render_tradeoff.svg")
-    )?;
+    report.write_setup(&mut md)?;
+    report.write_bytes(&mut md)?;
+    report.write_frame_times(&mut md)?;
+    report.write_culled(&mut md)?;
+    report.write_ratios(&mut md)?;
+    report.write_tradeoff(&mut md)?;
     crate::atomic::write(cfg.common.out.join(cfg.tag.name("compress-render.md")), md)?;
-    let mut csv = String::from(
-        "mesh,triangles,meshlets,variant,bytes,ms_median,ms_p95,meshlets_culled_per_frame\n",
-    );
-    for r in rows {
-        let (m, p) = if r.ms.is_empty() {
-            (String::new(), String::new())
-        } else {
-            (format!("{:.4}", r.median()), format!("{:.4}", p95(&r.ms)))
-        };
-        writeln!(
-            csv,
-            "{},{},{},{},{},{m},{p},{:.1}",
-            r.mesh, r.triangles, r.meshlets, r.variant, r.bytes, r.culled
-        )?;
-    }
-    crate::atomic::write(
-        cfg.common.out.join(cfg.tag.name("compress-render.csv")),
-        csv,
-    )?;
-    Ok(())
+    report.write_csv()
 }
