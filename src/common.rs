@@ -1,6 +1,7 @@
 //! Small helpers that every room of the crate reads: the flat sparse-row array, the "no value"
-//! sentinel, a triangle's distinct corners, sorted sets and Morton codes. The lowest room: it
-//! imports nothing from the crate, so any module may use it without breaking the one-way flow.
+//! sentinel, a triangle's distinct corners, sorted sets, Morton codes and the one-thread pool.
+//! The lowest room: it imports nothing from the crate, so any module may use it without breaking
+//! the one-way flow.
 
 /// The sentinel for "no value" in a u32 array (no cluster, no edge, no group, not yet placed):
 /// every index the crate stores is below it, since meshes are limited to u32 indices.
@@ -96,6 +97,15 @@ pub fn union_len(a: &[u32], b: &[u32]) -> usize {
         n += 1;
     }
     n + (a.len() - i) + (b.len() - j)
+}
+
+/// A rayon pool of exactly one thread. The benches time one-thread runs in it (the global pool
+/// may be wider) and check determinism by comparing its output with a many-thread run's.
+pub fn one_thread_pool() -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a one-thread rayon pool")
 }
 
 /// The Morton (Z-order) code of a point quantised to 21 bits per axis: nearby codes are nearby

@@ -8,14 +8,13 @@ use super::table::{
     Style, Table,
 };
 use super::{
-    evaluate, machine_note, median, paper, plot, quality_cells, right_align_numbers, today, Common,
+    evaluate, median, paper, plot, quality_cells, right_align_numbers, write_header, Common,
     Evaluation, QUALITY_HEADER,
 };
 use crate::mesh::{self, Mesh};
 use crate::meshlet::Limits;
 use crate::strategy::{self, Options};
 use anyhow::{bail, Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -230,17 +229,8 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
         .filter(&keep)
         .map(|n| strategy::by_name(n, &cfg.options))
         .collect::<Result<Vec<_>, _>>()?;
-    let pb = if cfg.quiet {
-        ProgressBar::hidden()
-    } else {
-        let per_mesh = strategies.len() + presets.len() * preset_strategies.len();
-        ProgressBar::new((files.len() * per_mesh) as u64)
-    };
-    pb.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
-            .expect("static template")
-            .progress_chars("=> "),
-    );
+    let per_mesh = strategies.len() + presets.len() * preset_strategies.len();
+    let pb = super::progress::bar(cfg.quiet, (files.len() * per_mesh) as u64);
     let mut rows = Vec::new();
     let mut preset_rows = Vec::new();
     for f in &files {
@@ -396,18 +386,19 @@ fn flags(cfg: &Config) -> String {
     f
 }
 
-fn to_markdown(rows: &[Row], loads: &[LoadRow], cfg: &Config) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "# Meshlet build benchmark\n");
-    let _ = writeln!(
-        s,
-        "Written by `meshletlab bench build --runs {} --limits {}{}` on {}. Do not edit: rerun the command.\n",
+/// The command line of the run, for the reports' headers.
+fn command(cfg: &Config) -> String {
+    format!(
+        "meshletlab bench build --runs {} --limits {}{}",
         cfg.runs,
         cfg.limits,
-        flags(cfg),
-        today()
-    );
-    let _ = writeln!(s, "Machine: {}.\n", machine_note());
+        flags(cfg)
+    )
+}
+
+fn to_markdown(rows: &[Row], loads: &[LoadRow], cfg: &Config) -> String {
+    let mut s = String::new();
+    write_header(&mut s, "Meshlet build benchmark", &command(cfg), "");
     let _ = writeln!(
         s,
         "Time is the median of {} builds (wall clock, one thread unless the strategy parallelises; `+refine` rows: \
@@ -456,16 +447,12 @@ fn to_markdown(rows: &[Row], loads: &[LoadRow], cfg: &Config) -> String {
 /// results/strategies.md and the Figure-9 histogram plots.
 fn write_strategies(rows: &[Row], preset_rows: &[Row], cfg: &Config) -> Result<()> {
     let mut s = String::new();
-    let _ = writeln!(s, "# Strategies compared\n");
-    let _ = writeln!(
-        s,
-        "Written by `meshletlab bench build --runs {} --limits {}{}` on {} (same run as build.md). Do not edit.\n",
-        cfg.runs,
-        cfg.limits,
-        flags(cfg),
-        today()
+    write_header(
+        &mut s,
+        "Strategies compared",
+        &command(cfg),
+        " (same run as build.md)",
     );
-    let _ = writeln!(s, "Machine: {}.\n", machine_note());
     let strategies: Vec<String> = {
         let mut v: Vec<String> = rows.iter().map(|r| r.eval.strategy.clone()).collect();
         let mut seen = std::collections::HashSet::new();

@@ -13,7 +13,7 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{evaluate, machine_note, median, paper, today, Common, Evaluation};
+use super::{evaluate, median, paper, write_header, Common, Evaluation};
 use crate::mesh;
 use crate::meshlet::Limits;
 use crate::strategy::{self, GreedyPaper, Options, Strategy};
@@ -230,18 +230,12 @@ fn table<'a>() -> Table<'a, Row> {
 
 fn markdown(cfg: &Config, name: &str, m: &mesh::Mesh, rows: &[Row]) -> String {
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# Paper fidelity: greedy and bounding sphere on the bunny\n"
+    write_header(
+        &mut s,
+        "Paper fidelity: greedy and bounding sphere on the bunny",
+        &format!("meshletlab bench fidelity --runs {}", cfg.runs),
+        &format!(" from {name} ({} triangles)", m.triangle_count()),
     );
-    let _ = writeln!(
-        s,
-        "Written by `meshletlab bench fidelity --runs {}` on {} from {name} ({} triangles). Do not edit.\n",
-        cfg.runs,
-        today(),
-        m.triangle_count()
-    );
-    let _ = writeln!(s, "Machine: {}.\n", machine_note());
     let _ = writeln!(
         s,
         "Paper: Jensen, Frisvad, Bærentzen, JCGT 12(2), 2023, Tables 4, 7, 8 (their bunny: {PAPER_BUNNY_TRIANGLES} \

@@ -15,6 +15,7 @@ pub mod kmedoids;
 pub mod lod;
 pub mod paper;
 pub mod plot;
+pub mod progress;
 pub mod render;
 pub mod render_occlusion;
 pub mod robustness;
@@ -276,6 +277,22 @@ pub fn machine_note() -> String {
         rayon::current_num_threads(),
         env!("CARGO_PKG_VERSION")
     )
+}
+
+/// Writes the opening every bench's markdown report starts with: the `# title`, the command that
+/// wrote it and today's date (`context` follows the date in that sentence: `" (same run as
+/// build.md)"`, or empty), and this machine ([`machine_note`]). One format, so that a reader finds
+/// where and how any report was made in the same place.
+pub fn write_header(md: &mut String, title: &str, command: &str, context: &str) {
+    use std::fmt::Write as _;
+    // Writing into a String cannot fail.
+    let _ = writeln!(md, "# {title}\n");
+    let _ = writeln!(
+        md,
+        "Written by `{command}` on {}{context}. Do not edit: rerun the command.\n",
+        today()
+    );
+    let _ = writeln!(md, "Machine: {}.\n", machine_note());
 }
 
 /// Today's date (UTC) as YYYY-MM-DD, without a date crate.

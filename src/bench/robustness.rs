@@ -2,7 +2,7 @@
 //! results/robustness.md and robustness.csv: cases per format and mutation, their outcomes, the
 //! typed-error kinds each format gave, the heaviest and slowest case, and every defect found.
 
-use super::{machine_note, today};
+use super::write_header;
 use crate::fuzz::harness::{self, Report, Verdict};
 use crate::fuzz::{memory_bound, Mutation, Target, HANG_SECONDS};
 use anyhow::{Context, Result};
@@ -62,18 +62,8 @@ pub fn run(cfg: &Config) -> Result<Report> {
         super::smoke::prepare(&cfg.out)?;
     }
     let exe = std::env::current_exe().context("cannot find the meshletlab binary")?;
-    let pb = if cfg.quiet {
-        indicatif::ProgressBar::hidden()
-    } else {
-        indicatif::ProgressBar::new(cfg.cases())
-    };
-    pb.set_style(
-        indicatif::ProgressStyle::with_template(
-            "[{bar:30}] {pos}/{len} cases ({per_sec}, {eta} left)",
-        )
-        .expect("static template")
-        .progress_chars("=> "),
-    );
+    let pb = super::progress::bar(cfg.quiet, cfg.cases());
+    pb.set_message("cases");
     let progress = {
         let pb = pb.clone();
         Box::new(move |n: u64| {
@@ -116,18 +106,23 @@ fn csv(r: &Report) -> String {
 fn markdown(cfg: &Config, r: &Report) -> Result<String> {
     let mut md = String::new();
     let t = r.totals();
-    writeln!(md, "# Robustness: a mutation fuzzer over every reader\n")?;
+    write_header(
+        &mut md,
+        "Robustness: a mutation fuzzer over every reader",
+        &format!(
+            "meshletlab bench robustness --cases {} --seed {}",
+            cfg.cases(),
+            r.seed
+        ),
+        "",
+    );
     writeln!(
         md,
-        "Written by `meshletlab bench robustness --cases {} --seed {}` on {} ({}; {}); {} worker processes, {:.0} s ({:.0} cases/s).\n",
-        cfg.cases(),
-        r.seed,
-        today(),
-        machine_note(),
+        "{}; {} worker processes, {:.0} s ({:.0} cases/s).\n",
         if cfg!(debug_assertions) {
-            "built with overflow checks and debug assertions: an overflow is a counted panic"
+            "Built with overflow checks and debug assertions: an overflow is a counted panic"
         } else {
-            "**built without overflow checks: an arithmetic overflow would wrap unseen; use `make bench-robustness` (profile fuzz)**"
+            "**Built without overflow checks: an arithmetic overflow would wrap unseen; use `make bench-robustness` (profile fuzz)**"
         },
         cfg.workers(),
         r.seconds,

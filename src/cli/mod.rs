@@ -15,6 +15,7 @@ mod render;
 mod stats;
 mod subdivide;
 
+use crate::bench::progress::{bar, spinner};
 use crate::bench::{evaluate, Evaluation};
 use crate::mesh::{self, Mesh, MeshStats};
 use crate::meshlet::order::MeshletOrder;
@@ -22,7 +23,6 @@ use crate::meshlet::Limits;
 use crate::strategy::{self, Options, Strategy};
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -252,33 +252,6 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
         Command::Bench(b) => bench::run(b, q),
         Command::FuzzWorker(a) => fuzz_worker::run(a),
     }
-}
-
-fn spinner(quiet: bool, msg: String) -> ProgressBar {
-    if quiet {
-        return ProgressBar::hidden();
-    }
-    let pb = ProgressBar::new_spinner();
-    pb.set_style(
-        ProgressStyle::with_template("{spinner} {elapsed} {msg}").expect("static template"),
-    );
-    pb.set_message(msg);
-    pb.enable_steady_tick(Duration::from_millis(120));
-    pb
-}
-
-fn bar(quiet: bool, len: u64) -> ProgressBar {
-    let pb = if quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(len)
-    };
-    pb.set_style(
-        ProgressStyle::with_template("[{bar:20}] {pos}/{len} {msg}")
-            .expect("static template")
-            .progress_chars("=> "),
-    );
-    pb
 }
 
 fn load(path: &Path, quiet: bool) -> Result<Mesh> {

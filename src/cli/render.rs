@@ -9,7 +9,7 @@ use crate::meshlet::Meshlets;
 use crate::render::{Camera, Context, Pass, Pipeline, Shading, HEIGHT, WIDTH};
 use anyhow::{bail, Context as _, Result};
 use clap::Args;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `render`.
 #[derive(Args, Debug)]
@@ -167,11 +167,10 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
         colour_ids: false,
     };
     let (views, radius) = cameras(&a, &m);
-    let mut rows = Vec::new();
-    for (i, cam) in views.iter().enumerate() {
+    let measure = |i, cam: &Camera| -> Result<ViewRow> {
         let f = pass.render(cam, how, Shading::Lit)?;
         let v = pass.render(cam, Pipeline::Vertex, Shading::Lit)?;
-        let row = ViewRow {
+        Ok(ViewRow {
             view: i,
             distance_radii: (cam.eye - cam.target).length() / radius,
             mesh_ms: f.gpu_ns * 1e-6,
@@ -180,29 +179,26 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
             meshlets_culled_backface: f.culled_cone,
             meshlets_drawn: f.drawn,
             mesh_primitives_generated: f.queries.map(|q| q.primitives),
-        };
-        if !a.json {
-            let pct = |x: u32| 100.0 * x as f64 / ml.len().max(1) as f64;
-            let prims = row
-                .mesh_primitives_generated
-                .map(|p| format!("  mesh primitives generated {p}"))
-                .unwrap_or_default();
-            println!(
-                "view {i} ({:.2} radii): mesh shaders {:8.3} ms  vertex pipeline {:8.3} ms  culled: frustum {:5.1} %  backface {:5.1} %{prims}",
-                row.distance_radii,
-                row.mesh_ms,
-                row.vertex_ms,
-                pct(f.culled_frustum),
-                pct(f.culled_cone)
-            );
-        }
-        rows.push(row);
-        if i == 0 {
-            if let Some(p) = &a.output {
-                crate::render::write_meshlet_png(&pass, cam, cull, p)?;
-            }
-        }
-    }
+        })
+    };
+    let line = |row: &ViewRow| {
+        let pct = |x: u32| 100.0 * x as f64 / ml.len().max(1) as f64;
+        let prims = row
+            .mesh_primitives_generated
+            .map(|p| format!("  mesh primitives generated {p}"))
+            .unwrap_or_default();
+        Some(format!(
+            "view {} ({:.2} radii): mesh shaders {:8.3} ms  vertex pipeline {:8.3} ms  culled: frustum {:5.1} %  backface {:5.1} %{prims}",
+            row.view,
+            row.distance_radii,
+            row.mesh_ms,
+            row.vertex_ms,
+            pct(row.meshlets_culled_frustum),
+            pct(row.meshlets_culled_backface)
+        ))
+    };
+    let png = |cam: &Camera, p: &Path| crate::render::write_meshlet_png(&pass, cam, cull, p);
+    let rows = each_view(&a, &views, measure, line, png)?;
     let validation_errors = ctx.validation.as_ref().map(|v| v.errors());
     if a.json {
         let out = serde_json::json!({
@@ -288,11 +284,10 @@ fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
         colour_ids: false,
     };
     let (views, _) = cameras(&a, &scene.box_corners());
-    let mut rows = Vec::new();
-    for (i, cam) in views.iter().enumerate() {
+    let measure = |i, cam: &Camera| -> Result<SceneRow> {
         let f = pass.render(cam, how, Shading::Lit)?;
         let v = pass.render(cam, Pipeline::Vertex, Shading::Lit)?;
-        let row = SceneRow {
+        Ok(SceneRow {
             view: i,
             mesh_ms: f.gpu_ns * 1e-6,
             vertex_ms: v.gpu_ns * 1e-6,
@@ -301,25 +296,22 @@ fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
             meshlets_culled_backface: f.culled_cone,
             meshlets_drawn: f.drawn,
             mesh_primitives_generated: f.queries.map(|q| q.primitives),
-        };
-        if !a.json {
-            println!(
-                "view {i}: mesh shaders {:8.3} ms  vertex pipeline {:8.3} ms  instances culled {}  meshlets culled: frustum {}  backface {}  drawn {}",
-                row.mesh_ms,
-                row.vertex_ms,
-                row.instances_culled_frustum,
-                row.meshlets_culled_frustum,
-                row.meshlets_culled_backface,
-                row.meshlets_drawn
-            );
-        }
-        rows.push(row);
-        if i == 0 {
-            if let Some(p) = &a.output {
-                crate::render::write_meshlet_png(&pass, cam, cull, p)?;
-            }
-        }
-    }
+        })
+    };
+    let line = |row: &SceneRow| {
+        Some(format!(
+            "view {}: mesh shaders {:8.3} ms  vertex pipeline {:8.3} ms  instances culled {}  meshlets culled: frustum {}  backface {}  drawn {}",
+            row.view,
+            row.mesh_ms,
+            row.vertex_ms,
+            row.instances_culled_frustum,
+            row.meshlets_culled_frustum,
+            row.meshlets_culled_backface,
+            row.meshlets_drawn
+        ))
+    };
+    let png = |cam: &Camera, p: &Path| crate::render::write_meshlet_png(&pass, cam, cull, p);
+    let rows = each_view(&a, &views, measure, line, png)?;
     let validation_errors = ctx.validation.as_ref().map(|v| v.errors());
     if a.json {
         let out = serde_json::json!({
@@ -415,19 +407,13 @@ fn occlusion_paths(
     use crate::render::occlusion::{measure_path, Totals};
     let bar = super::bar(quiet || a.json, views.len() as u64);
     bar.set_message("camera paths");
-    let mut paths = Vec::new();
-    for (i, cam) in views.iter().enumerate() {
-        paths.push(measure_path(
-            pass,
-            cam,
-            i,
-            a.frames as usize,
-            slots,
-            policy,
-            lod,
-        )?);
+    let measure = |i, cam: &Camera| {
+        let path = measure_path(pass, cam, i, a.frames as usize, slots, policy, lod)?;
         bar.inc(1);
-    }
+        Ok(path)
+    };
+    // The paths are reported together once all are measured, and draw no PNG.
+    let paths = each_view(a, views, measure, |_| None, |_, _| Ok(()))?;
     bar.finish_and_clear();
     let mut total = Totals {
         images_identical: true,
@@ -582,8 +568,7 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
     }
     let cull = !a.no_cull;
     let (views, radius) = cameras(&a, &m);
-    let mut rows = Vec::new();
-    for (i, cam) in views.iter().enumerate() {
+    let measure = |i, cam: &Camera| -> Result<LodRow> {
         let q = cam.lod_query(a.threshold, finest, cull);
         let f = pass.render_lod(cam, &q, false, Shading::Lit)?;
         let how = Pipeline::Mesh {
@@ -593,7 +578,7 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
         };
         let full_frame = full.render(cam, how, Shading::Lit)?;
         let cpu = crate::lod::flat::select(&flat, &q).len();
-        let row = LodRow {
+        Ok(LodRow {
             view: i,
             distance_radii: (cam.eye - cam.target).length() / radius,
             lod_ms: f.gpu_ns * 1e-6,
@@ -605,32 +590,32 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
             cpu_reference_drawn: cpu,
             mesh_primitives_generated: f.queries.map(|q| q.primitives),
             source_triangles: m.triangle_count(),
-        };
-        if !a.json {
-            let prims = row
-                .mesh_primitives_generated
-                .map(|p| format!("  {p} triangles drawn"))
-                .unwrap_or_default();
-            println!(
-                "view {i} ({:.2} radii): LOD {:8.3} ms  full detail {:8.3} ms  meshlets drawn {} (CPU reference {}), culled: frustum {} backface {}{prims}",
-                row.distance_radii,
-                row.lod_ms,
-                row.full_detail_ms,
-                f.drawn,
-                cpu,
-                f.culled_frustum,
-                f.culled_cone,
-            );
-        }
-        rows.push(row);
-        if i == 0 {
-            if let Some(p) = &a.output {
-                let img = pass.render_lod(cam, &q, true, Shading::Lit)?;
-                crate::render::write_png(p, WIDTH, HEIGHT, &img.pixels)
-                    .with_context(|| format!("cannot write {}", p.display()))?;
-            }
-        }
-    }
+        })
+    };
+    let line = |row: &LodRow| {
+        let prims = row
+            .mesh_primitives_generated
+            .map(|p| format!("  {p} triangles drawn"))
+            .unwrap_or_default();
+        Some(format!(
+            "view {} ({:.2} radii): LOD {:8.3} ms  full detail {:8.3} ms  meshlets drawn {} (CPU reference {}), culled: frustum {} backface {}{prims}",
+            row.view,
+            row.distance_radii,
+            row.lod_ms,
+            row.full_detail_ms,
+            row.meshlets_drawn,
+            row.cpu_reference_drawn,
+            row.meshlets_culled_frustum,
+            row.meshlets_culled_backface,
+        ))
+    };
+    let png = |cam: &Camera, p: &Path| {
+        let q = cam.lod_query(a.threshold, finest, cull);
+        let img = pass.render_lod(cam, &q, true, Shading::Lit)?;
+        crate::render::write_png(p, WIDTH, HEIGHT, &img.pixels)
+            .with_context(|| format!("cannot write {}", p.display()))
+    };
+    let rows = each_view(&a, &views, measure, line, png)?;
     let mismatch = rows
         .iter()
         .find(|r| r.meshlets_drawn as usize != r.cpu_reference_drawn);
@@ -728,8 +713,7 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
         _ => Pipeline::mesh(cull),
     };
     let (views, radius) = cameras(&a, &m);
-    let mut rows = Vec::new();
-    for (i, cam) in views.iter().enumerate() {
+    let measure = |i, cam: &Camera| -> Result<CompressedRow> {
         let f = pass.render(cam, how, Shading::Lit)?;
         let r = reference.render(cam, reference_how, Shading::Lit)?;
         // Exact comparison: the reference without culling (only laced wires carry culling data).
@@ -742,7 +726,7 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
                 x.pixels == y.pixels && f.pixels == pass.render(cam, no_cull, Shading::Lit)?.pixels
             }
         };
-        let row = CompressedRow {
+        Ok(CompressedRow {
             view: i,
             distance_radii: (cam.eye - cam.target).length() / radius,
             compressed_ms: f.gpu_ns * 1e-6,
@@ -751,32 +735,31 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
             meshlets_culled_backface: f.culled_cone,
             meshlets_drawn: f.drawn,
             identical_to_decoded_reference: exact,
+        })
+    };
+    let line = |row: &CompressedRow| {
+        Some(format!(
+            "view {} ({:.2} radii): {} {:8.3} ms  uncompressed {:8.3} ms  culled: frustum {} backface {}  image {}",
+            row.view,
+            row.distance_radii,
+            format.name(),
+            row.compressed_ms,
+            row.uncompressed_ms,
+            row.meshlets_culled_frustum,
+            row.meshlets_culled_backface,
+            if row.identical_to_decoded_reference { "identical to the CPU-decoded reference" } else { "DIFFERS from the CPU-decoded reference" }
+        ))
+    };
+    let png = |cam: &Camera, p: &Path| {
+        let colour = match how {
+            Pipeline::Vertex => Pipeline::Vertex,
+            _ => Pipeline::mesh_ids(cull),
         };
-        if !a.json {
-            println!(
-                "view {i} ({:.2} radii): {} {:8.3} ms  uncompressed {:8.3} ms  culled: frustum {} backface {}  image {}",
-                row.distance_radii,
-                format.name(),
-                row.compressed_ms,
-                row.uncompressed_ms,
-                f.culled_frustum,
-                f.culled_cone,
-                if exact { "identical to the CPU-decoded reference" } else { "DIFFERS from the CPU-decoded reference" }
-            );
-        }
-        rows.push(row);
-        if i == 0 {
-            if let Some(p) = &a.output {
-                let colour = match how {
-                    Pipeline::Vertex => Pipeline::Vertex,
-                    _ => Pipeline::mesh_ids(cull),
-                };
-                let img = pass.render(cam, colour, Shading::Lit)?;
-                crate::render::write_png(p, WIDTH, HEIGHT, &img.pixels)
-                    .with_context(|| format!("cannot write {}", p.display()))?;
-            }
-        }
-    }
+        let img = pass.render(cam, colour, Shading::Lit)?;
+        crate::render::write_png(p, WIDTH, HEIGHT, &img.pixels)
+            .with_context(|| format!("cannot write {}", p.display()))
+    };
+    let rows = each_view(&a, &views, measure, line, png)?;
     let validation_errors = ctx.validation.as_ref().map(|v| v.errors());
     if a.json {
         let out = serde_json::json!({
@@ -799,6 +782,34 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
         );
     }
     report_validation(validation_errors, a.json)
+}
+
+/// Runs every view of a render mode: `measure` draws view `i` into its row, `line` is the row's
+/// text (printed as it comes unless `--json`), `png` writes the first view's image to
+/// `--output`. The rows, in view order, for the JSON report.
+fn each_view<R>(
+    a: &RenderArgs,
+    views: &[Camera],
+    mut measure: impl FnMut(usize, &Camera) -> Result<R>,
+    line: impl Fn(&R) -> Option<String>,
+    png: impl Fn(&Camera, &Path) -> Result<()>,
+) -> Result<Vec<R>> {
+    let mut rows = Vec::with_capacity(views.len());
+    for (i, cam) in views.iter().enumerate() {
+        let row = measure(i, cam)?;
+        if !a.json {
+            if let Some(text) = line(&row) {
+                println!("{text}");
+            }
+        }
+        rows.push(row);
+        if i == 0 {
+            if let Some(p) = &a.output {
+                png(cam, p)?;
+            }
+        }
+    }
+    Ok(rows)
 }
 
 /// The views of `render` (seeded random directions, framed unless `--distance`) and the mesh's

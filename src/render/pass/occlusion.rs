@@ -409,8 +409,49 @@ impl Pass<'_> {
         phases: Phases,
         lod: Option<&Query>,
     ) -> Result<OcclusionFrame, RenderError> {
-        let ctx = self.ctx;
-        let d = &ctx.device;
+        let (pipeline, meshlet_count) = self.occlusion_pipeline(check, lod)?;
+        let view_proj = camera
+            .view_proj(WIDTH as f32 / HEIGHT as f32)
+            .to_cols_array();
+        if lod.is_some() && matches!(phases, Phases::Occlusion { .. }) {
+            self.place_pyramid_view(view_proj);
+        }
+        let objects = self.objects()?;
+        self.bindings.counters.write(&[0u8; COUNTER_BYTES as usize]);
+        if check {
+            self.bindings
+                .ids
+                .write(&vec![0xffu8; self.bindings.ids.size as usize]);
+        }
+        let (first, second, culled_instances) =
+            self.phase_draws(camera, shading, meshlet_count, phases);
+        let two = matches!(phases, Phases::Occlusion { .. });
+        let [msaa, resolve, depth] = &self.targets;
+        // SAFETY: `submit` hands a recording command buffer and waits for it; every handle
+        // recorded is owned by this pass and lives past the wait.
+        self.ctx.submit(|cmd| unsafe {
+            Recording {
+                pass: self,
+                d: &self.ctx.device,
+                cmd,
+                objects,
+                pipeline,
+                msaa: (msaa.image.get(), msaa.view.get()),
+                resolve: (resolve.image.get(), resolve.view.get()),
+                depth: (depth.image.get(), depth.view.get()),
+            }
+            .record_frame(&first, two.then_some(&second[..]), check)
+        })?;
+        self.read_occlusion_frame(objects, check, culled_instances)
+    }
+
+    /// The graphics pipeline an occlusion frame draws with and its meshlet count (a LOD pass:
+    /// the loaded levels' count, with the cut's view written for the task shader).
+    fn occlusion_pipeline(
+        &self,
+        check: bool,
+        lod: Option<&Query>,
+    ) -> Result<(vk::Pipeline, u32), RenderError> {
         if !matches!(self.drawn, Drawn::Descriptors(_)) {
             return Err(RenderError::NoShaderDecoder(
                 "occlusion culling of a compressed pass".into(),
@@ -444,26 +485,32 @@ impl Pass<'_> {
                 .get(),
             (false, Some((shade, _))) => shade.get(),
         };
-        let view_proj = camera
-            .view_proj(WIDTH as f32 / HEIGHT as f32)
-            .to_cols_array();
-        if lod.is_some() && matches!(phases, Phases::Occlusion { .. }) {
-            // The camera the pyramid was built from, after its levels (the first frame after a
-            // reset: this one, over a pyramid of zeros that hides everything it can test).
-            let previous = self.pyramid_view.get().unwrap_or(view_proj);
-            let at = 4 * pyramid_texels() as usize;
-            self.bindings
-                .pyramid
-                .write_at(at, bytemuck::cast_slice(&previous));
-            self.pyramid_view.set(Some(view_proj));
-        }
-        let objects = self.objects()?;
-        self.bindings.counters.write(&[0u8; COUNTER_BYTES as usize]);
-        if check {
-            self.bindings
-                .ids
-                .write(&vec![0xffu8; self.bindings.ids.size as usize]);
-        }
+        Ok((pipeline, meshlet_count))
+    }
+
+    /// Writes, after the pyramid's levels, the camera the pyramid was built from, and keeps
+    /// `view_proj` as the next frame's (a LOD pass's early phase tests against the previous
+    /// frame's pyramid as the previous camera saw it).
+    fn place_pyramid_view(&self, view_proj: [f32; 16]) {
+        // The first frame after a reset: this one, over a pyramid of zeros that hides everything
+        // it can test.
+        let previous = self.pyramid_view.get().unwrap_or(view_proj);
+        let at = 4 * pyramid_texels() as usize;
+        self.bindings
+            .pyramid
+            .write_at(at, bytemuck::cast_slice(&previous));
+        self.pyramid_view.set(Some(view_proj));
+    }
+
+    /// The draws of the first and the second phase (none for a reference frame), flagged for
+    /// their phase, and the instances the frustum culled whole.
+    fn phase_draws(
+        &self,
+        camera: &Camera,
+        shading: Shading,
+        meshlet_count: u32,
+        phases: Phases,
+    ) -> (Vec<frame::DrawCmd>, Vec<frame::DrawCmd>, u32) {
         let base = FLAG_FRUSTUM | FLAG_CONE;
         let push = self.push(camera, base, shading, meshlet_count);
         let (draws, culled_instances) = self.draw_list(camera, push);
@@ -493,187 +540,32 @@ impl Pass<'_> {
                 with(FLAG_LATE | if one_texel { FLAG_PYRAMID_ONE_TEXEL } else { 0 }),
             ),
         };
-        let two = matches!(phases, Phases::Occlusion { .. });
-        let [msaa, resolve, depth] = &self.targets;
-        let (msaa, resolve, depth) = (
-            (msaa.image.get(), msaa.view.get()),
-            (resolve.image.get(), resolve.view.get()),
-            (depth.image.get(), depth.view.get()),
-        );
-        let ts = objects.queries.get();
-        let (cw, ch) = (WIDTH.div_ceil(16), HEIGHT.div_ceil(16));
-        // SAFETY: `submit` hands a recording command buffer and waits for it; every handle
-        // recorded is owned by this pass and lives past the wait.
-        ctx.submit(|cmd| unsafe {
-            d.cmd_reset_query_pool(cmd, ts, 0, 4);
-            let image_barrier = |image, old, new, aspect| {
-                vk::ImageMemoryBarrier2::default()
-                    .image(image)
-                    .old_layout(old)
-                    .new_layout(new)
-                    .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-                    .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
-                    .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-                    .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
-                    .subresource_range(
-                        vk::ImageSubresourceRange::default()
-                            .aspect_mask(aspect)
-                            .level_count(1)
-                            .layer_count(1),
-                    )
-            };
-            // Every buffer write before is visible to every read and write after.
-            let full = || {
-                let m = [vk::MemoryBarrier2::default()
-                    .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-                    .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
-                    .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-                    .dst_access_mask(
-                        vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE,
-                    )];
-                d.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&m));
-            };
-            let attachment = vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL;
-            let read_only = vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL;
-            let start = [
-                image_barrier(
-                    msaa.0,
-                    vk::ImageLayout::UNDEFINED,
-                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                    vk::ImageAspectFlags::COLOR,
-                ),
-                image_barrier(
-                    resolve.0,
-                    vk::ImageLayout::UNDEFINED,
-                    vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-                    vk::ImageAspectFlags::COLOR,
-                ),
-                image_barrier(
-                    depth.0,
-                    vk::ImageLayout::UNDEFINED,
-                    attachment,
-                    vk::ImageAspectFlags::DEPTH,
-                ),
-            ];
-            d.cmd_pipeline_barrier2(
-                cmd,
-                &vk::DependencyInfo::default().image_memory_barriers(&start),
-            );
-            let rendering = |clear: bool, last: bool, draws: &[frame::DrawCmd]| {
-                let load = if clear {
-                    vk::AttachmentLoadOp::CLEAR
-                } else {
-                    vk::AttachmentLoadOp::LOAD
-                };
-                let mut colour = vk::RenderingAttachmentInfo::default()
-                    .image_view(msaa.1)
-                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                    .load_op(load)
-                    .store_op(vk::AttachmentStoreOp::STORE)
-                    .clear_value(vk::ClearValue {
-                        color: vk::ClearColorValue {
-                            float32: [0.08, 0.09, 0.12, 1.0],
-                        },
-                    });
-                if last {
-                    colour = colour
-                        .resolve_mode(vk::ResolveModeFlags::AVERAGE)
-                        .resolve_image_view(resolve.1)
-                        .resolve_image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
-                }
-                let colour = [colour];
-                let depth_att = vk::RenderingAttachmentInfo::default()
-                    .image_view(depth.1)
-                    .image_layout(attachment)
-                    .load_op(load)
-                    .store_op(vk::AttachmentStoreOp::STORE)
-                    .clear_value(vk::ClearValue {
-                        depth_stencil: vk::ClearDepthStencilValue {
-                            depth: 1.0,
-                            stencil: 0,
-                        },
-                    });
-                self.begin_drawing(cmd, &colour, &depth_att, pipeline);
-                self.record_draws(cmd, draws, true);
-                d.cmd_end_rendering(cmd);
-            };
-            let compute = |mode: u32, level: u32, groups: (u32, u32)| {
-                let p = ComputePush {
-                    mode,
-                    level,
-                    sample_count: SAMPLES.as_raw(),
-                };
-                d.cmd_push_constants(
-                    cmd,
-                    objects.layout.get(),
-                    vk::ShaderStageFlags::COMPUTE,
-                    0,
-                    bytemuck::bytes_of(&p),
-                );
-                d.cmd_dispatch(cmd, groups.0, groups.1, 1);
-            };
-            let bind_compute = || {
-                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, objects.pipeline.get());
-                d.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::COMPUTE,
-                    objects.layout.get(),
-                    0,
-                    &[objects.set],
-                    &[],
-                );
-            };
-            let depth_to = |old, new| {
-                let b = [image_barrier(
-                    depth.0,
-                    old,
-                    new,
-                    vk::ImageAspectFlags::DEPTH,
-                )];
-                d.cmd_pipeline_barrier2(
-                    cmd,
-                    &vk::DependencyInfo::default().image_memory_barriers(&b),
-                );
-            };
-            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, ts, 0);
-            rendering(true, !two, &first);
-            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts, 1);
-            if two {
-                depth_to(attachment, read_only);
-                bind_compute();
-                // Levels 0-3 per 8 x 8 block (16 x 16 blocks a workgroup), then the rest in one
-                // workgroup.
-                compute(0, 0, (WIDTH.div_ceil(128), HEIGHT.div_ceil(128)));
-                full();
-                compute(1, 0, (1, 1));
-                full();
-                depth_to(read_only, attachment);
-            }
-            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts, 2);
-            if two {
-                rendering(false, true, &second);
-            }
-            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts, 3);
-            if check {
-                depth_to(attachment, read_only);
-                bind_compute();
-                compute(2, 0, (cw, ch));
-            }
-            self.record_readback(cmd, resolve.0);
-        })?;
+        (first, second, culled_instances)
+    }
+
+    /// Reads a submitted occlusion frame back: timestamps, counters, pixels and, with `check`,
+    /// the check's images.
+    fn read_occlusion_frame(
+        &self,
+        objects: &Objects,
+        check: bool,
+        culled_instances: u32,
+    ) -> Result<OcclusionFrame, RenderError> {
+        let d = &self.ctx.device;
         let mut t = [0u64; 4];
         // SAFETY: the submission that wrote the timestamps has completed (`submit` waits).
         unsafe {
             d.get_query_pool_results(
-                ts,
+                objects.queries.get(),
                 0,
                 &mut t,
                 vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
             )
         }
         .map_err(vk_err("timestamps"))?;
-        let ns =
-            |a: usize, b: usize| t[b].saturating_sub(t[a]) as f64 * ctx.timestamp_period as f64;
+        let ns = |a: usize, b: usize| {
+            t[b].saturating_sub(t[a]) as f64 * self.ctx.timestamp_period as f64
+        };
         let c: Vec<u32> =
             bytemuck::cast_slice(&self.bindings.counters.read(COUNTER_BYTES as usize)).to_vec();
         let checked = check.then(|| Checked {
@@ -705,5 +597,258 @@ impl Pass<'_> {
             occluded_instances: c[COUNTER_INSTANCES_OCCLUDED],
             checked,
         })
+    }
+}
+
+/// A barrier moving `image` from layout `old` to `new` after every earlier command's writes.
+fn image_barrier(
+    image: vk::Image,
+    old: vk::ImageLayout,
+    new: vk::ImageLayout,
+    aspect: vk::ImageAspectFlags,
+) -> vk::ImageMemoryBarrier2<'static> {
+    vk::ImageMemoryBarrier2::default()
+        .image(image)
+        .old_layout(old)
+        .new_layout(new)
+        .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+        .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+        .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
+        .subresource_range(
+            vk::ImageSubresourceRange::default()
+                .aspect_mask(aspect)
+                .level_count(1)
+                .layer_count(1),
+        )
+}
+
+/// What recording one occlusion frame reads: the pass, the command buffer, the compute objects,
+/// the graphics pipeline and the targets as (image, view).
+struct Recording<'r, 'a> {
+    pass: &'r Pass<'a>,
+    d: &'r ash::Device,
+    cmd: vk::CommandBuffer,
+    objects: &'r Objects,
+    pipeline: vk::Pipeline,
+    msaa: (vk::Image, vk::ImageView),
+    resolve: (vk::Image, vk::ImageView),
+    depth: (vk::Image, vk::ImageView),
+}
+
+const DEPTH_ATTACHMENT: vk::ImageLayout = vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL;
+const DEPTH_READ_ONLY: vk::ImageLayout = vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL;
+
+impl Recording<'_, '_> {
+    /// Records the whole frame: `first` (cleared), then with `second` the pyramid and `second`,
+    /// with `check` the check's depth copy, then the readback; timestamps between the steps.
+    ///
+    /// # Safety
+    /// `cmd` is recording outside a rendering; every handle is the pass's.
+    unsafe fn record_frame(
+        &self,
+        first: &[frame::DrawCmd],
+        second: Option<&[frame::DrawCmd]>,
+        check: bool,
+    ) {
+        let (d, cmd) = (self.d, self.cmd);
+        let ts = self.objects.queries.get();
+        let (cw, ch) = (WIDTH.div_ceil(16), HEIGHT.div_ceil(16));
+        // SAFETY: the caller's contract.
+        unsafe {
+            d.cmd_reset_query_pool(cmd, ts, 0, 4);
+            self.start_targets();
+            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, ts, 0);
+            self.draw_phase(true, second.is_none(), first);
+            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts, 1);
+            if second.is_some() {
+                self.move_depth(DEPTH_ATTACHMENT, DEPTH_READ_ONLY);
+                self.bind_pyramid_shader();
+                // Levels 0-3 per 8 x 8 block (16 x 16 blocks a workgroup), then the rest in one
+                // workgroup.
+                self.dispatch(0, 0, (WIDTH.div_ceil(128), HEIGHT.div_ceil(128)));
+                self.barrier_all();
+                self.dispatch(1, 0, (1, 1));
+                self.barrier_all();
+                self.move_depth(DEPTH_READ_ONLY, DEPTH_ATTACHMENT);
+            }
+            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts, 2);
+            if let Some(second) = second {
+                self.draw_phase(false, true, second);
+            }
+            d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, ts, 3);
+            if check {
+                self.move_depth(DEPTH_ATTACHMENT, DEPTH_READ_ONLY);
+                self.bind_pyramid_shader();
+                self.dispatch(2, 0, (cw, ch));
+            }
+            self.pass.record_readback(cmd, self.resolve.0);
+        }
+    }
+
+    /// Moves the targets from undefined contents into their attachment layouts.
+    ///
+    /// # Safety
+    /// As [`Recording::record_frame`].
+    unsafe fn start_targets(&self) {
+        let start = [
+            image_barrier(
+                self.msaa.0,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::ImageAspectFlags::COLOR,
+            ),
+            image_barrier(
+                self.resolve.0,
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+                vk::ImageAspectFlags::COLOR,
+            ),
+            image_barrier(
+                self.depth.0,
+                vk::ImageLayout::UNDEFINED,
+                DEPTH_ATTACHMENT,
+                vk::ImageAspectFlags::DEPTH,
+            ),
+        ];
+        // SAFETY: the caller's contract.
+        unsafe {
+            self.d.cmd_pipeline_barrier2(
+                self.cmd,
+                &vk::DependencyInfo::default().image_memory_barriers(&start),
+            );
+        }
+    }
+
+    /// Records one phase's rendering of `draws`: clearing the targets or loading them, and on
+    /// the `last` phase resolving the colour.
+    ///
+    /// # Safety
+    /// As [`Recording::record_frame`].
+    unsafe fn draw_phase(&self, clear: bool, last: bool, draws: &[frame::DrawCmd]) {
+        let load = if clear {
+            vk::AttachmentLoadOp::CLEAR
+        } else {
+            vk::AttachmentLoadOp::LOAD
+        };
+        let mut colour = vk::RenderingAttachmentInfo::default()
+            .image_view(self.msaa.1)
+            .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+            .load_op(load)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue {
+                color: vk::ClearColorValue {
+                    float32: [0.08, 0.09, 0.12, 1.0],
+                },
+            });
+        if last {
+            colour = colour
+                .resolve_mode(vk::ResolveModeFlags::AVERAGE)
+                .resolve_image_view(self.resolve.1)
+                .resolve_image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL);
+        }
+        let colour = [colour];
+        let depth_att = vk::RenderingAttachmentInfo::default()
+            .image_view(self.depth.1)
+            .image_layout(DEPTH_ATTACHMENT)
+            .load_op(load)
+            .store_op(vk::AttachmentStoreOp::STORE)
+            .clear_value(vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 1.0,
+                    stencil: 0,
+                },
+            });
+        // SAFETY: the caller's contract; the attachments are the pass's targets in the layouts
+        // they name.
+        unsafe {
+            self.pass
+                .begin_drawing(self.cmd, &colour, &depth_att, self.pipeline);
+            self.pass.record_draws(self.cmd, draws, true);
+            self.d.cmd_end_rendering(self.cmd);
+        }
+    }
+
+    /// Makes every buffer write before visible to every read and write after.
+    ///
+    /// # Safety
+    /// As [`Recording::record_frame`].
+    unsafe fn barrier_all(&self) {
+        let m = [vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)];
+        // SAFETY: the caller's contract.
+        unsafe {
+            self.d.cmd_pipeline_barrier2(
+                self.cmd,
+                &vk::DependencyInfo::default().memory_barriers(&m),
+            );
+        }
+    }
+
+    /// Binds the pyramid shader and its descriptor set.
+    ///
+    /// # Safety
+    /// As [`Recording::record_frame`].
+    unsafe fn bind_pyramid_shader(&self) {
+        let o = self.objects;
+        // SAFETY: the caller's contract.
+        unsafe {
+            self.d
+                .cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, o.pipeline.get());
+            self.d.cmd_bind_descriptor_sets(
+                self.cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                o.layout.get(),
+                0,
+                &[o.set],
+                &[],
+            );
+        }
+    }
+
+    /// Dispatches the bound pyramid shader in `mode` at `level` over `groups` workgroups.
+    ///
+    /// # Safety
+    /// As [`Recording::record_frame`], with the pyramid shader bound.
+    unsafe fn dispatch(&self, mode: u32, level: u32, groups: (u32, u32)) {
+        let p = ComputePush {
+            mode,
+            level,
+            sample_count: SAMPLES.as_raw(),
+        };
+        // SAFETY: the caller's contract.
+        unsafe {
+            self.d.cmd_push_constants(
+                self.cmd,
+                self.objects.layout.get(),
+                vk::ShaderStageFlags::COMPUTE,
+                0,
+                bytemuck::bytes_of(&p),
+            );
+            self.d.cmd_dispatch(self.cmd, groups.0, groups.1, 1);
+        }
+    }
+
+    /// Moves the depth target from layout `old` to `new`.
+    ///
+    /// # Safety
+    /// As [`Recording::record_frame`], with the depth target in `old`.
+    unsafe fn move_depth(&self, old: vk::ImageLayout, new: vk::ImageLayout) {
+        let b = [image_barrier(
+            self.depth.0,
+            old,
+            new,
+            vk::ImageAspectFlags::DEPTH,
+        )];
+        // SAFETY: the caller's contract.
+        unsafe {
+            self.d.cmd_pipeline_barrier2(
+                self.cmd,
+                &vk::DependencyInfo::default().image_memory_barriers(&b),
+            );
+        }
     }
 }
