@@ -145,12 +145,3 @@ mod tests {
         assert_eq!(distinct([1, 2, 3]).count(), 3);
     }
 }
-
-/// A rayon pool of one thread: what one-thread timings run on, and the other side of every
-/// thread-count determinism check (a method's output must not depend on the pool it runs on).
-pub fn one_thread_pool() -> rayon::ThreadPool {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .expect("a one-thread pool")
-}

@@ -10,12 +10,12 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{machine_note, plot, today, Common};
+use super::{plot, Common};
 use crate::mesh;
 use crate::meshlet::{bounds, validate, Limits, Metrics};
 use crate::strategy::kmedoids::{cluster, Clustering, Config as KConfig, Grow, Mode};
 use anyhow::{bail, Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
@@ -593,15 +593,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     if !cfg.skip_paper {
         modes.push(Method::Paper);
     }
-    let pb = if cfg.common.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new((inputs.len() * modes.len()) as u64)
-    };
-    pb.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")?
-            .progress_chars("=> "),
-    );
+    let pb = super::progress::bar(cfg.common.quiet, (inputs.len() * modes.len()) as u64);
     let mut runs = Vec::new();
     for (name, m) in &inputs {
         runs.extend(measure_mesh(cfg, &modes, &pb, name, m)?);
@@ -785,33 +777,29 @@ fn run_sweep(cfg: &Config, sm: &mesh::Mesh) -> Result<Vec<SweepRow>> {
             });
         }
     }
-    // The region methods' knobs, each at the other's default: region size (from many small
+    // The region method's knobs, each at the other's default: region size (from many small
     // regions to one per piece), then rounds of boundary moves.
     let regions = REGION_SWEEP.map(|r| (Some(r), None));
     let moves = MOVE_SWEEP.map(|m| (None, Some(m)));
-    for knob in [&regions[..], &moves[..]] {
-        for method in [Method::Parallel] {
-            for &(region, moves) in knob {
-                let mut kc = method.config();
-                let base = kc.parallel;
-                kc.parallel.region_triangles = region.unwrap_or(base.region_triangles);
-                kc.parallel.move_rounds = moves.unwrap_or(base.move_rounds);
-                let (seconds, c, metrics) = run_one(sm, cfg.limits, method, kc, cfg.sweep_mesh())?;
-                sweep.push(SweepRow {
-                    mode: method,
-                    threshold: 0.0,
-                    max_iterations: kc.flat.max_iterations,
-                    region,
-                    moves,
-                    seconds,
-                    c,
-                    metrics,
-                    pareto: false,
-                });
-            }
-        }
+    let method = Method::Parallel;
+    for &(region, moves) in regions.iter().chain(&moves) {
+        let mut kc = method.config();
+        let base = kc.parallel;
+        kc.parallel.region_triangles = region.unwrap_or(base.region_triangles);
+        kc.parallel.move_rounds = moves.unwrap_or(base.move_rounds);
+        let (seconds, c, metrics) = run_one(sm, cfg.limits, method, kc, cfg.sweep_mesh())?;
+        sweep.push(SweepRow {
+            mode: method,
+            threshold: 0.0,
+            max_iterations: kc.flat.max_iterations,
+            region,
+            moves,
+            seconds,
+            c,
+            metrics,
+            pareto: false,
+        });
     }
-
     Ok(sweep)
 }
 
@@ -837,28 +825,27 @@ fn write_data(cfg: &Config, runs: &[Run], sweep: &[SweepRow]) -> Result<()> {
                     .collect(),
             })
             .collect();
-        // The region methods' two knobs, one series per method and knob.
+        // The region method's two knobs, one series each.
         let knobs = [
             ("region triangles", &REGION_SWEEP[..], true),
             ("move rounds", &MOVE_SWEEP[..], false),
         ];
+        let m = Method::Parallel;
         for (knob, values, by_region) in knobs {
-            for m in [Method::Parallel] {
-                out.push(plot::Series {
-                    label: format!(
-                        "{} ({knob} {}..{})",
-                        m.name(),
-                        values[0],
-                        values[values.len() - 1]
-                    ),
-                    points: sweep
-                        .iter()
-                        // A region method's row sweeps one knob: the region size or the move rounds.
-                        .filter(|r| r.mode == m && r.region.is_some() == by_region)
-                        .map(|r| (r.seconds, y(r)))
-                        .collect(),
-                });
-            }
+            out.push(plot::Series {
+                label: format!(
+                    "{} ({knob} {}..{})",
+                    m.name(),
+                    values[0],
+                    values[values.len() - 1]
+                ),
+                points: sweep
+                    .iter()
+                    // Its row sweeps one knob: the region size or the move rounds.
+                    .filter(|r| r.mode == m && r.region.is_some() == by_region)
+                    .map(|r| (r.seconds, y(r)))
+                    .collect(),
+            });
         }
         out.extend(thresholds.iter().map(|&th| {
             plot::Series {
@@ -919,16 +906,21 @@ fn write_data(cfg: &Config, runs: &[Run], sweep: &[SweepRow]) -> Result<()> {
 /// kmedoids.md.
 fn report(cfg: &Config, runs: &[Run], sweep: &[SweepRow]) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "# k-medoids at scale, and run time against error\n");
-    let _ = writeln!(
-        s,
-        "Written by `meshletlab bench kmedoids --limits {} --paper-budget {}{}` on {}. Do not edit: rerun the command.\n",
+    let command = format!(
+        "meshletlab bench kmedoids --limits {} --paper-budget {}{}",
         cfg.limits,
         cfg.paper_budget().as_secs_f64(),
-        cfg.tag.tag.as_ref().map_or(String::new(), |t| format!(" --tag {t}")),
-        today()
+        cfg.tag
+            .tag
+            .as_ref()
+            .map_or(String::new(), |t| format!(" --tag {t}")),
     );
-    let _ = writeln!(s, "Machine: {}.\n", machine_note());
+    super::write_header(
+        &mut s,
+        "k-medoids at scale, and run time against error",
+        &command,
+        "",
+    );
     let _ = writeln!(
         s,
         "`kmedoids` (the default): clusters grown to the limits one at a time (among equally cheap triangles the \

@@ -92,6 +92,61 @@ fn fits(gpu: &Gpu, what: &'static str, len: usize) -> Result<(), GpuError> {
     Ok(())
 }
 
+/// The words of each buffer of a run (`parallel::layout`'s sections).
+struct Sizes {
+    tri_len: usize,
+    corner_len: usize,
+    canon_len: usize,
+    arena_len: usize,
+    info_len: usize,
+}
+
+/// The buffers' sizes for `t` triangles in `k_regions` regions, or the error naming the first
+/// that does not fit one binding of `gpu`.
+fn sizes(gpu: &Gpu, t: usize, k_regions: usize, limits: Limits) -> Result<Sizes, GpuError> {
+    let s = Sizes {
+        tri_len: layout::TRI_SECTIONS as usize * t,
+        corner_len: 3 * layout::CORNER_SECTIONS as usize * t,
+        canon_len: layout::CANON_WORDS as usize * t,
+        arena_len: layout::arena_words(t, k_regions, limits.max_triangles as usize),
+        info_len: 3 * k_regions + 2 + t,
+    };
+    fits(gpu, "regions' triangle state", s.tri_len)?;
+    fits(gpu, "regions' corner state", s.corner_len)?;
+    fits(gpu, "regions' canonical corners and centres", s.canon_len)?;
+    fits(gpu, "regions' lists", s.arena_len)?;
+    if t.div_ceil(k_regions) >= 1 << 24 {
+        // Regions hold at most ceil(T / k) plus the small pieces they take in; checked exactly
+        // once the regions are known.
+        return Err(GpuError::Unsupported(
+            "a region of 2^24 triangles or more (pockets are packed as 24-bit offsets)",
+        ));
+    }
+    Ok(s)
+}
+
+/// Writes each region's first cluster (the prefix sums of the regions' cluster `counts`, and the
+/// total after them) into `info` after the counts; returns the cluster count and the upload
+/// seconds.
+fn write_bases(gpu: &Gpu, info: &wgpu::Buffer, counts: &[u32]) -> (usize, f64) {
+    let k_regions = counts.len();
+    let mut bases = Vec::with_capacity(k_regions + 1);
+    let mut k = 0u32;
+    for &c in counts {
+        bases.push(k);
+        k += c;
+    }
+    bases.push(k);
+    let (_, up) = timed(|| {
+        gpu.queue.write_buffer(
+            info,
+            4 * (2 * k_regions + 1) as u64,
+            bytemuck::cast_slice(&bases),
+        )
+    });
+    (k as usize, up)
+}
+
 /// Runs `kmedoids-parallel` on `gpu` over a mesh on the host or already on the device; with
 /// `read_back` the labels, distances and meshlets come back to the host, else only the medoids
 /// (one word per cluster) do, and the meshlets stay on the device.
@@ -104,22 +159,14 @@ pub fn cluster(
 ) -> Result<(GpuRegions, DeviceMeshlets), GpuError> {
     let start = Instant::now();
     let (t, n) = source.counts();
-    let tri_len = layout::TRI_SECTIONS as usize * t;
-    let corner_len = 3 * layout::CORNER_SECTIONS as usize * t;
-    let canon_len = layout::CANON_WORDS as usize * t;
-    fits(gpu, "regions' triangle state", tri_len)?;
-    fits(gpu, "regions' corner state", corner_len)?;
-    fits(gpu, "regions' canonical corners and centres", canon_len)?;
     let k_regions = region_count(t, cfg.region_triangles as usize);
-    let arena_len = layout::arena_words(t, k_regions, limits.max_triangles as usize);
-    fits(gpu, "regions' lists", arena_len)?;
-    if t.div_ceil(k_regions) >= 1 << 24 {
-        // Regions hold at most ceil(T / k) plus the small pieces they take in; checked exactly
-        // below, once the regions are known.
-        return Err(GpuError::Unsupported(
-            "a region of 2^24 triangles or more (pockets are packed as 24-bit offsets)",
-        ));
-    }
+    let Sizes {
+        tri_len,
+        corner_len,
+        canon_len,
+        arena_len,
+        info_len,
+    } = sizes(gpu, t, k_regions, limits)?;
     let Placed {
         indices,
         positions,
@@ -133,7 +180,6 @@ pub fn cluster(
         wgsl!(generated "kmedoids_parallel_layout.wgsl"; "kmedoids_parallel.wgsl", "medoid.wgsl"),
         &["init", "grow", "grow_rows", "relabel", "medoid"],
     );
-    let info_len = 3 * k_regions + 2 + t;
     let (bufs, up) = timed(|| {
         (
             gpu.zeros("region info", info_len),
@@ -216,21 +262,7 @@ pub fn cluster(
             "a region of 2^24 triangles or more (pockets are packed as 24-bit offsets)",
         ));
     }
-    let mut bases = Vec::with_capacity(k_regions + 1);
-    let mut k = 0u32;
-    for &c in counts {
-        bases.push(k);
-        k += c;
-    }
-    bases.push(k);
-    let k = k as usize;
-    let (_, up) = timed(|| {
-        gpu.queue.write_buffer(
-            &info,
-            4 * (2 * k_regions + 1) as u64,
-            bytemuck::cast_slice(&bases),
-        )
-    });
+    let (k, up) = write_bases(gpu, &info, counts);
     timing.upload += up;
     // Steps 3, 4 and 5, then the medoids and the moves' counters back.
     let moves = (cfg.move_rounds > 0)
