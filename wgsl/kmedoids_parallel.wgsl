@@ -1,17 +1,18 @@
 // kmedoids-parallel on the device, mirroring src/strategy/kmedoids/parallel/ step by step
-// (driver: src/gpu/kmedoids_parallel.rs):
-//   init      canonical_corners, and the State words of grow_region set to their start values
+// (driver: src/gpu/kmedoids_parallel.rs), one section per CPU file:
+//   init      mod.rs canonical_corners, and region.rs State's words set to their start values
 //             (per triangle)
-//   grow      grow_region with Packing::nearest (nearest_piece), absorb_pockets (shed_front),
-//             merge_neighbours, pack_pieces and dissolve_clusters: one invocation per region
-//             (one per workgroup, or eight per workgroup in grow_rows),
+//   grow      grow.rs grow_region, calling the sections below: pockets.rs (absorb for
+//             absorb_pockets, shed_front), pack.rs (nearest_piece for Packing::nearest, then
+//             pack_pieces), merge.rs (merge_neighbours) and dissolve.rs (dissolve_clusters): one
+//             invocation per region (one per workgroup, or eight per workgroup in grow_rows),
 //             the same sequential steps over the same integer keys (regions share no word, so
 //             they run at once)
 //   relabel   step 3: cluster c of region r becomes base[r] + c (per triangle)
 //   medoid    medoids_and_distances: the paper's medoid of one cluster (least_sum_128's reach
 //             sets, or a BFS per member for wider clusters) and its members' hop distances (one
 //             invocation per cluster; the steps are in medoid.wgsl, shared with kmedoids_parallel_moves.wgsl)
-// The CPU keeps a region's state in lc arrays; here the same words live in global arrays
+// The CPU keeps a region's state in local arrays (region.rs); here the same words live in global arrays
 // indexed by triangle id or canonical corner (the region's own), and its lists at its member
 // offset (`RS`) in `arena`.
 
@@ -120,7 +121,7 @@ fn init(@builtin(global_invocation_id) gid: vec3<u32>) {
     set_free(t, 0u);
 }
 
-// ---- grow ------------------------------------------------------------------------------------
+// ---- grow's state and keys (region.rs: Region, State; grow.rs: the growth key) ---------------
 
 // The region and cluster the invocation works on, and the region's triangle count.
 var<private> N: u32;
@@ -168,6 +169,8 @@ fn key_less(a: vec4<u32>, ah: u32, b: vec4<u32>, bh: u32) -> bool {
     if (ah != bh) { return ah < bh; }
     return a.w < b.w;
 }
+
+// ---- pockets (pockets.rs: absorb_pockets, shed_front) -------------------------------------
 
 // absorb_pockets for the cluster in `grown` (length `len`), keeping the pieces' free counts;
 // returns its new length and the earliest seed-order position it freed, or NONE when nothing
@@ -480,6 +483,8 @@ fn shed_front(len: u32, pw: u32) -> vec2<u32> {
     return vec2<u32>(glen, earliest);
 }
 
+// ---- grow (grow.rs: grow_region; the entry points) -------------------------------------------
+
 // Closes the current cluster: its members (`grown`, `len`) go to the region's seq list.
 fn close(len: u32, written: u32) -> u32 {
     let G = s_grown(R);
@@ -501,7 +506,7 @@ fn grow_rows(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_in
     grow_one(group(wid) * 8u + lid);
 }
 
-// Packing::nearest: the seed of the piece nearest the centre `cen` (ties to the earlier piece)
+// pack.rs, during the growth: Packing::nearest, the seed of the piece nearest the centre `cen` (ties to the earlier piece)
 // among the PACK_WINDOW pieces from the cursor's, the cursor's own or an untouched one after it,
 // if it is not cut by the region's border and its seed fits; NONE if no piece qualifies.
 fn nearest_piece(np: u32, cursor: u32, nv: u32, cen: vec3<u32>) -> u32 {
@@ -687,7 +692,7 @@ fn grow_one(r: u32) {
     info[p.regions + 1u + r] = C;
 }
 
-// ---- merge_neighbours (step 2b, in the same invocation) -----------------------------------------
+// ---- merge (merge.rs: merge_neighbours, step 2b, in the same invocation) ------------------------
 //
 // Clusters become linked lists (`next` in the frontier-cluster section, which growth no longer
 // needs); per cluster, head, tail, size and the merge order live in the sections growth used for
@@ -833,7 +838,7 @@ fn merge_neighbours() {
     C = nc;
 }
 
-// ---- pack_pieces (step 2c, in the same invocation) -------------------------------------------
+// ---- piece packing (pack.rs: pack_pieces, step 2c, in the same invocation) ---------------------
 //
 // Per cluster c, words growth no longer needs: its centre (x | y << 16, z) and radius in the hop,
 // aux and position sections and its vertex count in the free-count section, each at the region's
@@ -1029,7 +1034,7 @@ fn pack_pieces() {
     }
 }
 
-// ---- dissolve_clusters (step 2d, in the same invocation) ---------------------------------------
+// ---- dissolve (dissolve.rs: dissolve_clusters, step 2d, in the same invocation) ---------------
 //
 // Scratch: the queue (circular, `max_t` words: a member is queued at most once at a time) in the
 // grown row; a member's queued flag in its first corner's mark word; the plan's added triangles

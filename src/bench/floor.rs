@@ -69,31 +69,23 @@ pub fn bytes_per_call(kernel: &str, s: &Sizes) -> Option<(&'static str, f64)> {
         "stats" => ("members T, indices 3T, distances T", w * 5.0 * t),
         "remember" | "dirty_mark" => ("labels T, per-triangle medoid T", w * 2.0 * t),
         "dist_partial" => ("distances T", w * t),
-        // Capacity-aware assignment; `walk` per assignment (all its levels and repeats together).
-        "clear_labels" => ("labels, two claim arrays 3T", w * 3.0 * t),
-        "walk" => (
-            "dual offsets T, rows E, labels T, indices 3T, cluster lists T",
-            w * (7.0 * t + e),
-        ),
         _ => return None,
     })
 }
 
-/// Calls of `kernel` in `p`: `push` and `walk` run dispatches per BFS level, so their calls are
-/// the assignments (one `clear` or `clear_labels` each); every other kernel is one dispatch per
-/// call.
+/// Calls of `kernel` in `p`: `push` runs a dispatch per BFS level, so its calls are the
+/// assignments (one `clear` each); every other kernel is one dispatch per call.
 fn calls(kernel: &str, p: &Profile) -> u64 {
     let n = |k: &str| p.per_kernel.get(k).map_or(0, |e| e.0);
     match kernel {
         "push" => n("clear"),
-        "walk" => n("clear_labels"),
         _ => n(kernel),
     }
 }
 
 /// One kernel of one profiled run.
 pub struct Row {
-    /// Which run ("kmedoids-flat", "kmedoids").
+    /// Which run (`kmedoids-flat`).
     pub run: &'static str,
     /// Entry point.
     pub kernel: &'static str,
@@ -254,7 +246,7 @@ mod tests {
     }
 
     #[test]
-    fn push_and_walk_count_one_call_per_assignment() {
+    fn push_counts_one_call_per_assignment() {
         let mut p = Profile::default();
         p.per_kernel.insert("push", (40, 0.4));
         p.per_kernel.insert("clear", (2, 0.01));
@@ -276,13 +268,6 @@ mod tests {
         assert!((push.floor() - push.bytes / 1e9).abs() < 1e-15);
         // Largest measured time first.
         assert_eq!(r[0].kernel, "push");
-        // The capacity-aware assignment's walks, likewise one call per assignment.
-        p.per_kernel.insert("walk", (70, 0.2));
-        p.per_kernel.insert("clear_labels", (3, 0.01));
-        let r = rows("capacity", &p, &s, &copy);
-        let walk = r.iter().find(|r| r.kernel == "walk").unwrap();
-        assert_eq!(walk.calls, 3);
-        assert_eq!(walk.bytes, 3.0 * 4.0 * (700.0 + 300.0));
     }
 
     #[test]

@@ -15,7 +15,7 @@ pub struct ParityArgs {
     /// Meshlet limits for k-medoids.
     #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
     limits: Limits,
-    /// Kernel families to leave out (comma-separated), e.g. `--skip flat,grower` on a large mesh
+    /// Kernel families to leave out (comma-separated), e.g. `--skip kmedoids-flat,grower` on a large mesh
     /// where those two take most of the time.
     #[arg(long, value_delimiter = ',', value_enum)]
     skip: Vec<Family>,
