@@ -1,5 +1,5 @@
-//! The multi-source BFS of `wgsl/assign.wgsl` ([`Bfs`], CPU reference
-//! [`crate::strategy::kmedoids::assign`]): `kmedoids-flat`'s assignment ([`super::kmedoids_flat`])
+//! The multi-source BFS of `wgsl/assign.wgsl` (`Bfs`, CPU reference
+//! [`mod@crate::strategy::kmedoids::assign`]): `kmedoids-flat`'s assignment ([`super::kmedoids_flat`])
 //! and the coarse regions' ([`super::coarse`]). Its parameter block is the one the flat method's
 //! three kernel modules share.
 

@@ -3,8 +3,8 @@
 //! CPU runs.
 //!
 //! A strategy qualifies when the GPU runs all of it and the host only orders the work between
-//! kernels: `bsphere-parallel` ([`super::grow`]), `kmedoids-flat` ([`super::kmedoids`]'s flat
-//! driver) and `kmedoids-parallel` ([`super::regions`]). The default `kmedoids` does not: its
+//! kernels: `bsphere-parallel` ([`super::grow`]), `kmedoids-flat` ([`super::kmedoids_flat`])
+//! and `kmedoids-parallel` ([`super::kmedoids_parallel`]). The default `kmedoids` does not: its
 //! seeding growth, merges and packing are sequential host code, so a GPU run of it would mostly
 //! measure the host. The ordering post-passes
 //! (`--local-order`, `--meshlet-order`) run on the host after the build, exactly as after a CPU

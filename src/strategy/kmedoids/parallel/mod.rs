@@ -6,7 +6,7 @@
 //! (the running centroid), and its merges and piece packing sort and allocate, so no kernel runs
 //! it. This method cuts the mesh into coarse regions and grows each with integer keys, linear
 //! scans and fixed arrays, which a kernel runs line for line. One file per step:
-//! [`mod@grow`] (step 2's growth), [`pockets`], [`pack`] (piece packing), [`merge`],
+//! [`mod@grow`] (step 2's growth), [`pockets`], [`mod@pack`] (piece packing), [`merge`],
 //! [`dissolve`], [`moves`] (step 5); [`region`] holds the context they share.
 //!
 //! 1. **Regions**: [`super::coarse`] (the Morton-seeded multi-source BFS).
@@ -28,18 +28,18 @@
 //!    - when a cluster stops, free pockets next to it of at most half the triangle limit are
 //!      absorbed, largest first, if giving back its last-grown triangles (at most half of them)
 //!      makes room: the pocket would otherwise become a meshlet of its own; each pocket that
-//!      rule cannot take is tried by the front rule ([`pockets::shed_front`]), which gives back the
+//!      rule cannot take is tried by the front rule (`pockets::shed_front`), which gives back the
 //!      triangles nearest the open free side instead;
 //!    - then clusters merge into a neighbour across an edge whose union fits, smallest first
 //!      (what tube ends and enclosed leftovers need: on the neurons a sixth fewer meshlets);
 //!    - then a cluster made only of whole small pieces is dissolved into the clusters nearest
 //!      its pieces that have room, where the targets' bounding radii grow by no more, summed,
-//!      than its own ([`pack::pack_pieces`]): the growth packs pieces only into a cluster whose own
+//!      than its own (`pack::pack_pieces`): the growth packs pieces only into a cluster whose own
 //!      piece ran out, so detached pieces seeded among a large piece's clusters would otherwise
 //!      stay meshlets of their own;
 //!    - then a cluster whose members all find room in the clusters across its edges is dissolved
 //!      into them, smallest first, member by member from its border inwards
-//!      ([`dissolve::dissolve_clusters`]): the merges move a cluster whole into one neighbour, while on
+//!      (`dissolve::dissolve_clusters`): the merges move a cluster whole into one neighbour, while on
 //!      branching tubes a cluster between two part-filled ones often fits neither alone but
 //!      splits across both.
 //! 3. **Labels**: cluster `c` of region `r` is `base[r] + c`, regions in order.

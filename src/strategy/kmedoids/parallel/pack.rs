@@ -1,6 +1,6 @@
 //! Piece packing in `kmedoids-parallel`'s growth: a cluster whose piece ran out goes on in the
-//! nearest small piece that fits ([`Packing`], step 2), and after the merges a cluster made only
-//! of whole small pieces is dissolved into the nearest clusters with room ([`pack_pieces`], step
+//! nearest small piece that fits (`Packing`, step 2), and after the merges a cluster made only
+//! of whole small pieces is dissolved into the nearest clusters with room (`pack_pieces`, step
 //! 2c). The `grow` kernel's `nearest_piece` and `pack_pieces` mirror them.
 
 use super::super::morton::{distance2, unpack, Centre};

@@ -1,6 +1,6 @@
 //! The pocket rules of `kmedoids-parallel`'s growth, as a cluster stops: small free pockets
-//! next to it are absorbed for its last-grown triangles ([`absorb_pockets`]), or for triangles
-//! given back at its open side ([`shed_front`]). The `grow` kernel's pocket section mirrors them.
+//! next to it are absorbed for its last-grown triangles (`absorb_pockets`), or for triangles
+//! given back at its open side (`shed_front`). The `grow` kernel's pocket section mirrors them.
 
 use super::layout::{ATTEMPT, BIG, TRYING};
 use super::region::{Region, State};

@@ -1,7 +1,7 @@
 //! One region's context for the growth steps of `kmedoids-parallel`: what the steps read
-//! ([`Region`]: the region's dual graph, canonical corners and centroid cells in local numbers,
-//! and the limits), the words they change ([`State`]), and the clusters between the growth and
-//! the renumbering ([`Clusters`]). Each step file takes these three instead of a bundle of
+//! (`Region`: the region's dual graph, canonical corners and centroid cells in local numbers,
+//! and the limits), the words they change (`State`), and the clusters between the growth and
+//! the renumbering (`Clusters`). Each step file takes these three instead of a bundle of
 //! arguments; the kernel (`wgsl/kmedoids_parallel.wgsl`) keeps the same words in global arrays.
 
 use super::super::morton::Centre;
