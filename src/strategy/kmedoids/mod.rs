@@ -85,16 +85,6 @@ impl Mode {
             Mode::Paper => "kmedoids-paper",
         }
     }
-
-    /// One line on what the method optimises, for `--help` and the README.
-    pub fn summary(self) -> &'static str {
-        match self {
-            Mode::Sequential => "k-medoids whose clusters grow to the limits and take triangles only while they have room",
-            Mode::Parallel => "k-medoids on regions of the mesh at once, each grown by integer keys (the same on the GPU)",
-            Mode::Flat => "k-medoids on the triangle dual graph (hop distance), overflowing clusters split a fraction at a time",
-            Mode::Paper => "k-medoids as the paper runs it: one cluster added and everything re-run per overflow",
-        }
-    }
 }
 
 /// Where a method's parallel steps run. The output is the same either way.
