@@ -112,8 +112,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("device: {}", gpu.describe());
 
     // The mesh as the application holds it on the device.
-    let positions = buffer(&device, "positions", bytemuck::cast_slice(&mesh.positions));
-    let indices = buffer(&device, "indices", bytemuck::cast_slice(&mesh.indices));
+    let positions = buffer(
+        &device,
+        "positions",
+        bytemuck::cast_slice(&mesh.positions()),
+    );
+    let indices = buffer(&device, "indices", bytemuck::cast_slice(&mesh.indices()));
     let view = View::fitting(&mesh, 1.6);
     let reference = draw(&device, &queue, &view, &positions, &indices, None);
     let covered = reference.depth.iter().filter(|&&d| d != CLEAR).count();
@@ -366,7 +370,7 @@ fn draw(
         pass.set_bind_group(0, &bind, &[]);
         match built {
             Some(b) => pass.draw(
-                0..3 * Limits::DEFAULT.max_triangles,
+                0..3 * Limits::DEFAULT.max_triangles(),
                 0..b.meshlets.count as u32,
             ),
             None => pass.draw(0..indices.size() as u32 / 4, 0..1),

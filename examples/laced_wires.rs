@@ -50,7 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         want.sort_unstable();
         assert_eq!(got, want, "meshlet {i}");
         for (v, p) in d.vertices.iter().zip(&d.positions) {
-            let src = mesh.positions[*v as usize];
+            let src = mesh.positions()[*v as usize];
             for a in 0..3 {
                 worst = worst.max((p[a] as f64 - src[a] as f64).abs());
             }

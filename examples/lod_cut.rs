@@ -53,7 +53,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     picked.fold((m, t), |(m, t), (i, _)| {
                         (
                             m + 1,
-                            t + level.meshlets.meshlets[i].triangle_count as usize,
+                            t + level.meshlets.meshlets()[i].triangle_count as usize,
                         )
                     })
                 });

@@ -113,6 +113,7 @@
 #![warn(missing_docs)]
 
 pub mod adjacency;
+#[cfg(feature = "io")]
 pub mod atomic;
 #[cfg(feature = "tool")]
 pub mod bench;

@@ -746,11 +746,11 @@ fn an_instanced_scene_is_built_once_per_mesh_by_stats_export_and_render() {
             .build(m, meshletlab::meshlet::Limits::DEFAULT)
             .len()
     };
-    let built: usize = scene.meshes.iter().map(ml).sum();
+    let built: usize = scene.meshes().iter().map(ml).sum();
     let over: usize = scene
-        .instances
+        .instances()
         .iter()
-        .map(|i| ml(&scene.meshes[i.mesh as usize]))
+        .map(|i| ml(&scene.meshes()[i.mesh as usize]))
         .sum();
     let stats: serde_json::Value = serde_json::from_str(&ok(&[
         "stats",
@@ -775,7 +775,7 @@ fn an_instanced_scene_is_built_once_per_mesh_by_stats_export_and_render() {
         out.to_str().unwrap(),
     ]);
     let back = meshletlab::mesh::load_scene(&out).unwrap();
-    assert_eq!((back.meshes.len(), back.instances.len()), (2, 9));
+    assert_eq!((back.meshes().len(), back.instances().len()), (2, 9));
     assert_eq!(back.triangles_drawn(), scene.triangles_drawn());
     // Render draws each mesh's meshlets per instance.
     let r: serde_json::Value = serde_json::from_str(&ok(&[
@@ -819,7 +819,7 @@ fn render_occlusion_checks_every_frame_and_reports_json() {
     assert!(oracle > 0 && oracle <= occ && occ <= full, "{r}");
     let scene = meshletlab::mesh::load_scene("gen:scene-small".as_ref()).unwrap();
     let built: usize = scene
-        .meshes
+        .meshes()
         .iter()
         .map(|m| {
             meshletlab::strategy::by_name("meshopt", &Default::default())

@@ -40,7 +40,7 @@ fn round_trip(format: Format, name: &str, mesh: &Mesh, ml: &Meshlets, tolerance:
         assert_eq!(got, want, "{name}: meshlet {i} triangles differ");
         for (k, &v) in d.vertices.iter().enumerate() {
             let p = d.positions[k];
-            let o = mesh.positions[v as usize];
+            let o = mesh.positions()[v as usize];
             let err = (0..3)
                 .map(|a| (p[a] as f64 - o[a] as f64).abs())
                 .fold(0.0, f64::max);
@@ -105,10 +105,11 @@ fn meshopt_codec_round_trips_every_shared_mesh() {
 fn meshopt_codec_holds_the_tolerance_far_from_the_origin_and_at_any_scale() {
     let base = generate::noisy_sphere(3, 0.2, 9);
     for (offset, scale) in [(0.0, 1.0), (1e6, 1.0), (0.0, 1e-6), (0.0, 1e6), (1e3, 1e-3)] {
-        let mut m = base.clone();
-        for p in &mut m.positions {
-            *p = p.map(|x| (x as f64 * scale + offset) as f32);
-        }
+        let moved = base
+            .positions()
+            .iter()
+            .map(|p| p.map(|x| (x as f64 * scale + offset) as f32));
+        let m = Mesh::from_slices(&moved.collect::<Vec<_>>(), base.indices(), "moved").unwrap();
         for limits in [Limits::DEFAULT, Limits::new(128, 128).unwrap()] {
             let name = format!("offset {offset} scale {scale} {limits}");
             round_trip(
@@ -149,10 +150,11 @@ fn laced_wires_round_trip_every_shared_mesh_and_beat_the_peer_at_the_same_grid()
 fn laced_wires_round_trip_generated_meshes_at_any_offset_scale_and_limits() {
     let base = generate::noisy_sphere(3, 0.2, 9);
     for (offset, scale) in [(0.0, 1.0), (1e6, 1.0), (0.0, 1e-6), (0.0, 1e6), (1e3, 1e-3)] {
-        let mut m = base.clone();
-        for p in &mut m.positions {
-            *p = p.map(|x| (x as f64 * scale + offset) as f32);
-        }
+        let moved = base
+            .positions()
+            .iter()
+            .map(|p| p.map(|x| (x as f64 * scale + offset) as f32));
+        let m = Mesh::from_slices(&moved.collect::<Vec<_>>(), base.indices(), "moved").unwrap();
         for (strategy, limits) in [
             ("qem", paper_limits()),
             ("meshopt", Limits::new(64, 126).unwrap()),
@@ -316,10 +318,11 @@ fn the_papers_comparison_formats_round_trip_basic_and_compact() {
     let bunny =
         meshletlab::mesh::load(&common::meshes_dir().join("stanford_bunny.ply.zst")).unwrap();
     let base = generate::noisy_sphere(3, 0.2, 9);
-    let mut far = base.clone();
-    for p in &mut far.positions {
-        *p = p.map(|x| (x as f64 * 1e-3 + 1e6) as f32);
-    }
+    let moved = base
+        .positions()
+        .iter()
+        .map(|p| p.map(|x| (x as f64 * 1e-3 + 1e6) as f32));
+    let far = Mesh::from_slices(&moved.collect::<Vec<_>>(), base.indices(), "far").unwrap();
     let awkward = awkward();
     for (name, m) in [
         ("bunny", &bunny),

@@ -151,7 +151,7 @@ fn every_shader_decoded_format_draws_its_cpu_decoded_reference() {
         let what = format!("{name} {strat} {limits}");
         for format in FORMATS {
             if format != Format::LacedWires
-                && limits.max_triangles > 126
+                && limits.max_triangles() > 126
                 && format != Format::ScCompact
             {
                 continue;

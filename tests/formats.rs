@@ -20,8 +20,8 @@ fn same_geometry(a: &Mesh, b: &Mesh) {
         "every vertex is referenced, so none is dropped"
     );
     for t in 0..a.triangle_count() {
-        let pa = a.triangle(t).map(|v| a.positions[v as usize]);
-        let pb = b.triangle(t).map(|v| b.positions[v as usize]);
+        let pa = a.triangle(t).map(|v| a.positions()[v as usize]);
+        let pb = b.triangle(t).map(|v| b.positions()[v as usize]);
         assert_eq!(pa, pb, "triangle {t}");
     }
 }
@@ -32,10 +32,10 @@ fn obj_ascii_ply_and_big_endian_ply_match_binary_ply() {
     let dir = common::scratch("formats");
     // OBJ: one object, every vertex referenced, so tobj keeps the vertex order.
     let mut obj = String::new();
-    for p in &m.positions {
+    for p in m.positions() {
         writeln!(obj, "v {:?} {:?} {:?}", p[0], p[1], p[2]).unwrap();
     }
-    for t in m.indices.chunks_exact(3) {
+    for t in m.indices().chunks_exact(3) {
         writeln!(obj, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1).unwrap();
     }
     std::fs::write(dir.join("m.obj"), &obj).unwrap();
@@ -56,22 +56,22 @@ fn obj_ascii_ply_and_big_endian_ply_match_binary_ply() {
         )
     };
     let mut ascii = header("ascii");
-    for p in &m.positions {
+    for p in m.positions() {
         writeln!(ascii, "{:?} {:?} {:?}", p[0], p[1], p[2]).unwrap();
     }
-    for t in m.indices.chunks_exact(3) {
+    for t in m.indices().chunks_exact(3) {
         writeln!(ascii, "3 {} {} {}", t[0], t[1], t[2]).unwrap();
     }
     std::fs::write(dir.join("a.ply"), ascii).unwrap();
     assert_eq!(mesh::load(&dir.join("a.ply")).unwrap(), m);
 
     let mut be = header("binary_big_endian").into_bytes();
-    for p in &m.positions {
+    for p in m.positions() {
         for c in p {
             be.extend_from_slice(&c.to_be_bytes());
         }
     }
-    for t in m.indices.chunks_exact(3) {
+    for t in m.indices().chunks_exact(3) {
         be.push(3);
         for i in t {
             be.extend_from_slice(&i.to_be_bytes());
@@ -236,7 +236,7 @@ fn check_export(m: &Mesh, ml: &meshletlab::meshlet::Meshlets, path: &std::path::
     std::fs::write(path, &glb).unwrap();
     let back = mesh::load(path).unwrap();
     assert_eq!(back.triangle_count(), m.triangle_count());
-    let dup: usize = ml.meshlets.iter().map(|x| x.vertex_count as usize).sum();
+    let dup: usize = ml.meshlets().iter().map(|x| x.vertex_count as usize).sum();
     assert_eq!(
         back.vertex_count(),
         dup,
@@ -248,9 +248,13 @@ fn check_export(m: &Mesh, ml: &meshletlab::meshlet::Meshlets, path: &std::path::
     for k in 0..ml.len() {
         let want = export::colour(k).map(|c| c as f32 / 255.0);
         for tri in ml.global_triangles(k) {
-            let src = tri.map(|v| m.positions[v as usize]);
+            let src = tri.map(|v| m.positions()[v as usize]);
             let got = back.triangle(t);
-            assert_eq!(got.map(|v| back.positions[v as usize]), src, "triangle {t}");
+            assert_eq!(
+                got.map(|v| back.positions()[v as usize]),
+                src,
+                "triangle {t}"
+            );
             for v in got {
                 assert_eq!(colours[v as usize], want, "triangle {t} of meshlet {k}");
             }
@@ -285,7 +289,7 @@ fn export_round_trips_through_the_gltf_loader() {
 fn welded(m: &Mesh) -> (Vec<[[f32; 3]; 3]>, usize) {
     let key = |p: [f32; 3]| p.map(|c| if c == 0.0 { 0 } else { c.to_bits() });
     let corners: Vec<[[f32; 3]; 3]> = (0..m.triangle_count())
-        .map(|t| m.triangle(t).map(|v| m.positions[v as usize]))
+        .map(|t| m.triangle(t).map(|v| m.positions()[v as usize]))
         .collect();
     let distinct: std::collections::HashSet<[u32; 3]> =
         corners.iter().flatten().map(|&p| key(p)).collect();
@@ -307,7 +311,7 @@ fn stl_ascii_binary_and_zst_round_trip_through_load() {
             assert_eq!(back.vertex_count(), distinct, "{file}: welded exactly");
         };
         let mut bin = Vec::new();
-        mesh::stl::write_binary(&m.positions, &m.indices, &mut bin).unwrap();
+        mesh::stl::write_binary(&m.positions(), &m.indices(), &mut bin).unwrap();
         std::fs::write(dir.join(format!("{name}.stl")), &bin).unwrap();
         check(&format!("{name}.stl"));
         std::fs::write(

@@ -78,7 +78,7 @@ fn unique_positions(m: &Mesh) -> (Vec<[f32; 3]>, Vec<usize>) {
     let mut ids = std::collections::HashMap::new();
     let mut unique = Vec::new();
     let of = m
-        .positions
+        .positions()
         .iter()
         .map(|p| {
             *ids.entry(p.map(f32::to_bits)).or_insert_with(|| {
@@ -127,7 +127,7 @@ fn fixtures_from_gltfpack_and_gltf_transform_give_the_original_triangles() {
         // Each vertex lands on the original position nearest to it, within one step per axis.
         let mut worst = 0f32;
         let nearest: Vec<usize> = m
-            .positions
+            .positions()
             .iter()
             .map(|p| {
                 let d = |u: &[f32; 3]| (0..3).map(|k| (p[k] - u[k]).abs()).fold(0f32, f32::max);
@@ -241,7 +241,7 @@ fn sparse_accessors_and_accessors_without_a_buffer_view() {
             {"bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3", "sparse": sparse}
         ]}),
     );
-    assert_eq!(mesh::load(&with_base).unwrap().positions, expect);
+    assert_eq!(mesh::load(&with_base).unwrap().positions(), expect);
 
     // No bufferView: zeros, then the substitutions (vertices 1 and 4 only; the rest stay 0).
     let zeros = gltf_file(
@@ -253,7 +253,7 @@ fn sparse_accessors_and_accessors_without_a_buffer_view() {
         ]}),
     );
     let m = mesh::load(&zeros).unwrap();
-    for (v, p) in m.positions.iter().enumerate() {
+    for (v, p) in m.positions().iter().enumerate() {
         let want = if v == 1 || v == 4 {
             expect[v]
         } else {
@@ -332,7 +332,7 @@ fn draco_used_but_not_required_reads_the_fallback_or_is_refused_without_one() {
     };
     // With an uncompressed fallback, the fallback is read.
     let p = gltf_file(&dir, "fallback.gltf", &bin, doc(true));
-    assert_eq!(mesh::load(&p).unwrap().positions[1], [1.0, 0.0, 0.0]);
+    assert_eq!(mesh::load(&p).unwrap().positions()[1], [1.0, 0.0, 0.0]);
     // Without one, the accessor would read as zeros: refused, naming Draco.
     let p = gltf_file(&dir, "no-fallback.gltf", &bin, doc(false));
     let e = mesh::load(&p).unwrap_err();
@@ -379,7 +379,7 @@ fn octahedral_positions_and_quaternion_streams_decode_through_meshoptimizer() {
     let n = sphere.vertex_count();
     for (bits, stride, component) in [(8, 4usize, 5120), (16, 8, 5122)] {
         let units: Vec<[f32; 4]> = sphere
-            .positions
+            .positions()
             .iter()
             .map(|p| {
                 let v = glam::Vec3::from_array(*p).normalize();
@@ -404,7 +404,7 @@ fn octahedral_positions_and_quaternion_streams_decode_through_meshoptimizer() {
         );
         let got = mesh::load(&p).unwrap();
         let tolerance = if bits == 8 { 0.02 } else { 1e-3 };
-        for (a, b) in got.positions.iter().zip(&units) {
+        for (a, b) in got.positions().iter().zip(&units) {
             for k in 0..3 {
                 assert!(
                     (a[k] - b[k]).abs() < tolerance,
@@ -433,7 +433,7 @@ fn octahedral_positions_and_quaternion_streams_decode_through_meshoptimizer() {
     );
     // The decoder may return q or -q; compare up to sign.
     let got = mesh::load(&p).unwrap();
-    for (a, q) in got.positions.iter().zip(&quats) {
+    for (a, q) in got.positions().iter().zip(&quats) {
         let close = |s: f32| (0..3).all(|k| (a[k] - s * q[k]).abs() < 2e-3);
         assert!(close(1.0) || close(-1.0), "{a:?} vs {q:?}");
     }

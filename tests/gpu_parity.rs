@@ -28,17 +28,16 @@ fn same_labels(gpu: &[u32], cpu: &[u32], what: &str) {
 
 /// A straight strip of `quads` quads (two triangles each): its dual graph is a path.
 fn strip(quads: u32) -> Mesh {
-    let mut m = Mesh {
-        positions: (0..=quads)
-            .flat_map(|i| [[i as f32, 0.0, 0.0], [i as f32, 1.0, 0.0]])
-            .collect(),
-        indices: Vec::new(),
-    };
-    for i in 0..quads {
-        let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
-        m.indices.extend([a, b, c, b, d, c]);
-    }
-    m
+    let positions: Vec<[f32; 3]> = (0..=quads)
+        .flat_map(|i| [[i as f32, 0.0, 0.0], [i as f32, 1.0, 0.0]])
+        .collect();
+    let indices: Vec<u32> = (0..quads)
+        .flat_map(|i| {
+            let (a, b, c, d) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+            [a, b, c, b, d, c]
+        })
+        .collect();
+    Mesh::from_slices(&positions, &indices, "strip").unwrap()
 }
 
 fn assert_parity(gpu: &Gpu, name: &str, mesh: &Mesh, limits: Limits) {
@@ -92,24 +91,27 @@ fn every_shared_mesh_gives_identical_results() {
 /// A tube with `count` small tetrahedra beside it, each a piece of its own next to one of the
 /// tube's vertices (as the neurons have); returns the mesh and the tube's vertex count.
 fn tube_with_tetrahedra(count: usize) -> (Mesh, usize) {
-    let mut m = generate::knot_tube(200, 8, 3);
-    let tube = m.vertex_count();
+    let (mut positions, mut indices) = generate::knot_tube(200, 8, 3).into_parts();
+    let tube = positions.len();
     let (step, size) = (tube / count, 0.01);
     for q in 0..count {
-        let p = m.positions[q * step + step / 2];
-        let v = m.positions.len() as u32;
+        let p = positions[q * step + step / 2];
+        let v = positions.len() as u32;
         for d in [
             [0.5, 0.5, 0.5],
             [1.5, 0.5, 0.5],
             [0.5, 1.5, 0.5],
             [0.5, 0.5, 1.5],
         ] {
-            m.positions.push([0, 1, 2].map(|j| p[j] + size * d[j]));
+            positions.push([0, 1, 2].map(|j| p[j] + size * d[j]));
         }
-        m.indices.extend([v, v + 2, v + 1, v, v + 1, v + 3]);
-        m.indices.extend([v, v + 3, v + 2, v + 1, v + 2, v + 3]);
+        indices.extend([v, v + 2, v + 1, v, v + 1, v + 3]);
+        indices.extend([v, v + 3, v + 2, v + 1, v + 2, v + 3]);
     }
-    (m, tube)
+    (
+        Mesh::from_slices(&positions, &indices, "tube").unwrap(),
+        tube,
+    )
 }
 
 #[test]
@@ -197,25 +199,23 @@ fn non_manifold_degenerate_and_disconnected_input() {
     // neighbours (3 in the fan, 1 in the strip), the most the GPU's reach-set medoid keeps; five
     // or seven send the cluster to its one-BFS-per-member path.
     for n in [4u32, 5, 7] {
-        let mut m = Mesh {
-            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]],
-            indices: Vec::new(),
-        };
+        let mut positions = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]];
+        let mut indices = Vec::new();
         for k in 0..n {
             let a = k as f32 * 6.0 / n as f32;
-            m.positions.push([0.5, a.cos(), a.sin()]);
-            m.indices.extend([0, 1, 2 + k]);
+            positions.push([0.5, a.cos(), a.sin()]);
+            indices.extend([0, 1, 2 + k]);
         }
         // A strip off the first fan triangle's free edge (1, 2): distance sums differ, so the
         // medoid is not a tie among the fan's triangles.
-        let s0 = m.positions.len() as u32;
-        m.positions.extend([
+        let s0 = positions.len() as u32;
+        positions.extend([
             [1.5, 1.0, 0.0],
             [2.0, 0.5, 0.0],
             [2.5, 1.0, 0.0],
             [3.0, 0.5, 0.0],
         ]);
-        m.indices.extend([
+        indices.extend([
             1,
             2,
             s0,
@@ -229,15 +229,16 @@ fn non_manifold_degenerate_and_disconnected_input() {
             s0 + 2,
             s0 + 3,
         ]);
-        m.indices.extend([2, 2, 3]);
-        let v = m.positions.len() as u32;
-        m.positions.extend([
+        indices.extend([2, 2, 3]);
+        let v = positions.len() as u32;
+        positions.extend([
             [5.0, 5.0, 5.0],
             [6.0, 5.0, 5.0],
             [5.0, 6.0, 5.0],
             [9.0, 9.0, 9.0],
         ]);
-        m.indices.extend([v, v + 1, v + 2]);
+        indices.extend([v, v + 1, v + 2]);
+        let m = Mesh::from_slices(&positions, &indices, "fan").unwrap();
         let name = format!("fan of {n}");
         assert_parity(&gpu, &name, &m, Limits::DEFAULT);
         assert_parity(&gpu, &name, &m, Limits::new(3, 1).unwrap());
@@ -357,8 +358,8 @@ fn the_morton_order_and_the_seeds_match_the_cpu() {
         meshes.push((format!("sphere {name}"), m));
     }
     for (name, m) in &meshes {
-        let positions = gpu.upload("positions", &m.positions);
-        let indices = Split::upload(&gpu, "indices", &m.indices).unwrap();
+        let positions = gpu.upload("positions", &m.positions());
+        let indices = Split::upload(&gpu, "indices", &m.indices()).unwrap();
         let input = || DeviceInput {
             positions: &positions,
             vertices: m.vertex_count(),
@@ -395,20 +396,20 @@ fn device_cones_are_conservative_and_cull() {
             .unwrap()
             .build(&m, Limits::DEFAULT);
         let mut words: Vec<u32> = Vec::new();
-        for b in ml.triangles.chunks(4) {
+        for b in ml.triangles().chunks(4) {
             let mut w = [0u8; 4];
             w[..b.len()].copy_from_slice(b);
             words.push(u32::from_le_bytes(w));
         }
         let on_device = DeviceMeshlets {
-            meshlets: gpu.upload("meshlets", &ml.meshlets),
-            vertices: gpu.upload("vertices", &ml.vertices),
+            meshlets: gpu.upload("meshlets", &ml.meshlets()),
+            vertices: gpu.upload("vertices", &ml.vertices()),
             triangles: gpu.upload("triangles", &words),
             count: ml.len(),
-            vertex_count: ml.vertices.len(),
-            triangle_count: ml.triangles.len() / 3,
+            vertex_count: ml.vertices().len(),
+            triangle_count: ml.triangles().len() / 3,
         };
-        let positions = gpu.upload("positions", &m.positions);
+        let positions = gpu.upload("positions", &m.positions());
         let (task, _) = bounds::task_on_device(&gpu, &positions, &on_device).unwrap();
         let words = gpu.read(&task, 0, bounds::TASK_WORDS * ml.len()).unwrap();
         let task = bounds::cones_from_task(&words);
@@ -451,8 +452,8 @@ fn a_mesh_already_on_the_device_builds_the_cpu_meshlets() {
         (generate::cad_part(128, 1), Limits::new(64, 84).unwrap()),
         (generate::terrain(40, 2), Limits::new(8, 6).unwrap()),
     ] {
-        let positions = gpu.upload("positions", &m.positions);
-        let indices = gpu.upload("indices", &m.indices);
+        let positions = gpu.upload("positions", &m.positions());
+        let indices = gpu.upload("indices", &m.indices());
         let on_device = DeviceMesh {
             positions: &positions,
             vertices: m.vertex_count(),
@@ -501,7 +502,7 @@ fn a_mesh_already_on_the_device_builds_the_cpu_meshlets() {
         let (expected, _) = bounds::spheres(&gpu, &m, &cpu).unwrap();
         for (i, (got, e)) in task.iter().zip(&expected).enumerate() {
             assert_eq!(got.0, *e, "sphere {i}");
-            assert_eq!(words[12 * i + 11], cpu.meshlets[i].triangle_count);
+            assert_eq!(words[12 * i + 11], cpu.meshlets()[i].triangle_count);
         }
         let cones: Vec<_> = task.iter().map(|t| t.1).collect();
         let (_, violations) = check_cones(&m, &cpu, &cones);
@@ -537,20 +538,20 @@ fn islands(count: u32, long: u32, seed: u64) -> Mesh {
             .wrapping_add(1442695040888963407);
         ((state >> 33) % n as u64) as u32
     };
-    let mut m = Mesh::default();
+    let (mut positions, mut indices) = (Vec::new(), Vec::new());
     for i in 0..=count {
         let quads = if i == count { long } else { 1 + next(40) };
         let s = strip(quads);
-        let base = m.positions.len() as u32;
+        let base = positions.len() as u32;
         let at = [next(1000) as f32, next(1000) as f32, next(1000) as f32];
-        m.positions.extend(
-            s.positions
+        positions.extend(
+            s.positions()
                 .iter()
                 .map(|p| [p[0] + at[0], p[1] + at[1], p[2] + at[2]]),
         );
-        m.indices.extend(s.indices.iter().map(|&v| v + base));
+        indices.extend(s.indices().iter().map(|&v| v + base));
     }
-    m
+    Mesh::from_slices(&positions, &indices, "islands").unwrap()
 }
 
 /// The coarse regions of the region-parallel methods, on the device alone: every triangle's
@@ -579,7 +580,7 @@ fn coarse_regions_equal_the_cpu_regions() {
             let (cpu, k) = coarse::regions(m, &dual, size);
             let rows = members(&cpu, k);
             let (adj, _) = AdjacencyKernels::new(&gpu).build(&gpu, m).unwrap();
-            let positions = gpu.upload("positions", &m.positions);
+            let positions = gpu.upload("positions", &m.positions());
             let (region, offsets) = (gpu.zeros("region", t), gpu.zeros("offsets", k + 1));
             let input = DeviceInput {
                 positions: &positions,

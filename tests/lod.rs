@@ -7,7 +7,7 @@ use glam::Vec3;
 use meshletlab::lod::flat::{self, Flat, Query};
 use meshletlab::lod::{self, io::LodFile, select, Lod};
 use meshletlab::mesh::{generate, Mesh};
-use meshletlab::meshlet::Limits;
+use meshletlab::meshlet::{Limits, Meshlets};
 use std::collections::{HashMap, HashSet};
 
 fn build(m: &Mesh) -> Lod {
@@ -410,13 +410,12 @@ fn generated_closed_open_and_unwelded_meshes() {
     dag_checks("knot", &generate::knot_tube(300, 24, 4), 1000);
     // Faceted: every triangle has its own three vertices. Welding makes it reduce like the welded
     // sphere, and the welded edges are still crack-free.
-    let mut facets = Mesh::default();
-    for t in 0..sphere.triangle_count() {
-        for v in sphere.triangle(t) {
-            facets.indices.push(facets.positions.len() as u32);
-            facets.positions.push(sphere.positions[v as usize]);
-        }
-    }
+    let corners: Vec<[f32; 3]> = (0..sphere.triangle_count())
+        .flat_map(|t| sphere.triangle(t))
+        .map(|v| sphere.positions()[v as usize])
+        .collect();
+    let own: Vec<u32> = (0..corners.len() as u32).collect();
+    let facets = Mesh::from_slices(&corners, &own, "faceted").unwrap();
     dag_checks("faceted-sphere", &facets, 1000);
     let (a, b) = (build(&sphere), build(&facets));
     assert_eq!(
@@ -513,18 +512,21 @@ fn the_checks_catch_a_broken_cut() {
     let mut moved = lod.clone();
     let ml = &mut moved.levels[l].meshlets;
     let (off, n) = (
-        ml.meshlets[k].triangle_offset as usize,
-        ml.meshlets[k].vertex_count as u8,
+        ml.meshlets()[k].triangle_offset as usize,
+        ml.meshlets()[k].vertex_count as u8,
     );
-    let corner = &mut ml.triangles[off];
-    *corner = (*corner + 1) % n;
+    let (meshlets, vertices, mut triangles) = ml.clone().into_parts();
+    triangles[off] = (triangles[off] + 1) % n;
+    *ml = Meshlets::new(&m, meshlets, vertices, triangles).unwrap();
     select::check_cut(&moved, &sel, 0).unwrap();
     let e = edges(&moved, &sel).unwrap_err();
     assert!(e.contains("crack") || e.contains("flipped"), "{e}");
     // One drawn triangle's winding flipped:
     let mut flipped = lod.clone();
     let ml = &mut flipped.levels[l].meshlets;
-    ml.triangles.swap(off + 1, off + 2);
+    let (meshlets, vertices, mut triangles) = ml.clone().into_parts();
+    triangles.swap(off + 1, off + 2);
+    *ml = Meshlets::new(&m, meshlets, vertices, triangles).unwrap();
     select::check_cut(&flipped, &sel, 0).unwrap();
     assert!(edges(&flipped, &sel).unwrap_err().contains("flipped"));
     // A meshlet drawn with one of its parents: some path selects two.

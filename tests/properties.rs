@@ -14,9 +14,11 @@ fn arb_mesh() -> impl Strategy<Value = Mesh> {
     (3usize..40).prop_flat_map(|n| {
         let pos = prop::collection::vec(prop::array::uniform3(-4i32..5), n);
         let tris = prop::collection::vec(prop::array::uniform3(0..n as u32), 1..300);
-        (pos, tris).prop_map(|(p, t)| Mesh {
-            positions: p.into_iter().map(|q| q.map(|c| c as f32 * 0.25)).collect(),
-            indices: t.into_iter().flatten().collect(),
+        (pos, tris).prop_map(|(p, t)| {
+            let positions: Vec<[f32; 3]> =
+                p.into_iter().map(|q| q.map(|c| c as f32 * 0.25)).collect();
+            let indices: Vec<u32> = t.into_iter().flatten().collect();
+            Mesh::from_slices(&positions, &indices, "random").unwrap()
         })
     })
 }
@@ -47,14 +49,14 @@ proptest! {
             prop_assert!(b.sphere.radius.is_finite() && b.cone.cutoff.is_finite());
             prop_assert!(b.cone.apex.iter().chain(&b.cone.axis).all(|x| x.is_finite()));
             for &v in ml.meshlet_vertices(i) {
-                let p = DVec3::from_array(m.positions[v as usize].map(f64::from));
+                let p = DVec3::from_array(m.positions()[v as usize].map(f64::from));
                 prop_assert!((p - c).length() <= b.sphere.radius as f64);
             }
             for cam in &cams {
                 if b.cone.culls(*cam) {
                     let camd = DVec3::from_array(cam.map(f64::from));
                     for t in ml.global_triangles(i) {
-                        let p = t.map(|v| DVec3::from_array(m.positions[v as usize].map(f64::from)));
+                        let p = t.map(|v| DVec3::from_array(m.positions()[v as usize].map(f64::from)));
                         let n = (p[1] - p[0]).cross(p[2] - p[0]);
                         prop_assert!(n.dot(p[0] - camd) >= 0.0, "meshlet {} culled with a front face", i);
                     }
@@ -66,14 +68,14 @@ proptest! {
     #[test]
     fn ply_round_trips(m in arb_mesh()) {
         let mut buf = Vec::new();
-        ply::write_binary(&m.positions, &m.indices, &mut buf).unwrap();
-        prop_assert_eq!(ply::parse(&buf).unwrap(), (m.positions.clone(), m.indices.clone()));
+        ply::write_binary(m.positions(), m.indices(), &mut buf).unwrap();
+        prop_assert_eq!(ply::parse(&buf).unwrap(), (m.positions().to_vec(), m.indices().to_vec()));
     }
 
     #[test]
     fn ply_reader_never_panics_on_corrupted_files(m in arb_mesh(), flips in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..8), cut in any::<prop::sample::Index>()) {
         let mut buf = Vec::new();
-        ply::write_binary(&m.positions, &m.indices, &mut buf).unwrap();
+        ply::write_binary(m.positions(), m.indices(), &mut buf).unwrap();
         for (at, byte) in flips {
             let i = at.index(buf.len());
             buf[i] = byte;
@@ -81,7 +83,7 @@ proptest! {
         let end = cut.index(buf.len() + 1);
         // Any outcome but a panic is fine; a success must be a valid mesh or a typed error later.
         if let Ok((p, i)) = ply::parse(&buf[..end]) {
-            let _ = Mesh { positions: p, indices: i }.validate();
+            let _ = Mesh::new(p, i, "corrupted".as_ref());
         }
     }
 }

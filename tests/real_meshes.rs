@@ -119,7 +119,7 @@ fn every_strategy_validates(pick: impl Fn(&str) -> bool, expected: usize) {
                 validate(&m, &ml, limits)
                     .unwrap_or_else(|e| panic!("{} {} {}: {e}", mesh_name(&f), s.name(), limits));
                 // Meshlet count can never be below the triangle bound.
-                assert!(ml.len() * limits.max_triangles as usize >= m.triangle_count());
+                assert!(ml.len() * limits.max_triangles() as usize >= m.triangle_count());
                 counts.insert(s.name(), ml.len());
             }
             assert!(
@@ -247,7 +247,7 @@ fn bounds_are_conservative_and_at_least_as_tight_as_meshoptimizer() {
             theirs_cull += (mo.cone_cutoff < 1.0) as usize;
             let c = glam::DVec3::from_array(mb.sphere.center.map(f64::from));
             for &v in ml.meshlet_vertices(i) {
-                let p = glam::DVec3::from_array(m.positions[v as usize].map(f64::from));
+                let p = glam::DVec3::from_array(m.positions()[v as usize].map(f64::from));
                 assert!(
                     (p - c).length() <= mb.sphere.radius as f64,
                     "{stem} meshlet {i}: vertex {v} outside sphere"
@@ -261,7 +261,7 @@ fn bounds_are_conservative_and_at_least_as_tight_as_meshoptimizer() {
                 if mb.cone.culls(cam.to_array()) {
                     for tri in ml.global_triangles(i) {
                         let p = tri.map(|v| {
-                            glam::DVec3::from_array(m.positions[v as usize].map(f64::from))
+                            glam::DVec3::from_array(m.positions()[v as usize].map(f64::from))
                         });
                         let n = (p[1] - p[0]).cross(p[2] - p[0]);
                         let camd = cam.as_dvec3();

@@ -344,11 +344,11 @@ fn an_instanced_scene_draws_what_its_baked_mesh_draws() {
     use meshletlab::mesh::{load_scene, Instance, Scene};
     let ctx = Context::new(true).expect("lavapipe with VK_EXT_mesh_shader (make setup)");
     let small = load_scene("gen:scene-small".as_ref()).unwrap();
-    assert!(small.instances.iter().any(Instance::mirrored));
+    assert!(small.instances().iter().any(Instance::mirrored));
     // One mirrored instance alone: a wrong front face would show the far, inner side.
-    let mirrored = Scene {
-        meshes: vec![small.meshes[0].clone()],
-        instances: vec![Instance {
+    let mirrored = Scene::new(
+        vec![small.meshes()[0].clone()],
+        vec![Instance {
             mesh: 0,
             transform: glam::Mat4::from_scale_rotation_translation(
                 glam::Vec3::new(-1.0, 1.2, 0.9),
@@ -356,31 +356,33 @@ fn an_instanced_scene_draws_what_its_baked_mesh_draws() {
                 glam::Vec3::new(0.5, 0.0, 0.0),
             ),
         }],
-    };
+        "mirrored",
+    )
+    .unwrap();
     for scene in [&small, &mirrored] {
         let corners = scene.box_corners();
         let mut views = Camera::random_views(&corners, 3, 7, 2.5);
         views.extend(Camera::random_views(&corners, 2, 11, 0.5));
         // From a corner, looking along one edge: the instances away from it are outside.
         let (lo, hi) = corners.bounding_box();
-        views.extend((scene.instances.len() > 1).then_some(Camera {
+        views.extend((scene.instances().len() > 1).then_some(Camera {
             eye: hi + (hi - lo) * 0.02,
             target: hi - glam::Vec3::X * (hi - lo).x,
             near: 0.01,
             far: 100.0,
         }));
         let ml: Vec<Meshlets> = scene
-            .meshes
+            .meshes()
             .iter()
             .map(|m| meshlets(m, "meshopt", Limits::DEFAULT))
             .collect();
         let total: u32 = scene
-            .instances
+            .instances()
             .iter()
             .map(|i| ml[i.mesh as usize].len() as u32)
             .sum();
         let pass = Pass::instanced(&ctx, scene, &ml).unwrap();
-        assert_eq!(pass.instance_count(), scene.instances.len());
+        assert_eq!(pass.instance_count(), scene.instances().len());
         let baked = scene.flatten();
         let baked_pass =
             Pass::new(&ctx, &baked, &meshlets(&baked, "meshopt", Limits::DEFAULT)).unwrap();
@@ -434,7 +436,7 @@ fn an_instanced_scene_draws_what_its_baked_mesh_draws() {
             );
         }
         assert!(culled > 0, "nothing culled");
-        if scene.instances.len() > 1 {
+        if scene.instances().len() > 1 {
             assert!(
                 culled_instances > 0,
                 "no instance left the frustum in the close views"
@@ -453,7 +455,7 @@ fn occlusion_culling_hides_nothing_and_the_check_catches_a_wrong_pyramid() {
     let ctx = Context::new(true).expect("lavapipe with VK_EXT_mesh_shader (make setup)");
     let scene = meshletlab::mesh::load_scene("gen:scene-small".as_ref()).unwrap();
     let ml: Vec<Meshlets> = scene
-        .meshes
+        .meshes()
         .iter()
         .map(|m| meshlets(m, "meshopt", Limits::DEFAULT))
         .collect();

@@ -36,7 +36,7 @@ fn every_strategy_validates_on_every_stress_mesh_and_preset() {
                 validate(&g.mesh, &ml, limits)
                     .unwrap_or_else(|e| panic!("{} {name} {limits}: {e}", g.name));
                 assert!(
-                    ml.len() * limits.max_triangles as usize >= g.mesh.triangle_count(),
+                    ml.len() * limits.max_triangles() as usize >= g.mesh.triangle_count(),
                     "{} {name} {limits}: below the triangle bound",
                     g.name
                 );

@@ -76,7 +76,7 @@ pub fn run(
     let views = common.or_smoke(args.occlusion_views, 1).max(1);
     let frames = common.or_smoke(args.occlusion_frames, 3).max(2);
     let mut rows = Vec::new();
-    let grid = Scene::grid(mesh.clone(), 4, 0.7);
+    let grid = Scene::grid(mesh.clone(), 4, 0.7)?;
     for s in &strategies {
         tick(&format!("occlusion: {name} 4x4x4, {s}"));
         rows.push(scene_row(

@@ -136,7 +136,7 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
             bail!("--spacing must be a positive fraction of the mesh's extent");
         }
         let m = scene.meshes.pop().expect("one mesh");
-        scene = Scene::grid(m, n as usize, a.spacing);
+        scene = Scene::grid(m, n as usize, a.spacing)?;
     }
     if a.occlusion {
         return run_occlusion(a, scene, quiet);

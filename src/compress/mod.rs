@@ -19,6 +19,7 @@
 
 pub mod baseline;
 mod bits;
+#[cfg(feature = "io")]
 pub mod file;
 pub mod laced;
 pub mod meshopt_codec;
@@ -123,7 +124,8 @@ pub fn dequantise(q: i64, o: f32, e: i32) -> f32 {
 }
 
 /// Bytes of an encoding, by what they hold (the paper reports these separately).
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Sizes {
     /// Triangle connectivity and vertex references.
     pub connectivity: usize,

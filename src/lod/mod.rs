@@ -37,6 +37,7 @@
 pub mod camera;
 pub mod flat;
 pub mod group;
+#[cfg(feature = "io")]
 pub mod io;
 pub mod select;
 
@@ -46,7 +47,6 @@ use crate::meshlet::{Limits, Meshlet, Meshlets};
 use crate::strategy::Strategy;
 use glam::DVec3;
 use rayon::prelude::*;
-use serde::Serialize;
 
 /// How the meshlets of a level are grouped.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -96,7 +96,8 @@ impl Default for Config {
 }
 
 /// LOD data of one meshlet (the CMO's per-meshlet record).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct LodInfo {
     /// Bounds of the geometry this meshlet simplifies (its own sphere at level 0, else the sphere of
     /// the group that produced it).
@@ -124,7 +125,8 @@ pub struct Level {
 }
 
 /// One group: a set of meshlets of one level simplified together.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Group {
     /// Level of its children.
     pub level: u32,

@@ -95,6 +95,7 @@ impl MeshError {
 }
 
 /// Shorthand for a parse error at a location.
+#[cfg(feature = "io")]
 pub(crate) fn parse_err(location: impl Into<String>, message: impl Into<String>) -> MeshErrorKind {
     MeshErrorKind::Parse {
         location: location.into(),

@@ -8,19 +8,27 @@
 pub mod edges;
 mod error;
 pub mod generate;
+#[cfg(feature = "io")]
 pub mod gltf_io;
+#[cfg(feature = "io")]
 mod gltf_meshopt;
+#[cfg(feature = "io")]
 mod load;
+#[cfg(feature = "io")]
 mod obj;
+#[cfg(feature = "io")]
 pub mod ply;
 pub mod scene;
 mod stats;
+#[cfg(feature = "io")]
 pub mod stl;
 pub mod subdivide;
 pub mod tipsify;
+#[cfg(feature = "io")]
 mod tokens;
 
 pub use error::{MeshError, MeshErrorKind};
+#[cfg(feature = "io")]
 pub use load::{
     decompress, load, load_bytes, load_scene, save_ply, scene_from_bytes, Format, GENERATED_PREFIX,
     MAX_ZSTD_RATIO, ZSTD_SLACK,
@@ -31,13 +39,18 @@ pub use stats::MeshStats;
 use glam::Vec3;
 use std::path::Path;
 
-/// An indexed triangle mesh.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// An indexed triangle mesh, valid by construction: every way to make one outside this crate
+/// ([`Mesh::new`], [`Mesh::from_slices`], [`Mesh::from_strided`], the loaders, the generators)
+/// checks the invariants [`Mesh::validate`] lists, so a strategy, the bounds, the LOD build and the
+/// codecs (some of which hand the arrays to meshoptimizer's C code) never see an index out of
+/// range or a non-finite position. Read the arrays with [`Mesh::positions`] and [`Mesh::indices`];
+/// take them back with [`Mesh::into_parts`].
+#[derive(Clone, Debug, PartialEq)]
 pub struct Mesh {
     /// Vertex positions.
-    pub positions: Vec<[f32; 3]>,
+    pub(crate) positions: Vec<[f32; 3]>,
     /// Triangle list: three vertex indices per triangle, counter-clockwise.
-    pub indices: Vec<u32>,
+    pub(crate) indices: Vec<u32>,
 }
 
 impl Mesh {
@@ -96,6 +109,30 @@ impl Mesh {
             })
             .collect();
         Self::new(positions, indices.to_vec(), path)
+    }
+
+    /// An empty mesh, invalid as input: scratch that crate code fills (a scene's baked copy, a
+    /// renderer's joined buffers) before anything reads it.
+    pub(crate) fn empty() -> Self {
+        Self {
+            positions: Vec::new(),
+            indices: Vec::new(),
+        }
+    }
+
+    /// Vertex positions (f32 x 3).
+    pub fn positions(&self) -> &[[f32; 3]] {
+        &self.positions
+    }
+
+    /// The triangle list: three vertex indices per triangle, counter-clockwise.
+    pub fn indices(&self) -> &[u32] {
+        &self.indices
+    }
+
+    /// The positions and the triangle list, moved out.
+    pub fn into_parts(self) -> (Vec<[f32; 3]>, Vec<u32>) {
+        (self.positions, self.indices)
     }
 
     /// Number of vertices (referenced or not).

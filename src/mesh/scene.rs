@@ -10,8 +10,9 @@
 //! tested in the instance's own space, with the camera moved there (exact for any invertible
 //! affine transform, non-uniform scales included: the sign of a triangle's facing survives it).
 
-use super::Mesh;
+use super::{Mesh, MeshError, MeshErrorKind};
 use glam::{DMat3, Mat4, Vec3};
+use std::path::Path;
 
 /// One placement of a mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -54,16 +55,74 @@ fn largest_eigenvalue(a: DMat3) -> f64 {
     q + 2.0 * p * phi.cos()
 }
 
-/// Meshes and the instances that place them.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// Meshes and the instances that place them; valid by construction (at least one instance, each
+/// naming a mesh, and a baked copy with finite positions that fits 32-bit indices), so
+/// [`Scene::flatten`] always yields a valid [`Mesh`].
+#[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
     /// Each mesh once, in the order instances first name them.
-    pub meshes: Vec<Mesh>,
+    pub(crate) meshes: Vec<Mesh>,
     /// Every placement, in the file's node order.
-    pub instances: Vec<Instance>,
+    pub(crate) instances: Vec<Instance>,
 }
 
 impl Scene {
+    /// Checks `meshes` and `instances` (see the type's invariants) and takes them; `label` names
+    /// the scene in errors.
+    pub fn new(
+        meshes: Vec<Mesh>,
+        instances: Vec<Instance>,
+        label: impl AsRef<Path>,
+    ) -> Result<Self, MeshError> {
+        let err = |k| MeshError::new(label.as_ref(), k);
+        if instances.is_empty() {
+            return Err(err(MeshErrorKind::Empty(
+                "a scene without instances".into(),
+            )));
+        }
+        let mut total = 0usize;
+        for (k, inst) in instances.iter().enumerate() {
+            let Some(m) = meshes.get(inst.mesh as usize) else {
+                return Err(err(MeshErrorKind::Unsupported(format!(
+                    "instance {k} places mesh {} of {}",
+                    inst.mesh,
+                    meshes.len()
+                ))));
+            };
+            total += m.vertex_count();
+            // The very arithmetic flatten does: a finite transform can still overflow a point.
+            let placed = m
+                .positions
+                .iter()
+                .map(|&p| inst.transform.transform_point3(Vec3::from_array(p)));
+            if let Some(v) = placed.clone().position(|p| !p.is_finite()) {
+                return Err(err(MeshErrorKind::NonFinite {
+                    vertex: total - m.vertex_count() + v,
+                    value: format!(
+                        "instance {k} places a vertex at {}",
+                        placed.clone().nth(v).unwrap()
+                    ),
+                }));
+            }
+        }
+        if total > u32::MAX as usize {
+            return Err(err(MeshErrorKind::TooLarge(format!(
+                "{total} baked vertices do not fit 32-bit indices"
+            ))));
+        }
+        Ok(Self { meshes, instances })
+    }
+
+    /// Each mesh once, in the order instances first name them.
+    pub fn meshes(&self) -> &[Mesh] {
+        &self.meshes
+    }
+
+    /// Every placement, in the file's node order.
+    pub fn instances(&self) -> &[Instance] {
+        &self.instances
+    }
+
     /// One mesh placed once, untransformed.
     pub fn single(mesh: Mesh) -> Self {
         Self {
@@ -76,8 +135,9 @@ impl Scene {
     }
 
     /// `n` x `n` x `n` copies of `mesh` on a grid whose spacing is `spacing` times the mesh's
-    /// largest extent (below 1 the copies interpenetrate, so most of them hide the others).
-    pub fn grid(mesh: Mesh, n: usize, spacing: f32) -> Self {
+    /// largest extent (below 1 the copies interpenetrate, so most of them hide the others); an
+    /// error when `n` is 0 or the copies leave the f32 range.
+    pub fn grid(mesh: Mesh, n: usize, spacing: f32) -> Result<Self, MeshError> {
         let (lo, hi) = mesh.bounding_box();
         let step = (hi - lo).max_element() * spacing;
         let mut instances = Vec::with_capacity(n * n * n);
@@ -89,10 +149,7 @@ impl Scene {
                 transform: Mat4::from_translation(offset),
             });
         }
-        Self {
-            meshes: vec![mesh],
-            instances,
-        }
+        Self::new(vec![mesh], instances, "grid")
     }
 
     /// Whether instancing saves anything: some mesh is placed more than once. A scene that places
@@ -132,7 +189,7 @@ impl Scene {
     /// Every instance baked into one mesh (world positions; mirrored instances get two corners
     /// of each triangle swapped so front faces stay front faces).
     pub fn flatten(&self) -> Mesh {
-        let mut out = Mesh::default();
+        let mut out = Mesh::empty();
         for inst in &self.instances {
             let m = &self.meshes[inst.mesh as usize];
             let base = out.positions.len() as u32;

@@ -2,11 +2,11 @@
 
 use super::edges::EdgeTable;
 use super::Mesh;
-use serde::Serialize;
 
 /// Counts that describe a mesh's size, defects and topology. None of these defects are errors: every
 /// strategy must still place every triangle.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct MeshStats {
     /// Vertices in the vertex array.
     pub vertices: usize,

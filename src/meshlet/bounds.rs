@@ -14,10 +14,10 @@ use super::Meshlets;
 use crate::mesh::Mesh;
 use glam::DVec3;
 use rayon::prelude::*;
-use serde::Serialize;
 
 /// A bounding sphere.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Sphere {
     /// Centre.
     pub center: [f32; 3],
@@ -30,7 +30,8 @@ pub struct Sphere {
 /// Cull when `cutoff < 1 && dot(normalize(apex - camera), axis) >= cutoff`. A `cutoff` of 1 means
 /// the normals spread over a half-space or more and the cone can never cull (the explicit `< 1` test
 /// matters: a normalised dot product can round to 1.0 exactly).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Cone {
     /// Apex: a point behind every triangle plane of the meshlet.
     pub apex: [f32; 3],
@@ -66,7 +67,8 @@ impl Cone {
 }
 
 /// Bounds of one meshlet.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct MeshletBounds {
     /// Bounding sphere of its vertices.
     pub sphere: Sphere,

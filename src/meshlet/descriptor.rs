@@ -22,13 +22,13 @@ use super::bounds::{compute_bounds, MeshletBounds};
 use super::Meshlets;
 use crate::mesh::Mesh;
 use glam::DVec3;
-use serde::Serialize;
 use std::fmt;
 use std::str::FromStr;
 use thiserror::Error;
 
 /// A descriptor layout.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub enum Format {
     /// Separate task (culling) and mesh (offsets, counts) descriptors, full-precision bounds.
     #[default]
@@ -111,7 +111,8 @@ pub enum DescriptorError {
 
 /// The object box that the 8-bit meshlet boxes are relative to: axis `k` of code `q` decodes to
 /// `min[k] + q * step[k]`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct ObjectBox {
     /// Lower corner.
     pub min: [f32; 3],

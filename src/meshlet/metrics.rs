@@ -2,11 +2,11 @@
 
 use super::{bounds::MeshletBounds, Limits, Meshlets};
 use crate::mesh::Mesh;
-use serde::Serialize;
 use std::time::Duration;
 
 /// Metrics of one meshlet collection.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Metrics {
     /// Number of meshlets.
     pub meshlets: usize,

@@ -10,7 +10,9 @@ pub mod assemble;
 pub mod bounds;
 mod builder;
 pub mod descriptor;
+#[cfg(feature = "io")]
 pub mod export;
+#[cfg(feature = "io")]
 pub mod io;
 pub mod metrics;
 pub mod order;
@@ -21,7 +23,6 @@ pub use builder::MeshletBuilder;
 pub use metrics::Metrics;
 pub use validate::{canonical, validate, ValidationError};
 
-use serde::Serialize;
 use std::fmt;
 use std::str::FromStr;
 
@@ -39,18 +40,114 @@ pub struct Meshlet {
     pub triangle_count: u32,
 }
 
-/// A collection of meshlets over one mesh.
+/// A collection of meshlets over one mesh, consistent by construction: every meshlet's ranges lie
+/// inside the two arrays, it has at most 256 vertices and 256 triangles, and every corner names
+/// one of its vertices. The strategies build it; [`Meshlets::new`] checks arrays made elsewhere.
+/// Whether it covers a mesh's triangles, and within which limits, is [`validate`]'s question.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Meshlets {
     /// The meshlets, in build order.
-    pub meshlets: Vec<Meshlet>,
+    pub(crate) meshlets: Vec<Meshlet>,
     /// Global vertex indices, `vertex_count` per meshlet from its `vertex_offset`.
-    pub vertices: Vec<u32>,
+    pub(crate) vertices: Vec<u32>,
     /// Local triangle corners (indices into the meshlet's vertex range), three per triangle.
-    pub triangles: Vec<u8>,
+    pub(crate) triangles: Vec<u8>,
+}
+
+/// Why arrays do not make a [`Meshlets`] of a mesh.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum MeshletsError {
+    /// A meshlet's vertex or triangle range runs past its array.
+    #[error("meshlet {0}: its vertex or triangle range runs past the array")]
+    Range(usize),
+    /// A meshlet with more than 256 vertices or triangles (corners are u8).
+    #[error("meshlet {0}: more than 256 vertices or triangles")]
+    Size(usize),
+    /// A corner that names no vertex of its meshlet.
+    #[error("meshlet {meshlet}: corner {corner} is not below its vertex count {vertex_count}")]
+    Corner {
+        /// The meshlet.
+        meshlet: usize,
+        /// The corner's value.
+        corner: u8,
+        /// The meshlet's vertex count.
+        vertex_count: u32,
+    },
+    /// A global vertex index the mesh does not have.
+    #[error("meshlet {meshlet}: vertex {vertex} is not below the mesh's {vertex_count} vertices")]
+    Vertex {
+        /// The meshlet.
+        meshlet: usize,
+        /// The vertex index.
+        vertex: u32,
+        /// The mesh's vertex count.
+        vertex_count: usize,
+    },
 }
 
 impl Meshlets {
+    /// Checks arrays made elsewhere (another tool's clusters, a cache) against the invariants
+    /// above and against `mesh`'s vertex count, and takes them.
+    pub fn new(
+        mesh: &crate::mesh::Mesh,
+        meshlets: Vec<Meshlet>,
+        vertices: Vec<u32>,
+        triangles: Vec<u8>,
+    ) -> Result<Self, MeshletsError> {
+        for (i, m) in meshlets.iter().enumerate() {
+            if m.vertex_count > 256 || m.triangle_count > 256 {
+                return Err(MeshletsError::Size(i));
+            }
+            // u64: offsets near u32::MAX must not wrap into range.
+            let v_end = m.vertex_offset as u64 + m.vertex_count as u64;
+            let t_end = m.triangle_offset as u64 + 3 * m.triangle_count as u64;
+            if v_end > vertices.len() as u64 || t_end > triangles.len() as u64 {
+                return Err(MeshletsError::Range(i));
+            }
+            let corners = &triangles[m.triangle_offset as usize..t_end as usize];
+            if let Some(&corner) = corners.iter().find(|&&c| c as u32 >= m.vertex_count) {
+                return Err(MeshletsError::Corner {
+                    meshlet: i,
+                    corner,
+                    vertex_count: m.vertex_count,
+                });
+            }
+            let used = &vertices[m.vertex_offset as usize..v_end as usize];
+            if let Some(&vertex) = used.iter().find(|&&v| v as usize >= mesh.vertex_count()) {
+                return Err(MeshletsError::Vertex {
+                    meshlet: i,
+                    vertex,
+                    vertex_count: mesh.vertex_count(),
+                });
+            }
+        }
+        Ok(Self {
+            meshlets,
+            vertices,
+            triangles,
+        })
+    }
+
+    /// The meshlets, in build order.
+    pub fn meshlets(&self) -> &[Meshlet] {
+        &self.meshlets
+    }
+
+    /// Global vertex indices, `vertex_count` per meshlet from its `vertex_offset`.
+    pub fn vertices(&self) -> &[u32] {
+        &self.vertices
+    }
+
+    /// Local triangle corners (indices into the meshlet's vertex range), three per triangle.
+    pub fn triangles(&self) -> &[u8] {
+        &self.triangles
+    }
+
+    /// The three arrays, moved out.
+    pub fn into_parts(self) -> (Vec<Meshlet>, Vec<u32>, Vec<u8>) {
+        (self.meshlets, self.vertices, self.triangles)
+    }
+
     /// The meshlets of `parts` one after another (offsets moved to the joined arrays).
     pub fn concat(parts: Vec<Meshlets>) -> Meshlets {
         let mut out = Meshlets {
@@ -111,13 +208,16 @@ impl Meshlets {
     }
 }
 
-/// Per-meshlet size limits. Mesh-shader hardware and meshoptimizer cap both at 256 here.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+/// Per-meshlet size limits. Mesh-shader hardware and meshoptimizer cap both at 256 here; made
+/// only by [`Limits::new`] (or taken from the constants), so no strategy sees a limit it cannot
+/// meet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct Limits {
     /// Most vertices in one meshlet (3..=256).
-    pub max_vertices: u32,
+    pub(crate) max_vertices: u32,
     /// Most triangles in one meshlet (1..=256).
-    pub max_triangles: u32,
+    pub(crate) max_triangles: u32,
 }
 
 impl Limits {
@@ -152,6 +252,16 @@ impl Limits {
             max_triangles: 128,
         },
     ];
+
+    /// Most vertices in one meshlet (3..=256).
+    pub fn max_vertices(&self) -> u32 {
+        self.max_vertices
+    }
+
+    /// Most triangles in one meshlet (1..=256).
+    pub fn max_triangles(&self) -> u32 {
+        self.max_triangles
+    }
 
     /// No partition of `triangles` triangles has fewer meshlets than this (a hard bound).
     pub fn min_meshlets(&self, triangles: usize) -> usize {

@@ -4,7 +4,6 @@
 
 use super::Meshlets;
 use crate::mesh::tipsify::fifo_misses;
-use serde::Serialize;
 use std::str::FromStr;
 
 /// Reorders each meshlet's triangles so that consecutive triangles share vertices, then renumbers
@@ -82,7 +81,8 @@ pub fn optimize_triangle_order(ml: &mut Meshlets) {
 const LOCAL_CACHE: usize = 8;
 
 /// The order of meshlets in a collection.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub enum MeshletOrder {
     /// As the strategy built them.
     #[default]

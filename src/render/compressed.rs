@@ -176,7 +176,7 @@ pub fn prepare(enc: &Encoded, format: Format) -> Result<Upload, RenderError> {
 /// meshlet owns its vertices, so the reference holds even for a buffer whose copies of one source
 /// vertex disagree (a damaged but decodable SC record).
 pub fn decoded_reference(enc: &Encoded, format: Format) -> Result<(Mesh, Meshlets), DecodeError> {
-    let mut mesh = Mesh::default();
+    let mut mesh = Mesh::empty();
     let mut ml = Meshlets::default();
     for i in 0..enc.offsets.len() {
         let d = format.decode(enc, i)?;

@@ -67,7 +67,7 @@ pub(super) struct Draw {
 
 /// A scene's meshes as one mesh, their meshlets as one set, and one draw per instance.
 pub(super) fn concatenate(scene: &Scene, meshlets: &[Meshlets]) -> (Mesh, Meshlets, Vec<Draw>) {
-    let mut mesh = Mesh::default();
+    let mut mesh = Mesh::empty();
     let mut ml = Meshlets::default();
     // Per mesh: (first meshlet, meshlets, first index, indices, object sphere).
     let mut ranges = Vec::with_capacity(scene.meshes.len());

@@ -93,7 +93,7 @@ mod tests {
     fn unreached_pieces_join_the_run_of_their_first_morton_triangle() {
         // Ten separate triangles in a row: two seeds reach only themselves, and every other
         // triangle (a piece of its own) joins the run its Morton rank falls in.
-        let mut mesh = Mesh::default();
+        let mut mesh = Mesh::empty();
         for i in 0..10u32 {
             let x = i as f32 * 3.0;
             mesh.positions
