@@ -41,7 +41,12 @@ impl Strategy for Meshopt {
         "meshopt"
     }
     fn build(&self, mesh: &Mesh, limits: Limits) -> Meshlets {
-        let cw = self.cone_weight.clamp(0.0, 1.0); // the C++ asserts 0..=1
+        // The C++ asserts 0..=1 (and a NaN passes a clamp): out-of-range weights are clamped, NaN
+        // is the default 0.
+        let cw = match self.cone_weight {
+            w if w.is_nan() => 0.0,
+            w => w.clamp(0.0, 1.0),
+        };
         convert(meshopt::build_meshlets(
             &mesh.indices,
             &adapter(mesh),

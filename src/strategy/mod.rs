@@ -61,9 +61,12 @@ pub struct Options {
     pub fill_weight: f32,
     /// k-medoids tunables (the method itself, [`kmedoids::Mode`], comes from the strategy name).
     pub kmedoids: kmedoids::Config,
-    /// Reorder triangles inside each meshlet for vertex reuse (any strategy).
+    /// Reorder triangles inside each meshlet for vertex reuse
+    /// ([`optimize_triangle_order`]); every strategy made from these options applies it
+    /// ([`Kind::strategy`], [`Kind::refined`], [`Kind::partitioned`], [`by_name`]). `meshopt`'s
+    /// meshlets come optimised by meshoptimizer already.
     pub local_order: bool,
-    /// Order of the meshlets in the collection (any strategy).
+    /// Order of the meshlets in the collection ([`order_meshlets`]); applied as `local_order` is.
     pub meshlet_order: MeshletOrder,
 }
 
@@ -185,11 +188,11 @@ fn retired_hint(name: &str) -> String {
         .map_or(String::new(), |(_, hint)| format!(" ({hint})"))
 }
 
-/// Looks a strategy up by name; the ordering options wrap it in a post-pass. The typed way to
-/// the same strategies is [`Kind::strategy`] (or [`Kind::refined`]) and [`with_order`].
+/// Looks a strategy up by name, with every option in `opts` applied. The typed way to the same
+/// strategies is [`Kind::strategy`], [`Kind::refined`] and [`Kind::partitioned`].
 pub fn by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, UnknownStrategy> {
     let unknown = || UnknownStrategy(name.to_string());
-    let inner = match refined(name) {
+    Ok(match refined(name) {
         Some((base, effort, _)) => Kind::from_name(base)
             .ok_or_else(unknown)?
             .refined(effort, opts),
@@ -199,12 +202,12 @@ pub fn by_name(name: &str, opts: &Options) -> Result<Box<dyn Strategy>, UnknownS
                 .ok_or_else(unknown)?,
             None => Kind::from_name(name).ok_or_else(unknown)?.strategy(opts),
         },
-    };
-    Ok(with_order(inner, opts))
+    })
 }
 
 /// Wraps `inner` in the ordering post-passes that `opts` asks for ([`Options::local_order`],
-/// [`Options::meshlet_order`]); returns it unchanged when they ask for none.
+/// [`Options::meshlet_order`]); returns it unchanged when they ask for none. The strategies this
+/// module makes have them already: this is for a [`Strategy`] of one's own.
 pub fn with_order(inner: Box<dyn Strategy>, opts: &Options) -> Box<dyn Strategy> {
     if !opts.local_order && opts.meshlet_order == MeshletOrder::AsBuilt {
         return inner;
@@ -267,9 +270,8 @@ macro_rules! strategies {
                 }
             }
 
-            /// The strategy, with the tunables in `opts` it reads (the ordering options are
-            /// applied by [`with_order`], not here).
-            pub fn strategy(self, opts: &Options) -> Box<dyn Strategy> {
+            /// The strategy with the tunables in `opts` it reads, before the ordering options.
+            fn bare(self, opts: &Options) -> Box<dyn Strategy> {
                 match self {
                     $(Kind::$kind => {
                         let $o = opts;
@@ -347,7 +349,9 @@ strategies! {
     Compact => "compact",
         "ours: fewest new vertices (dangling triangles free), island closing, nearest to centroid, corner-first seeds",
         |_o| Compact;
-    /// [`Meshopt`] (meshoptimizer's `build_meshlets`).
+    /// [`Meshopt`] (meshoptimizer's `build_meshlets`). Its output has already been through
+    /// meshoptimizer's per-meshlet triangle optimisation (`meshopt_optimizeMeshlet`), so
+    /// [`Options::local_order`] on top gains little vertex reuse for its time.
     Meshopt => "meshopt",
         "meshoptimizer 1.3 build_meshlets: the peer; adjacency- and distance-driven greedy growth",
         |o| Meshopt { cone_weight: o.cone_weight };
@@ -385,16 +389,25 @@ impl Kind {
 
     /// The strategy followed by [`partition`](refine::partition), named e.g. `greedy+partition`
     /// (`partition` is `meshopt+partition`); `None` for [`Kind::Partition`].
+    /// Every option in `opts` applies: the ordering ones to the partitioned output.
     pub fn partitioned(self, opts: &Options) -> Option<Box<dyn Strategy>> {
         let (_, name) = partitioned(&format!("{}{PARTITION_SUFFIX}", self.name()))?;
-        Some(Box::new(refine::partition::Partitioned {
-            inner: self.strategy(opts),
+        let partitioned = Box::new(refine::partition::Partitioned {
+            inner: self.bare(opts),
             config: refine::partition::Config::default(),
             name,
-        }))
+        });
+        Some(with_order(partitioned, opts))
     }
 
-    /// The strategy followed by [`refine`] at `effort`, named e.g. `meshopt+refine`.
+    /// The strategy, with every option in `opts` applied: the tunables it reads, then the
+    /// ordering post-passes ([`Options::local_order`], [`Options::meshlet_order`]).
+    pub fn strategy(self, opts: &Options) -> Box<dyn Strategy> {
+        with_order(self.bare(opts), opts)
+    }
+
+    /// The strategy followed by [`refine`] at `effort`, named e.g. `meshopt+refine`; every option
+    /// in `opts` applies, the ordering ones to the refined output.
     pub fn refined(self, effort: refine::Effort, opts: &Options) -> Box<dyn Strategy> {
         let suffix = REFINE_SUFFIXES
             .iter()
@@ -402,11 +415,12 @@ impl Kind {
             .map_or("", |&(s, _)| s);
         let (_, _, name) =
             refined(&format!("{}{suffix}", self.name())).expect("every kind has every suffix");
-        Box::new(refine::Refined {
-            inner: self.strategy(opts),
+        let refined = Box::new(refine::Refined {
+            inner: self.bare(opts),
             config: refine::Config::new(effort),
             name,
-        })
+        });
+        with_order(refined, opts)
     }
 }
 
@@ -490,10 +504,22 @@ mod tests {
             Kind::Kmedoids,
             Kind::KmedoidsFlat,
         ] {
-            let typed = with_order(k.strategy(&opts), &opts).build(&mesh, limits);
+            let typed = k.strategy(&opts).build(&mesh, limits);
             let named = by_name(k.name(), &opts).unwrap().build(&mesh, limits);
             assert_eq!(typed, named, "{}", k.name());
             crate::meshlet::validate(&mesh, &typed, limits).unwrap();
+            // The options act: the typed strategy is the bare one followed by both passes.
+            let mut by_hand = k.strategy(&Options::default()).build(&mesh, limits);
+            assert_ne!(typed, by_hand, "{}: the ordering options did nothing", k.name());
+            optimize_triangle_order(&mut by_hand);
+            order_meshlets(&mut by_hand, opts.meshlet_order);
+            assert_eq!(typed, by_hand, "{}", k.name());
         }
+        let partitioned = Kind::Greedy.partitioned(&opts).unwrap();
+        let named = by_name("greedy+partition", &opts).unwrap();
+        assert_eq!(partitioned.build(&mesh, limits), named.build(&mesh, limits));
+        let refined = Kind::Greedy.refined(refine::Effort::Fast, &opts);
+        let named = by_name("greedy+refine-fast", &opts).unwrap();
+        assert_eq!(refined.build(&mesh, limits), named.build(&mesh, limits));
     }
 }
