@@ -43,7 +43,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             lod::camera::FOV_Y.to_radians(),
             1.0,
         );
-        let cut = select::select(&dag, &view, 0);
+        let cut = select::select_cut(&dag, &view, 0);
         select::check_cut(&dag, &cut, 0)?;
         let (meshlets, triangles) =
             cut.iter()

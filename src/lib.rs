@@ -46,7 +46,7 @@
 //! - **Bounds** for culling: [`meshlet::bounds::compute_bounds`] (sphere and normal cone per
 //!   meshlet); quality figures from [`meshlet::Metrics`].
 //! - **Upload**: [`meshlet::descriptor::pack`] packs the meshlets in one of the four descriptor
-//!   layouts the mesh-shader pass reads ([`meshlet::descriptor::Format`]: split task and mesh
+//!   layouts the mesh-shader pass reads ([`meshlet::descriptor::DescriptorFormat`]: split task and mesh
 //!   descriptors, NVIDIA's two 128-bit layouts, or self-contained blocks); the GLSL that reads
 //!   them is `glsl/descriptors.glsl`. [`compress`] encodes them smaller.
 //! - **Level of detail**: [`lod::build`] makes the cluster-LOD DAG and [`lod::select`] the cut
@@ -86,7 +86,7 @@
 //! let dag = lod::build(&mesh, strategy.as_ref(), Limits::DEFAULT, &lod::Config::default());
 //! // 1080 pixels high, 60 degrees vertical field of view, a one-pixel error, from 10 units away.
 //! let view = select::View::new(glam::Vec3::new(0.0, 0.0, 10.0), 1080.0, 60f32.to_radians(), 1.0);
-//! let cut = select::select(&dag, &view, 0);
+//! let cut = select::select_cut(&dag, &view, 0);
 //! select::check_cut(&dag, &cut, 0)?; // one meshlet on every path: no crack, no overlap
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
@@ -111,6 +111,10 @@
 //! default) both plus the `meshletlab` command, its benches (`bench`) and the fuzzer (`fuzz`).
 
 #![warn(missing_docs)]
+
+/// The vector library of the public API ([`lod::select::View::new`] takes a `glam::Vec3`):
+/// name it through this re-export and no version needs pinning by hand.
+pub use glam;
 
 pub mod adjacency;
 #[cfg(feature = "io")]

@@ -5,13 +5,13 @@
 
 mod common;
 
-use meshletlab::compress::{self, file::Format};
+use meshletlab::compress::{self, Codec};
 use meshletlab::mesh::{generate, Mesh};
 use meshletlab::meshlet::{canonical, Limits, Meshlets};
 use std::collections::HashMap;
 
 /// Round trip of one codec; returns bytes per triangle.
-fn round_trip(format: Format, name: &str, mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> f64 {
+fn round_trip(format: Codec, name: &str, mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> f64 {
     meshletlab::meshlet::validate(mesh, ml, Limits::new(256, 256).unwrap())
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     let enc = format
@@ -85,7 +85,7 @@ fn meshopt_codec_round_trips_every_shared_mesh() {
         let m = meshletlab::mesh::load(&f).unwrap();
         let name = f.file_name().unwrap().to_string_lossy().to_string();
         let bpt = round_trip(
-            Format::Meshopt,
+            Codec::Meshopt,
             &name,
             &m,
             &meshlets(&m, l128),
@@ -113,7 +113,7 @@ fn meshopt_codec_holds_the_tolerance_far_from_the_origin_and_at_any_scale() {
         for limits in [Limits::DEFAULT, Limits::new(128, 128).unwrap()] {
             let name = format!("offset {offset} scale {scale} {limits}");
             round_trip(
-                Format::Meshopt,
+                Codec::Meshopt,
                 &name,
                 &m,
                 &meshlets(&m, limits),
@@ -135,10 +135,10 @@ fn laced_wires_round_trip_every_shared_mesh_and_beat_the_peer_at_the_same_grid()
         let name = f.file_name().unwrap().to_string_lossy().to_string();
         let ml = build("qem", &m, paper_limits());
         let t = compress::paper_tolerance(&m);
-        let laced = round_trip(Format::LacedWires, &name, &m, &ml, t);
+        let laced = round_trip(Codec::LacedWires, &name, &m, &ml, t);
         // The same meshlets and grid through meshoptimizer's codec: storing every vertex once
         // must pay for the wires' headers (the size targets live in `bench compress`).
-        let peer = round_trip(Format::Meshopt, &name, &m, &ml, t);
+        let peer = round_trip(Codec::Meshopt, &name, &m, &ml, t);
         assert!(
             laced < peer,
             "{name}: laced wires {laced} >= meshopt {peer} B/tri"
@@ -163,7 +163,7 @@ fn laced_wires_round_trip_generated_meshes_at_any_offset_scale_and_limits() {
             let name = format!("offset {offset} scale {scale} {strategy} {limits}");
             let ml = build(strategy, &m, limits);
             round_trip(
-                Format::LacedWires,
+                Codec::LacedWires,
                 &name,
                 &m,
                 &ml,
@@ -173,7 +173,7 @@ fn laced_wires_round_trip_generated_meshes_at_any_offset_scale_and_limits() {
     }
     for g in generate::demo_set(5) {
         let ml = build("qem", &g.mesh, paper_limits());
-        round_trip(Format::LacedWires, g.name, &g.mesh, &ml, 1e-3);
+        round_trip(Codec::LacedWires, g.name, &g.mesh, &ml, 1e-3);
     }
 }
 
@@ -234,7 +234,7 @@ fn laced_wires_keep_non_manifold_degenerate_isolated_and_duplicate_triangles() {
     ] {
         let ml = build(strategy, &m, limits);
         round_trip(
-            Format::LacedWires,
+            Codec::LacedWires,
             &format!("awkward {strategy}"),
             &m,
             &ml,
@@ -248,9 +248,9 @@ fn laced_wires_refuse_meshlets_above_64_vertices() {
     let m = generate::noisy_sphere(3, 0.2, 9);
     let ml = build("meshopt", &m, Limits::new(128, 128).unwrap());
     assert!(matches!(
-        Format::LacedWires.encode(&m, &ml, 1e-3),
+        Codec::LacedWires.encode(&m, &ml, 1e-3),
         Err(compress::EncodeError::Laced(
-            compress::laced::EncodeError::Size(_)
+            compress::laced::LacedEncodeError::Size(_)
         ))
     ));
 }
@@ -259,7 +259,7 @@ fn laced_wires_refuse_meshlets_above_64_vertices() {
 fn corruption_is_an_error_never_a_panic_in_every_format() {
     let m = generate::noisy_sphere(2, 0.2, 3);
     let ml = build("qem", &m, paper_limits());
-    for f in Format::ALL {
+    for f in Codec::ALL {
         let enc = f.encode(&m, &ml, 1e-3).unwrap();
         assert!(f.decode(&enc, ml.len()).is_err(), "{f:?}");
         let mut cut = enc.clone();
@@ -299,7 +299,7 @@ fn corruption_is_an_error_never_a_panic_in_every_format() {
                             );
                         }
                     }
-                    if f == Format::LacedWires {
+                    if f == Codec::LacedWires {
                         let _ = compress::laced::culling(&c, i);
                     }
                 }
@@ -333,7 +333,7 @@ fn the_papers_comparison_formats_round_trip_basic_and_compact() {
         let ml = build("qem", m, paper_limits());
         let t = compress::paper_tolerance(m);
         let mut sizes = Vec::new();
-        for f in Format::ALL.into_iter().skip(2) {
+        for f in Codec::ALL.into_iter().skip(2) {
             sizes.push((f, round_trip(f, &format!("{name} {f:?}"), m, &ml, t)));
         }
         // Compact is smaller than basic, and GI basic spends its 12 bytes per triangle on indices.
@@ -342,7 +342,7 @@ fn the_papers_comparison_formats_round_trip_basic_and_compact() {
         }
     }
     let ml = build("qem", &bunny, paper_limits());
-    let gi = Format::Gi.encode(&bunny, &ml, 1e-3).unwrap();
+    let gi = Codec::Gi.encode(&bunny, &ml, 1e-3).unwrap();
     assert_eq!(gi.sizes.connectivity, 12 * bunny.triangle_count());
 }
 
@@ -358,7 +358,7 @@ fn laced_wire_culling_bytes_are_conservative_for_the_decoded_meshlets() {
         ("awkward", &awkward),
     ] {
         let ml = build("qem", m, paper_limits());
-        let enc = Format::LacedWires
+        let enc = Codec::LacedWires
             .encode(m, &ml, compress::paper_tolerance(m))
             .unwrap();
         let (lo, hi) = m.bounding_box();

@@ -5,8 +5,8 @@
 
 mod common;
 
-use meshletlab::compress::file::Format;
 use meshletlab::compress::laced::culling;
+use meshletlab::compress::Codec;
 use meshletlab::compress::{paper_tolerance, Encoded};
 use meshletlab::mesh::Mesh;
 use meshletlab::meshlet::{Limits, Meshlets};
@@ -28,11 +28,11 @@ const NO_CULL: Pipeline = Pipeline::mesh(false);
 
 /// Draws `enc` and its decoded reference from every view and compares; returns the meshlets the
 /// laced-wire records culled (frustum, cone) over the views.
-fn check(ctx: &Context, what: &str, enc: &Encoded, format: Format, views: &[Camera]) -> (u32, u32) {
+fn check(ctx: &Context, what: &str, enc: &Encoded, format: Codec, views: &[Camera]) -> (u32, u32) {
     let up = prepare(enc, format).unwrap();
     let pass = Pass::compressed(ctx, &up).unwrap();
     let culled = check_pass(ctx, what, enc, &up, &pass, views);
-    if format == Format::LacedWires && ctx.mesh_subgroups {
+    if format == Codec::LacedWires && ctx.mesh_subgroups {
         // The decoder without subgroup operations, for devices that lack them in mesh shaders.
         let pass = Pass::compressed_with(ctx, &up, false).unwrap();
         let what = format!("{what} (workgroup-memory scans)");
@@ -109,7 +109,7 @@ fn check_pass(
             "{tag}"
         );
         assert_eq!(b.drawn, up.meshlets() as u32, "{tag}");
-        if format != Format::LacedWires {
+        if format != Codec::LacedWires {
             assert_eq!(a.drawn, up.meshlets() as u32, "{tag}");
         } else if a.culled_frustum == 0 {
             // The task shader reads the culling records as the CPU does: its cone test culls what
@@ -129,7 +129,7 @@ fn check_pass(
         cone += a.culled_cone;
     }
     assert!(
-        format != Format::LacedWires || compared > 0 || views.len() < 2,
+        format != Codec::LacedWires || compared > 0 || views.len() < 2,
         "{what}: no view without frustum culling to compare the cone culling with"
     );
     (frustum, cone)
@@ -150,15 +150,15 @@ fn every_shader_decoded_format_draws_its_cpu_decoded_reference() {
         views.extend(Camera::random_views(&mesh, 2, 11, 0.6));
         let what = format!("{name} {strat} {limits}");
         for format in FORMATS {
-            if format != Format::LacedWires
+            if format != Codec::LacedWires
                 && limits.max_triangles() > 126
-                && format != Format::ScCompact
+                && format != Codec::ScCompact
             {
                 continue;
             }
             let enc = format.encode(&mesh, &ml, paper_tolerance(&mesh)).unwrap();
             let (frustum, cone) = check(&ctx, &what, &enc, format, &views);
-            if format == Format::LacedWires {
+            if format == Codec::LacedWires {
                 assert!(frustum > 0 && cone > 0, "{what}: laced-wire records culled {frustum} by the frustum, {cone} by the cone");
             }
         }
@@ -217,7 +217,7 @@ fn damaged_buffers_are_refused_before_upload_or_drawn_exactly_as_they_decode() {
 fn formats_without_a_shader_decoder_say_so() {
     let mesh = common::load("fandisk");
     let ml = meshlets(&mesh, "meshopt", Limits::DEFAULT);
-    for format in [Format::Meshopt, Format::Sc, Format::Gi] {
+    for format in [Codec::Meshopt, Codec::Sc, Codec::Gi] {
         let enc = format.encode(&mesh, &ml, paper_tolerance(&mesh)).unwrap();
         let err = prepare(&enc, format).unwrap_err();
         assert!(matches!(err, RenderError::NoShaderDecoder(_)), "{err}");
@@ -231,10 +231,10 @@ fn laced_wire_task_culling_never_removes_a_visible_triangle() {
     for name in ["stanford_bunny", "stellarium_gaspra"] {
         let mesh = common::load(name);
         let ml = meshlets(&mesh, "meshopt", Limits::DEFAULT);
-        let enc = Format::LacedWires
+        let enc = Codec::LacedWires
             .encode(&mesh, &ml, paper_tolerance(&mesh))
             .unwrap();
-        let pass = Pass::compressed(&ctx, &prepare(&enc, Format::LacedWires).unwrap()).unwrap();
+        let pass = Pass::compressed(&ctx, &prepare(&enc, Codec::LacedWires).unwrap()).unwrap();
         // Many seeded views, from inside the bounds (frustum culling) to far out (cone culling).
         let mut views = Vec::new();
         for (k, distance) in [0.5f32, 0.8, 1.2, 2.0, 3.5].into_iter().enumerate() {

@@ -296,7 +296,7 @@ fn check_view(s: &Subject, v: &select::View, finest: usize, name: &str, t: &mut 
         remap,
         shape,
     } = *s;
-    let sel = select::select(lod, v, finest);
+    let sel = select::select_cut(lod, v, finest);
     select::check_cut(lod, &sel, finest).unwrap_or_else(|e| panic!("{name}: {e}"));
     // The flattened selection the kernel and the task shader mirror picks the same meshlets.
     let q = Query {
@@ -305,7 +305,7 @@ fn check_view(s: &Subject, v: &select::View, finest: usize, name: &str, t: &mut 
         frustum: None,
         cone: false,
     };
-    let flat_sel: Vec<u32> = flat::select(flat, &q);
+    let flat_sel: Vec<u32> = flat::select_meshlets(flat, &q);
     let per_level: Vec<u32> = (0..lod.levels.len())
         .rev()
         .flat_map(|l| {
@@ -477,7 +477,7 @@ fn the_checks_catch_a_broken_cut() {
     let (lo, hi) = m.bounding_box();
     let (c, r) = ((lo + hi) * 0.5, (hi - lo).length() * 0.5);
     let v = &select::View::new(c + Vec3::new(0.6, 0.0, 0.8) * r * 6.0, 720.0, 1.0, 1.0);
-    let sel = select::select(&lod, v, 0);
+    let sel = select::select_cut(&lod, v, 0);
     assert!(
         !sel[0].iter().any(|&b| b),
         "level 0 is not drawn from 6 radii"

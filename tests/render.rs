@@ -4,7 +4,7 @@
 
 mod common;
 
-use meshletlab::meshlet::descriptor::Format;
+use meshletlab::meshlet::descriptor::DescriptorFormat;
 use meshletlab::meshlet::{Limits, Meshlets};
 use meshletlab::render::{
     differing_pixels, max_channel_difference, Camera, Context, Pass, Pipeline, Shading, SHADERS,
@@ -68,7 +68,7 @@ fn check_views(
     mesh: &meshletlab::mesh::Mesh,
     ml: &Meshlets,
     views: &[Camera],
-    format: Format,
+    format: DescriptorFormat,
 ) -> (u32, u32) {
     let pass = Pass::with_format(ctx, mesh, ml, format).unwrap();
     let (mut frustum, mut cone) = (0, 0);
@@ -147,13 +147,13 @@ fn mesh_shaders_match_the_vertex_pipeline_and_culling_removes_nothing_visible() 
     views.extend(Camera::random_views(&bunny, 2, 11, 0.6));
     for name in ["meshopt", "bsphere-parallel", "kmedoids"] {
         let ml = meshlets(&bunny, name, Limits::DEFAULT);
-        let (frustum, cone) = check_views(&ctx, &bunny, &ml, &views, Format::Split);
+        let (frustum, cone) = check_views(&ctx, &bunny, &ml, &views, DescriptorFormat::Split);
         assert!(cone > 0, "{name}: the normal cone never culled");
         assert!(frustum > 0, "{name}: the frustum never culled");
     }
     // Limits above 64/126 take the 256/256 mesh shader.
     let ml = meshlets(&bunny, "meshopt", Limits::new(128, 256).unwrap());
-    check_views(&ctx, &bunny, &ml, &views[..2], Format::Split);
+    check_views(&ctx, &bunny, &ml, &views[..2], DescriptorFormat::Split);
     let (errors, first) = ctx.validation.as_ref().unwrap().errors();
     assert_eq!(errors, 0, "validation layer errors: {first:#?}");
 }
@@ -180,8 +180,13 @@ fn every_descriptor_format_draws_the_same_meshlets() {
             .iter()
             .map(|v| split.render(v, colour_ids, Shading::Lit).unwrap().pixels)
             .collect();
-        let (split_frustum, split_cone) = check_views(&ctx, &bunny, &ml, &views, Format::Split);
-        for format in [Format::NvidiaA, Format::NvidiaB, Format::Monolithic] {
+        let (split_frustum, split_cone) =
+            check_views(&ctx, &bunny, &ml, &views, DescriptorFormat::Split);
+        for format in [
+            DescriptorFormat::NvidiaA,
+            DescriptorFormat::NvidiaB,
+            DescriptorFormat::Monolithic,
+        ] {
             // Decoding: every meshlet's vertices, triangles and id come out as the split layout's,
             // so the meshlet-coloured images are identical.
             let pass = Pass::with_format(&ctx, &bunny, &ml, format).unwrap();
@@ -247,7 +252,7 @@ fn lod_task_shader_matches_the_cpu_cut_and_full_detail_at_sub_pixel_threshold() 
             let q = cam.lod_query(0.5, 0, true);
             let (a, ids) = pass.render_lod_ids(cam, &q, Shading::Unlit).unwrap();
             let b = full.render(cam, MESH_CULL, Shading::Unlit).unwrap();
-            let cpu = flat::select(&fl, &q);
+            let cpu = flat::select_meshlets(&fl, &q);
             // The very meshlets the task shader launched, not only as many.
             assert_eq!(ids, sorted(&cpu), "{name} view {i}: drawn set");
             assert_eq!(a.drawn as usize, cpu.len(), "{name} view {i}");
@@ -281,7 +286,7 @@ fn lod_task_shader_matches_the_cpu_cut_and_full_detail_at_sub_pixel_threshold() 
             for finest in 0..fl.levels() {
                 let q = cam.lod_query(2.0, finest, true);
                 let (a, ids) = pass.render_lod_ids(cam, &q, Shading::Lit).unwrap();
-                let cpu = flat::select(&fl, &q);
+                let cpu = flat::select_meshlets(&fl, &q);
                 assert_eq!(ids, sorted(&cpu), "{name}: drawn set, levels from {finest}");
                 assert_eq!(a.drawn as usize, cpu.len());
                 assert_eq!(
@@ -547,7 +552,7 @@ fn occlusion_culling_with_a_lod_cut_hides_nothing() {
             assert_eq!(a.differences(b), (0, 0), "frame {f}");
             assert_eq!(
                 full.drawn() as usize,
-                flat::select(&fl, &q).len(),
+                flat::select_meshlets(&fl, &q).len(),
                 "frame {f}"
             );
             assert!(occ.drawn() <= full.drawn());

@@ -159,7 +159,7 @@ pub fn mesh_files(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("{}: cannot list mesh folder", dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_file() && mesh::Format::of(p).is_some())
+        .filter(|p| p.is_file() && mesh::MeshFormat::of(p).is_some())
         .collect();
     files.sort();
     if files.is_empty() {

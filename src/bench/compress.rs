@@ -18,7 +18,7 @@ use super::table::{
     Style, Table,
 };
 use super::{median, write_header, Common};
-use crate::compress::file::Format;
+use crate::compress::Codec;
 use crate::compress::{Encoded, Sizes};
 use crate::mesh::{self, Mesh};
 use crate::meshlet::{Limits, Meshlets};
@@ -77,8 +77,8 @@ pub struct Row {
     pub triangles: usize,
     /// Vertices used by a triangle.
     pub vertices: usize,
-    /// Format.
-    pub format: Format,
+    /// Codec.
+    pub format: Codec,
     /// Strategy and limits of the meshlets.
     pub meshlets_from: String,
     /// Meshlet count.
@@ -125,7 +125,7 @@ fn pool(threads: usize) -> Result<rayon::ThreadPool> {
 }
 
 /// Decodes every meshlet; (max, mean) error against the source and the decoded-vertex count.
-fn errors(mesh: &Mesh, format: Format, enc: &Encoded) -> Result<(f64, f64)> {
+fn errors(mesh: &Mesh, format: Codec, enc: &Encoded) -> Result<(f64, f64)> {
     let mut worst = 0.0f64;
     let mut sum = 0.0f64;
     let mut n = 0usize;
@@ -152,7 +152,7 @@ fn measure(
     mesh: &Mesh,
     ml: &Meshlets,
     from: &str,
-    format: Format,
+    format: Codec,
     (setting, tolerance): (&'static str, f64),
     runs: usize,
     pools: &[rayon::ThreadPool; 2],
@@ -192,11 +192,9 @@ fn measure(
     // Positions stored: once per vertex (laced wires, IX, GI), per meshlet vertex (meshopt,
     // SC), per corner (TS).
     let stored = match format {
-        Format::LacedWires | Format::Ix | Format::IxCompact | Format::Gi | Format::GiCompact => {
-            used
-        }
-        Format::Ts | Format::TsCompact => 3 * mesh.triangle_count(),
-        Format::Meshopt | Format::Sc | Format::ScCompact => ml.vertices.len(),
+        Codec::LacedWires | Codec::Ix | Codec::IxCompact | Codec::Gi | Codec::GiCompact => used,
+        Codec::Ts | Codec::TsCompact => 3 * mesh.triangle_count(),
+        Codec::Meshopt | Codec::Sc | Codec::ScCompact => ml.vertices.len(),
     };
     let tris = mesh.triangle_count() as f64 / 1e6;
     Ok(Row {
@@ -272,17 +270,17 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
         let t14 = ("paper", crate::compress::paper_tolerance(m));
         let t4 = ("1e-4", 1e-4 * diag);
         for (ml, from, format, t) in [
-            (&qem, "qem 64/84", Format::LacedWires, t14),
-            (&qem, "qem 64/84", Format::Meshopt, t14),
-            (&qem, "qem 64/84", Format::LacedWires, t4),
-            (&full, "meshopt 64/126", Format::LacedWires, t4),
-            (&qem, "qem 64/84", Format::Meshopt, t4),
-            (&mo, "meshopt 128/128", Format::Meshopt, t4),
+            (&qem, "qem 64/84", Codec::LacedWires, t14),
+            (&qem, "qem 64/84", Codec::Meshopt, t14),
+            (&qem, "qem 64/84", Codec::LacedWires, t4),
+            (&full, "meshopt 64/126", Codec::LacedWires, t4),
+            (&qem, "qem 64/84", Codec::Meshopt, t4),
+            (&mo, "meshopt 128/128", Codec::Meshopt, t4),
         ] {
             rows.push(measure(name, m, ml, from, format, t, cfg.runs(), &pools)?);
         }
         // The paper's comparison formats on the same meshlets (Tables 2, 4, 5).
-        for format in Format::ALL.into_iter().skip(2) {
+        for format in Codec::ALL.into_iter().skip(2) {
             rows.push(measure(
                 name,
                 m,
@@ -300,8 +298,8 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
         for b in 8..=16u32 {
             let t = extent / (1u64 << b) as f64 / 2.0;
             for (ml, format, label) in [
-                (&qem, Format::LacedWires, "local: laced wires (qem 64/84)"),
-                (&mo, Format::Meshopt, "local: meshopt anchors (128/128)"),
+                (&qem, Codec::LacedWires, "local: laced wires (qem 64/84)"),
+                (&mo, Codec::Meshopt, "local: meshopt anchors (128/128)"),
             ] {
                 let t0 = Instant::now();
                 let enc = format.encode(m, ml, t)?;
@@ -391,7 +389,7 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
     // Total bytes per triangle at 1e-4: laced wires against the peer.
     let at4: Vec<&Row> = rows.iter().filter(|r| r.setting == "1e-4").collect();
     let cats: Vec<String> = names.iter().map(|s| s.to_string()).collect();
-    let pick = |f: Format, from: &str| -> Vec<f64> {
+    let pick = |f: Codec, from: &str| -> Vec<f64> {
         cats.iter()
             .map(|c| {
                 at4.iter()
@@ -408,22 +406,22 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
         &[
             Bars {
                 label: "laced wires (qem 64/84)".into(),
-                values: pick(Format::LacedWires, "qem 64/84"),
+                values: pick(Codec::LacedWires, "qem 64/84"),
                 stack: 0,
             },
             Bars {
                 label: "laced wires (meshopt 64/126)".into(),
-                values: pick(Format::LacedWires, "meshopt 64/126"),
+                values: pick(Codec::LacedWires, "meshopt 64/126"),
                 stack: 3,
             },
             Bars {
                 label: "meshopt codec (meshopt 128/128)".into(),
-                values: pick(Format::Meshopt, "meshopt 128/128"),
+                values: pick(Codec::Meshopt, "meshopt 128/128"),
                 stack: 1,
             },
             Bars {
                 label: "meshopt codec (qem 64/84)".into(),
-                values: pick(Format::Meshopt, "qem 64/84"),
+                values: pick(Codec::Meshopt, "qem 64/84"),
                 stack: 2,
             },
         ],
@@ -447,14 +445,14 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
     )?;
     writeln!(md, "Paper (Mlakar et al. 2024, Tables 2, 4, 5): laced wires {:.2} B/triangle connectivity, {:.2} B/vertex geometry; IX/SC compact {:.2} B/triangle; GI {:.0} B/triangle, {:.2} B/vertex quantised. Ours: geometry = positions and the boxes that place them (anchors, bit widths, the wire table) per vertex; the other headers (counts, item lists, offsets) are counted apart.\n", paper::LACED_CONNECTIVITY, paper::LACED_GEOMETRY, paper::IX_SC_COMPACT, paper::GI.0, paper::GI.1)?;
     let is_paper =
-        |r: &&Row| r.setting == "paper" && matches!(r.format, Format::LacedWires | Format::Meshopt);
+        |r: &&Row| r.setting == "paper" && matches!(r.format, Codec::LacedWires | Codec::Meshopt);
     writeln!(md, "{}", encodings().markdown(rows.iter().filter(is_paper)))?;
     writeln!(
         md,
         "\n### The paper's comparison formats on the same meshlets\n"
     )?;
     writeln!(md, "Each cell: connectivity B/triangle / geometry B/vertex (positions and boxes) / total B/triangle. Basic formats store f32 positions (error 0); compact ones quantise on the same grid as laced wires. Paper: IX/SC compact {:.2} B/triangle connectivity, GI {:.0} B/triangle and {:.2} B/vertex quantised; laced wires {:.2} / {:.2}.\n", paper::IX_SC_COMPACT, paper::GI.0, paper::GI.1, paper::LACED_CONNECTIVITY, paper::LACED_GEOMETRY)?;
-    let formats: Vec<Format> = Format::ALL.into_iter().skip(1).collect();
+    let formats: Vec<Codec> = Codec::ALL.into_iter().skip(1).collect();
     writeln!(
         md,
         "| mesh | {} |",
@@ -501,10 +499,10 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
     for c in &cats {
         let l = at4
             .iter()
-            .filter(|r| &r.mesh == c && r.format == Format::LacedWires)
+            .filter(|r| &r.mesh == c && r.format == Codec::LacedWires)
             .min_by(|a, b| a.total_per_tri().total_cmp(&b.total_per_tri()));
         let p = at4.iter().find(|r| {
-            &r.mesh == c && r.format == Format::Meshopt && r.meshlets_from == "meshopt 128/128"
+            &r.mesh == c && r.format == Codec::Meshopt && r.meshlets_from == "meshopt 128/128"
         });
         if let (Some(l), Some(p)) = (l, p) {
             let oot = OUT_OF_TREE

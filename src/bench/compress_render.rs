@@ -17,8 +17,8 @@
 use super::build::{mesh_files, mesh_name};
 use super::plot::{line_chart, Axes, Series};
 use super::{is_lavapipe, median, p95, write_header, Common, Tag};
-use crate::compress::file::Format;
 use crate::compress::paper_tolerance;
+use crate::compress::Codec;
 use crate::mesh::{self, Mesh};
 use crate::meshlet::{Limits, Meshlets};
 use crate::render::compressed::{decoded_reference, prepare, FORMATS};
@@ -81,7 +81,7 @@ enum Variant {
     SplitCull,
     SplitNoCull,
     VertexPipeline,
-    Compressed(Format, bool),
+    Compressed(Codec, bool),
 }
 
 impl Variant {
@@ -207,7 +207,7 @@ fn measure(ctx: &Context, name: &str, m: &Mesh, cfg: &Config) -> Result<Vec<Row>
     }
     for (format, pass, bytes) in &owned {
         passes.push((Variant::Compressed(*format, false), pass, *bytes));
-        if *format == Format::LacedWires {
+        if *format == Codec::LacedWires {
             passes.push((Variant::Compressed(*format, true), pass, *bytes));
         }
     }
@@ -229,7 +229,7 @@ fn measure(ctx: &Context, name: &str, m: &Mesh, cfg: &Config) -> Result<Vec<Row>
             culled[k] += (f.culled_frustum + f.culled_cone) as u64;
         }
     }
-    let meshopt = Format::Meshopt.encode(m, &ml, tolerance)?;
+    let meshopt = Codec::Meshopt.encode(m, &ml, tolerance)?;
     let mut rows: Vec<Row> = passes
         .iter()
         .zip(ms)

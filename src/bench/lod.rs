@@ -287,7 +287,7 @@ pub fn clod(mesh: &Mesh, max_triangles: usize) -> (Vec<Level>, usize, f64) {
 /// Triangles the cut selects for `cam` at `threshold` (LOD rule only, everything loaded).
 fn selected_triangles(fl: &Flat, cam: &Camera, threshold: f32) -> usize {
     let q = cam.lod_query(threshold, 0, false);
-    flat::select(fl, &q)
+    flat::select_meshlets(fl, &q)
         .iter()
         .map(|&i| fl.records[i as usize].triangles as usize)
         .sum()

@@ -14,7 +14,7 @@ use super::table::{
 };
 use super::{is_lavapipe, median, p95, write_header, Common, Tag};
 use crate::mesh::{self, Mesh};
-use crate::meshlet::descriptor::Format;
+use crate::meshlet::descriptor::DescriptorFormat;
 use crate::meshlet::order::{
     local_miss_rate, optimize_triangle_order, order_meshlets, MeshletOrder,
 };
@@ -327,7 +327,7 @@ fn experiments(
     // Layouts: a meshlet set too large for a layout's fields is reported, not measured.
     let mut passes = Vec::new();
     let mut unfit = Vec::new();
-    for f in Format::ALL {
+    for f in DescriptorFormat::ALL {
         match Pass::with_format(ctx, m, &base, f) {
             Ok(p) => passes.push((f.name().to_string(), &base, p)),
             Err(RenderError::Descriptor(e)) => unfit.push(Variant {
@@ -678,7 +678,7 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
             )?;
             continue;
         }
-        let Some(base) = find(v, Format::Split.name()) else {
+        let Some(base) = find(v, DescriptorFormat::Split.name()) else {
             continue;
         };
         let (rc, rn) = (
@@ -710,11 +710,11 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
     writeln!(
         md,
         "| strategy | {} |",
-        Format::ALL.map(|f| f.name()).join(" | ")
+        DescriptorFormat::ALL.map(|f| f.name()).join(" | ")
     )?;
-    writeln!(md, "|---|{}", "---:|".repeat(Format::ALL.len()))?;
+    writeln!(md, "|---|{}", "---:|".repeat(DescriptorFormat::ALL.len()))?;
     for s in &cfg.experiment_strategies() {
-        let cells: Vec<String> = Format::ALL
+        let cells: Vec<String> = DescriptorFormat::ALL
             .iter()
             .map(|f| {
                 ratios
@@ -724,7 +724,7 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
             .collect();
         writeln!(md, "| {s} | {} |", cells.join(" | "))?;
     }
-    let bars: Vec<Bars> = Format::ALL
+    let bars: Vec<Bars> = DescriptorFormat::ALL
         .iter()
         .enumerate()
         .map(|(i, f)| Bars {

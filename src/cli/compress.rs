@@ -1,8 +1,9 @@
 //! `meshletlab compress`: encode a mesh's meshlets in a compressed format and write the file.
 
 use super::{build_validated, load, StrategyArgs};
-use crate::compress::file::{CompressedFile, Format};
+use crate::compress::file::CompressedFile;
 use crate::compress::paper_tolerance;
+use crate::compress::Codec;
 use anyhow::{bail, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -17,7 +18,7 @@ pub struct CompressArgs {
     /// formats: triangle soup (ts), indexed (ix), self-contained (sc) meshlets, global index
     /// buffer (gi).
     #[arg(short, long, value_enum, default_value = "meshopt")]
-    format: Format,
+    format: Codec,
     /// The compact variant of ts, ix, sc or gi (quantised positions, packed indices).
     #[arg(long)]
     compact: bool,

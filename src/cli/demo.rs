@@ -182,18 +182,18 @@ fn compressed(
     split: &Pass,
     cam: &Camera,
 ) -> Result<()> {
-    use crate::compress::file::Format;
+    use crate::compress::Codec;
     use crate::render::compressed::{decoded_reference, prepare};
-    let enc = match Format::LacedWires.encode(m, ml, crate::compress::paper_tolerance(m)) {
+    let enc = match Codec::LacedWires.encode(m, ml, crate::compress::paper_tolerance(m)) {
         Ok(e) => e,
         Err(e) => {
             println!("Laced wires skipped: {e}.");
             return Ok(());
         }
     };
-    let up = prepare(&enc, Format::LacedWires)?;
+    let up = prepare(&enc, Codec::LacedWires)?;
     let pass = Pass::compressed(ctx, &up)?;
-    let (rm, rml) = decoded_reference(&enc, Format::LacedWires)?;
+    let (rm, rml) = decoded_reference(&enc, Codec::LacedWires)?;
     let reference = Pass::new(ctx, &rm, &rml)?;
     let ids = Pipeline::mesh_ids(false);
     let same = pass.render(cam, ids, Shading::Lit)?.pixels

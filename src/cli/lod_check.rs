@@ -40,7 +40,7 @@ pub(super) fn run(a: LodCheckArgs, quiet: bool) -> Result<()> {
             0.25 * 32f32.powf(w),
         );
         for finest in 0..f.lod.levels.len() {
-            let sel = select::select(&f.lod, &v, finest);
+            let sel = select::select_cut(&f.lod, &v, finest);
             if let Err(e) = select::check_cut(&f.lod, &sel, finest) {
                 bail!("{}: view {i}, levels {finest}..: {e}", a.file.display());
             }

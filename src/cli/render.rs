@@ -1,10 +1,11 @@
 //! `meshletlab render`: task + mesh shaders beside the vertex pipeline from seeded random views.
 
 use super::{build_validated, load, load_scene, StrategyArgs};
-use crate::compress::file::{CompressedFile, Format as CompressedFormat};
+use crate::compress::file::CompressedFile;
+use crate::compress::Codec;
 use crate::lod::flat::Flat;
 use crate::mesh::Scene;
-use crate::meshlet::descriptor::Format;
+use crate::meshlet::descriptor::DescriptorFormat;
 use crate::meshlet::Meshlets;
 use crate::render::{Camera, Context, Pass, Pipeline, Shading, HEIGHT, WIDTH};
 use anyhow::{bail, Context as _, Result};
@@ -34,8 +35,8 @@ pub struct RenderArgs {
     no_cull: bool,
     /// Meshlet descriptor layout on the GPU: split (exact bounds), nvidia-a, nvidia-b
     /// (quantised bounds), monolithic (per-meshlet vertex copies).
-    #[arg(short, long, default_value = "split", value_parser = clap::value_parser!(Format))]
-    descriptor: Format,
+    #[arg(short, long, default_value = "split", value_parser = clap::value_parser!(DescriptorFormat))]
+    descriptor: DescriptorFormat,
     /// Write the first view, coloured by meshlet (the paper's Figure 1), to this PNG.
     #[arg(short, long = "output", visible_alias = "png", value_name = "PNG")]
     output: Option<PathBuf>,
@@ -57,7 +58,7 @@ pub struct RenderArgs {
     /// ix-compact (mesh shaders), gi-compact and ts-compact (vertex shader). Each view is also
     /// drawn uncompressed from the CPU-decoded meshlets, and the two images must be identical.
     #[arg(long, value_name = "FORMAT", conflicts_with_all = ["lod", "compressed"])]
-    format: Option<CompressedFormat>,
+    format: Option<Codec>,
     /// Draw a file written by `meshletlab compress` (of MESH) instead; it is decoded on the CPU
     /// first and refused if damaged, before anything is uploaded.
     #[arg(long, value_name = "FILE", conflicts_with = "lod")]
@@ -252,7 +253,7 @@ fn build_per_mesh(a: &RenderArgs, scene: &Scene, quiet: bool) -> Result<Vec<Mesh
 
 /// `render` of an instanced scene: meshlets built once per mesh, drawn once per instance.
 fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
-    if a.descriptor != Format::Split {
+    if a.descriptor != DescriptorFormat::Split {
         bail!("an instanced scene is drawn in the split descriptor layout only");
     }
     let name = &a.strategy;
@@ -380,7 +381,7 @@ fn run_occlusion(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
 }
 
 fn check_occlusion_args(a: &RenderArgs) -> Result<()> {
-    if a.descriptor != Format::Split {
+    if a.descriptor != DescriptorFormat::Split {
         bail!("--occlusion draws the split descriptor layout only");
     }
     if a.no_cull {
@@ -492,7 +493,7 @@ struct LodRow {
 
 /// `render --lod`: the task shader selects the LOD cut per view.
 fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
-    if a.descriptor != Format::Split {
+    if a.descriptor != DescriptorFormat::Split {
         bail!("--lod draws the split descriptor layout only");
     }
     if !(a.threshold > 0.0 && a.threshold.is_finite()) {
@@ -577,7 +578,7 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
             colour_ids: false,
         };
         let full_frame = full.render(cam, how, Shading::Lit)?;
-        let cpu = crate::lod::flat::select(&flat, &q).len();
+        let cpu = crate::lod::flat::select_meshlets(&flat, &q).len();
         Ok(LodRow {
             view: i,
             distance_radii: (cam.eye - cam.target).length() / radius,
@@ -662,7 +663,7 @@ struct CompressedRow {
 /// `render --format F` / `--compressed FILE`: the shaders decode the compressed bytes.
 fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
     use crate::render::compressed::{decoded_reference, prepare};
-    if a.descriptor != Format::Split {
+    if a.descriptor != DescriptorFormat::Split {
         bail!("--format and --compressed draw the compressed bytes; --descriptor does not apply");
     }
     let m = load(&a.mesh, quiet)?;

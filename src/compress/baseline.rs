@@ -62,7 +62,7 @@ impl Kind {
 
 /// Why a meshlet set cannot be encoded.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
-pub enum EncodeError {
+pub enum BaselineEncodeError {
     /// A meshlet beyond 256 vertices or triangles, or an empty one.
     #[error("meshlet {0}: the formats take 1 to 256 vertices and triangles per meshlet")]
     Size(usize),
@@ -108,7 +108,7 @@ pub fn encode(
     tolerance: f64,
     kind: Kind,
     compact: bool,
-) -> Result<Encoded, EncodeError> {
+) -> Result<Encoded, BaselineEncodeError> {
     let e = super::grid_exponent(tolerance);
     let origin = mesh.bounding_box().0.to_array();
     let nv = mesh.vertex_count();
@@ -125,7 +125,7 @@ pub fn encode(
         0
     };
     if g > 31 {
-        return Err(EncodeError::GridTooFine);
+        return Err(BaselineEncodeError::GridTooFine);
     }
     let vbits = if compact { bits_for(nv) } else { 32 };
     let mut data = vec![0u8; SECTION];
@@ -139,7 +139,7 @@ pub fn encode(
         let lt = ml.meshlet_triangles(i);
         let (vc, tc) = (lv.len(), lt.len() / 3);
         if vc == 0 || tc == 0 || vc > 256 || tc > 256 {
-            return Err(EncodeError::Size(i));
+            return Err(BaselineEncodeError::Size(i));
         }
         let mut b = Tallied::new();
         // Positions held by the meshlet (TS: every corner; SC: every vertex).

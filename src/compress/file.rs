@@ -24,154 +24,12 @@
 //! non-positive tolerances and trailing bytes; `check` decodes every meshlet at random access and
 //! compares it with the mesh.
 
-use super::{baseline, laced, meshopt_codec, DecodeError, Decoded, Encoded};
+use super::{Codec, Encoded};
 use crate::mesh::Mesh;
 use crate::meshlet::io::Reader;
 use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"MLTCMP01";
-
-/// The formats a file can hold.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[cfg_attr(feature = "tool", derive(clap::ValueEnum))]
-pub enum Format {
-    /// meshoptimizer's meshlet codec with anchored per-axis positions (the peer).
-    Meshopt,
-    /// Laced wires (Mlakar et al. 2024): every vertex stored once, on its wire.
-    LacedWires,
-    /// Triangle soup, f32 corners.
-    Ts,
-    /// Triangle soup, quantised per meshlet.
-    TsCompact,
-    /// Indexed meshlets, 32-bit references, f32 global buffer.
-    Ix,
-    /// Indexed meshlets, packed references, quantised global buffer.
-    IxCompact,
-    /// Self-contained meshlets, f32 copies.
-    Sc,
-    /// Self-contained meshlets, quantised per meshlet.
-    ScCompact,
-    /// Global index buffer, 32-bit indices, f32 positions.
-    Gi,
-    /// Global index buffer, packed indices, quantised positions.
-    GiCompact,
-}
-
-impl Format {
-    fn id(self) -> u32 {
-        match self {
-            Format::Meshopt => 1,
-            Format::LacedWires => 2,
-            f => 3 + Self::BASELINES.iter().position(|b| b.0 == f).unwrap_or(0) as u32,
-        }
-    }
-
-    /// Every format.
-    pub const ALL: [Format; 10] = [
-        Format::Meshopt,
-        Format::LacedWires,
-        Format::Ts,
-        Format::TsCompact,
-        Format::Ix,
-        Format::IxCompact,
-        Format::Sc,
-        Format::ScCompact,
-        Format::Gi,
-        Format::GiCompact,
-    ];
-
-    /// The paper's comparison formats: (format, kind, compact).
-    const BASELINES: [(Format, baseline::Kind, bool); 8] = [
-        (Format::Ts, baseline::Kind::Ts, false),
-        (Format::TsCompact, baseline::Kind::Ts, true),
-        (Format::Ix, baseline::Kind::Ix, false),
-        (Format::IxCompact, baseline::Kind::Ix, true),
-        (Format::Sc, baseline::Kind::Sc, false),
-        (Format::ScCompact, baseline::Kind::Sc, true),
-        (Format::Gi, baseline::Kind::Gi, false),
-        (Format::GiCompact, baseline::Kind::Gi, true),
-    ];
-
-    fn from_id(id: u32) -> Option<Self> {
-        Self::ALL.into_iter().find(|f| f.id() == id)
-    }
-
-    /// The name on the command line (`--format`; clap's kebab-case of the variant, which a test
-    /// checks).
-    pub fn name(self) -> String {
-        match self {
-            Format::Meshopt => "meshopt",
-            Format::LacedWires => "laced-wires",
-            Format::Ts => "ts",
-            Format::TsCompact => "ts-compact",
-            Format::Ix => "ix",
-            Format::IxCompact => "ix-compact",
-            Format::Sc => "sc",
-            Format::ScCompact => "sc-compact",
-            Format::Gi => "gi",
-            Format::GiCompact => "gi-compact",
-        }
-        .to_string()
-    }
-
-    /// The compact variant of a basic comparison format.
-    pub fn compact(self) -> Option<Self> {
-        match self {
-            Format::Ts => Some(Format::TsCompact),
-            Format::Ix => Some(Format::IxCompact),
-            Format::Sc => Some(Format::ScCompact),
-            Format::Gi => Some(Format::GiCompact),
-            _ => None,
-        }
-    }
-
-    /// Whether positions are stored exactly (f32), whatever the tolerance.
-    pub fn exact(self) -> bool {
-        matches!(self, Format::Ts | Format::Ix | Format::Sc | Format::Gi)
-    }
-
-    /// Encodes `ml` (meshlets of `mesh`) in this format with every position within `tolerance`.
-    pub fn encode(
-        self,
-        mesh: &Mesh,
-        ml: &crate::meshlet::Meshlets,
-        tolerance: f64,
-    ) -> Result<Encoded, super::EncodeError> {
-        Ok(match self {
-            Format::Meshopt => meshopt_codec::encode(mesh, ml, tolerance)?,
-            Format::LacedWires => laced::encode(mesh, ml, tolerance)?,
-            f => {
-                let (_, kind, compact) = Self::BASELINES
-                    .into_iter()
-                    .find(|b| b.0 == f)
-                    .expect("every other format is a baseline");
-                baseline::encode(mesh, ml, tolerance, kind, compact)?
-            }
-        })
-    }
-
-    /// Decodes meshlet `i` of an encoding in this format. A position that decodes to NaN or an
-    /// infinity (a damaged raw float in the basic formats, say) is an error, as in the mesh
-    /// loaders: no valid file holds one.
-    pub fn decode(self, enc: &Encoded, i: usize) -> Result<Decoded, DecodeError> {
-        let d = match self {
-            Format::Meshopt => meshopt_codec::decode(enc, i),
-            Format::LacedWires => laced::decode(enc, i),
-            _ => baseline::decode(enc, i),
-        }?;
-        if let Some(k) = d
-            .positions
-            .iter()
-            .position(|p| !p.iter().all(|x| x.is_finite()))
-        {
-            return Err(DecodeError::Invalid {
-                meshlet: i,
-                what: format!("vertex {k} decodes to a non-finite position"),
-            });
-        }
-        Ok(d)
-    }
-}
 
 /// A compressed-meshlet file.
 #[derive(Clone, Debug, PartialEq)]
@@ -183,7 +41,7 @@ pub struct CompressedFile {
     /// Fingerprint of the source mesh.
     pub fingerprint: u64,
     /// The format.
-    pub format: Format,
+    pub format: Codec,
     /// Position tolerance the encoding guarantees.
     pub tolerance: f64,
     /// The encoded meshlets.
@@ -200,7 +58,7 @@ impl CompressedFile {
     }
 
     /// The file of `encoded`, an encoding of meshlets of `mesh` in `format` within `tolerance`.
-    pub fn new(mesh: &Mesh, format: Format, tolerance: f64, encoded: Encoded) -> Self {
+    pub fn new(mesh: &Mesh, format: Codec, tolerance: f64, encoded: Encoded) -> Self {
         Self {
             source_vertices: mesh.vertex_count() as u32,
             source_triangles: mesh.triangle_count() as u32,
@@ -254,7 +112,7 @@ impl CompressedFile {
             ));
         }
         let id = r.u32().ok_or_else(short)?;
-        let format = Format::from_id(id).ok_or_else(|| err(format!("unknown format {id}")))?;
+        let format = Codec::from_id(id).ok_or_else(|| err(format!("unknown format {id}")))?;
         let source_vertices = r.u32().ok_or_else(short)?;
         let source_triangles = r.u32().ok_or_else(short)?;
         let fingerprint = r.u64().ok_or_else(short)?;
@@ -395,7 +253,7 @@ mod tests {
     #[test]
     fn names_are_the_command_lines() {
         use clap::ValueEnum;
-        for f in Format::ALL {
+        for f in Codec::ALL {
             assert_eq!(f.name(), f.to_possible_value().unwrap().get_name());
         }
     }

@@ -30,7 +30,7 @@ const HEADER: usize = 19;
 
 /// Why a meshlet set cannot be encoded.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
-pub enum EncodeError {
+pub enum MeshoptEncodeError {
     /// Grid coordinates beyond i32 (a tolerance far below the coordinates' magnitude).
     #[error(
         "meshlet {0}: grid coordinates exceed 32 bits (tolerance too small for these coordinates)"
@@ -42,7 +42,7 @@ pub enum EncodeError {
 }
 
 /// Encodes `ml` (meshlets of `mesh`) at `tolerance`.
-pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, EncodeError> {
+pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, MeshoptEncodeError> {
     let e = super::grid_exponent(tolerance);
     let origin = mesh.bounding_box().0.to_array();
     let mut data = Vec::new();
@@ -60,7 +60,7 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
         let mut triangles = ml.meshlet_triangles(i).to_vec();
         let (vc, tc) = (vertices.len(), triangles.len() / 3);
         if vc == 0 || tc == 0 || vc > 256 || tc > 256 {
-            return Err(EncodeError::Size(i));
+            return Err(MeshoptEncodeError::Size(i));
         }
         meshopt::optimize_meshlet_level(&mut vertices, &mut triangles, 3);
         for v in &mut vertices {
@@ -75,11 +75,11 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
             vertices: &vertices,
             triangles: &triangles,
         })
-        .map_err(|_| EncodeError::Size(i))?;
+        .map_err(|_| MeshoptEncodeError::Size(i))?;
         // The decoder returns references in the order the encoder stored them: decode once to
         // learn that order, so positions follow it.
         let (order, _) =
-            meshopt::decode_meshlet(&conn, vc, tc).map_err(|_| EncodeError::Size(i))?;
+            meshopt::decode_meshlet(&conn, vc, tc).map_err(|_| MeshoptEncodeError::Size(i))?;
         let q: Vec<[i64; 3]> = order
             .iter()
             .map(|&v| {
@@ -93,10 +93,10 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
             .chain(&top)
             .any(|&x| x < i32::MIN as i64 || x > i32::MAX as i64)
         {
-            return Err(EncodeError::GridTooFine(i));
+            return Err(MeshoptEncodeError::GridTooFine(i));
         }
         if bits.iter().any(|&b| b > 31) {
-            return Err(EncodeError::GridTooFine(i));
+            return Err(MeshoptEncodeError::GridTooFine(i));
         }
         let start = data.len();
         offsets.push(start as u32);

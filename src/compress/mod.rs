@@ -19,6 +19,7 @@
 
 pub mod baseline;
 mod bits;
+mod codec;
 #[cfg(feature = "io")]
 pub mod file;
 pub mod laced;
@@ -26,6 +27,7 @@ pub mod meshopt_codec;
 
 use crate::mesh::Mesh;
 use bits::width;
+pub use codec::Codec;
 use thiserror::Error;
 
 /// Why a meshlet set cannot be encoded, by format.
@@ -33,13 +35,13 @@ use thiserror::Error;
 pub enum EncodeError {
     /// meshoptimizer's codec.
     #[error(transparent)]
-    Meshopt(#[from] meshopt_codec::EncodeError),
+    Meshopt(#[from] meshopt_codec::MeshoptEncodeError),
     /// Laced wires.
     #[error(transparent)]
-    Laced(#[from] laced::EncodeError),
+    Laced(#[from] laced::LacedEncodeError),
     /// The paper's comparison formats.
     #[error(transparent)]
-    Baseline(#[from] baseline::EncodeError),
+    Baseline(#[from] baseline::BaselineEncodeError),
 }
 
 /// A corrupt or truncated encoded buffer.

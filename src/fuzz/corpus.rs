@@ -3,7 +3,7 @@
 //! mutations can aim at them. Every seed loads as a valid mesh (a unit test checks it).
 
 use super::Target;
-use crate::compress::file::Format;
+use crate::compress::Codec;
 use crate::mesh::Mesh;
 use crate::meshlet::io::MeshletFile;
 use serde_json::{json, Value};
@@ -157,7 +157,7 @@ impl Corpus {
             seeds.push(meshlet_seed(&meshlet_source, strategy, limits));
         }
         seeds.push(lod_seed(&meshlet_source));
-        for f in Format::ALL {
+        for f in Codec::ALL {
             seeds.push(compressed_seed(&meshlet_source, f));
         }
         Self {
@@ -1156,7 +1156,7 @@ fn lod_seed(m: &Mesh) -> Seed {
 /// A compressed-meshlet file of the grid (meshoptimizer's codec or laced wires at 16/12), with
 /// its header, offset table, provenance tables and every record's (or the section's) header
 /// fields marked.
-fn compressed_seed(m: &Mesh, format: Format) -> Seed {
+fn compressed_seed(m: &Mesh, format: Codec) -> Seed {
     use crate::compress::file;
     let limits = crate::meshlet::Limits::new(16, 12).expect("valid seed limits");
     let s = crate::strategy::by_name("meshopt", &Default::default()).expect("known strategy");
@@ -1192,7 +1192,7 @@ fn compressed_seed(m: &Mesh, format: Format) -> Seed {
     for &o in &f.encoded.offsets {
         let r = data + o as usize;
         boundaries.push(r);
-        if format == Format::Meshopt {
+        if format == Codec::Meshopt {
             // Counts and bit widths are bytes; the anchor and the connectivity length are numbers.
             boundaries.push(r + 19);
             numbers.extend((0..3).map(|k| u32f(r + 5 + 4 * k)));
@@ -1203,7 +1203,7 @@ fn compressed_seed(m: &Mesh, format: Format) -> Seed {
             });
         }
     }
-    if format != Format::Meshopt {
+    if format != Codec::Meshopt {
         // Section header: meshlet, wire and corner counts, widths, table and first-wire offsets.
         numbers.extend([0, 4, 8, 12, 16, 20].map(|k| u32f(data + k)));
         boundaries.extend([data + 12, data + 16, data + 24]);

@@ -7,7 +7,7 @@ use super::select::{Selector, ViewData};
 use super::source::MeshSource;
 use super::{timed, Gpu, GpuError};
 use crate::adjacency::{dual_graph, side_flags, vertex_triangles, EdgeTable};
-use crate::lod::flat::{select, Flat, Query};
+use crate::lod::flat::{select_meshlets, Flat, Query};
 use crate::mesh::Mesh;
 use crate::meshlet::{validate, Limits, Meshlets};
 use crate::strategy::kmedoids::{self, Config, Mode};
@@ -428,7 +428,12 @@ pub fn lod_selection(
     let lod = crate::lod::build(mesh, strategy.as_ref(), limits, &Default::default());
     let flat = Flat::new(mesh, &lod);
     let queries = lod_queries(mesh, &flat, views, seed);
-    let (cpu, cpu_s) = timed(|| queries.iter().map(|q| select(&flat, q)).collect::<Vec<_>>());
+    let (cpu, cpu_s) = timed(|| {
+        queries
+            .iter()
+            .map(|q| select_meshlets(&flat, q))
+            .collect::<Vec<_>>()
+    });
     let data: Vec<ViewData> = queries
         .iter()
         .map(|q| ViewData::new(q, flat.loaded(q.finest)))

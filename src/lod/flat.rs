@@ -230,7 +230,7 @@ pub fn decide(r: &Record, q: &Query) -> Decision {
 }
 
 /// The drawn meshlets (indices into the flat array, ascending) for `q`.
-pub fn select(flat: &Flat, q: &Query) -> Vec<u32> {
+pub fn select_meshlets(flat: &Flat, q: &Query) -> Vec<u32> {
     flat.records[..flat.loaded(q.finest)]
         .iter()
         .enumerate()

@@ -151,7 +151,7 @@ pub fn should_render_streamed(i: &LodInfo, at_finest: bool, v: &View) -> bool {
 }
 
 /// The selected meshlets per level (`selected[level][meshlet]`) with levels `finest..` loaded.
-pub fn select(lod: &Lod, v: &View, finest: usize) -> Vec<Vec<bool>> {
+pub fn select_cut(lod: &Lod, v: &View, finest: usize) -> Vec<Vec<bool>> {
     lod.levels
         .iter()
         .enumerate()

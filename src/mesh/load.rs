@@ -1,4 +1,4 @@
-//! Format dispatch by file extension, with in-process zstd decompression of `*.zst`.
+//! MeshFormat dispatch by file extension, with in-process zstd decompression of `*.zst`.
 
 use super::error::{MeshError, MeshErrorKind};
 use super::scene::{Instance, Scene};
@@ -7,7 +7,7 @@ use std::path::Path;
 
 /// A supported mesh container.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
+pub enum MeshFormat {
     /// Stanford PLY, ASCII or binary.
     Ply,
     /// Wavefront OBJ.
@@ -20,10 +20,10 @@ pub enum Format {
     Stl,
 }
 
-impl Format {
-    /// Format of a file name (case-insensitive; a trailing `.zst` is looked through) and whether it is
+impl MeshFormat {
+    /// MeshFormat of a file name (case-insensitive; a trailing `.zst` is looked through) and whether it is
     /// zstd-compressed.
-    pub fn of(path: &Path) -> Option<(Format, bool)> {
+    pub fn of(path: &Path) -> Option<(MeshFormat, bool)> {
         let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
         let (stem, zst) = match name.strip_suffix(".zst") {
             Some(s) => (s.to_string(), true),
@@ -31,11 +31,11 @@ impl Format {
         };
         let ext = Path::new(&stem).extension()?.to_str()?.to_string();
         let f = match ext.as_str() {
-            "ply" => Format::Ply,
-            "obj" => Format::Obj,
-            "gltf" => Format::Gltf,
-            "glb" => Format::Glb,
-            "stl" => Format::Stl,
+            "ply" => MeshFormat::Ply,
+            "obj" => MeshFormat::Obj,
+            "gltf" => MeshFormat::Gltf,
+            "glb" => MeshFormat::Glb,
+            "stl" => MeshFormat::Stl,
             _ => return None,
         };
         Some((f, zst))
@@ -62,7 +62,7 @@ pub fn load(path: &Path) -> Result<Mesh, MeshError> {
             )
         });
     }
-    if Format::of(path).is_none() {
+    if MeshFormat::of(path).is_none() {
         return Err(MeshError::new(path, MeshErrorKind::UnknownFormat));
     }
     let bytes = std::fs::read(path).map_err(|e| MeshError::new(path, MeshErrorKind::Io(e)))?;
@@ -73,14 +73,14 @@ pub fn load(path: &Path) -> Result<Mesh, MeshError> {
 /// for a glTF file's external buffers).
 pub fn load_bytes(bytes: &[u8], path: &Path) -> Result<Mesh, MeshError> {
     let err = |k| MeshError::new(path, k);
-    let (format, zst) = Format::of(path).ok_or_else(|| err(MeshErrorKind::UnknownFormat))?;
+    let (format, zst) = MeshFormat::of(path).ok_or_else(|| err(MeshErrorKind::UnknownFormat))?;
     let data = plain(bytes, zst).map_err(err)?;
     let data = &data[..];
     let (positions, indices) = match format {
-        Format::Ply => ply::parse(data),
-        Format::Obj => obj::parse(data),
-        Format::Stl => stl::parse(data),
-        Format::Gltf | Format::Glb => gltf_io::parse(data, path.parent()),
+        MeshFormat::Ply => ply::parse(data),
+        MeshFormat::Obj => obj::parse(data),
+        MeshFormat::Stl => stl::parse(data),
+        MeshFormat::Gltf | MeshFormat::Glb => gltf_io::parse(data, path.parent()),
     }
     .map_err(err)?;
     Mesh::new(positions, indices, path)
@@ -95,7 +95,10 @@ pub fn load_scene(path: &Path) -> Result<Scene, MeshError> {
         }
         return load(path).map(Scene::single);
     }
-    let gltf = matches!(Format::of(path), Some((Format::Gltf | Format::Glb, _)));
+    let gltf = matches!(
+        MeshFormat::of(path),
+        Some((MeshFormat::Gltf | MeshFormat::Glb, _))
+    );
     if !gltf {
         return load(path).map(Scene::single);
     }
@@ -106,7 +109,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, MeshError> {
 /// [`load_scene`] of a glTF file's bytes (`path` labels errors and resolves external buffers).
 pub fn scene_from_bytes(bytes: &[u8], path: &Path) -> Result<Scene, MeshError> {
     let err = |k| MeshError::new(path, k);
-    let Some((Format::Gltf | Format::Glb, zst)) = Format::of(path) else {
+    let Some((MeshFormat::Gltf | MeshFormat::Glb, zst)) = MeshFormat::of(path) else {
         return load_bytes(bytes, path).map(Scene::single);
     };
     let data = plain(bytes, zst).map_err(err)?;

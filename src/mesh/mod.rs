@@ -30,8 +30,8 @@ mod tokens;
 pub use error::{MeshError, MeshErrorKind};
 #[cfg(feature = "io")]
 pub use load::{
-    decompress, load, load_bytes, load_scene, save_ply, scene_from_bytes, Format, GENERATED_PREFIX,
-    MAX_ZSTD_RATIO, ZSTD_SLACK,
+    decompress, load, load_bytes, load_scene, save_ply, scene_from_bytes, MeshFormat,
+    GENERATED_PREFIX, MAX_ZSTD_RATIO, ZSTD_SLACK,
 };
 pub use scene::{Instance, Scene};
 pub use stats::MeshStats;

@@ -4,10 +4,10 @@
 //!
 //! | format | per meshlet | culling data | where the vertices come from |
 //! |---|---|---|---|
-//! | [`Format::Split`] | task descriptor (48 B: f32 sphere, cone apex, axis, cutoff) + mesh descriptor (16 B) | exact | global index buffer (u32) |
-//! | [`Format::NvidiaA`] | 16 B: 20-bit offsets, 48-bit quantised box, 24-bit cone | quantised | global index buffer (u32) |
-//! | [`Format::NvidiaB`] | 16 B: 32-bit offset into one pack buffer, vertex pack byte, quantised box and cone | quantised | 16-bit global indices where a meshlet's fit, else 32-bit |
-//! | [`Format::Monolithic`] | one block: bounds, counts, copied positions, triangles | exact | per-meshlet vertex copies, no index buffer |
+//! | [`DescriptorFormat::Split`] | task descriptor (48 B: f32 sphere, cone apex, axis, cutoff) + mesh descriptor (16 B) | exact | global index buffer (u32) |
+//! | [`DescriptorFormat::NvidiaA`] | 16 B: 20-bit offsets, 48-bit quantised box, 24-bit cone | quantised | global index buffer (u32) |
+//! | [`DescriptorFormat::NvidiaB`] | 16 B: 32-bit offset into one pack buffer, vertex pack byte, quantised box and cone | quantised | 16-bit global indices where a meshlet's fit, else 32-bit |
+//! | [`DescriptorFormat::Monolithic`] | one block: bounds, counts, copied positions, triangles | exact | per-meshlet vertex copies, no index buffer |
 //!
 //! Quantisation is conservative: the decoded box holds every vertex of its meshlet and the decoded
 //! cone holds every triangle normal, so a meshlet culled with quantised data is also culled with
@@ -29,7 +29,7 @@ use thiserror::Error;
 /// A descriptor layout.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
-pub enum Format {
+pub enum DescriptorFormat {
     /// Separate task (culling) and mesh (offsets, counts) descriptors, full-precision bounds.
     #[default]
     Split,
@@ -42,22 +42,22 @@ pub enum Format {
     Monolithic,
 }
 
-impl Format {
+impl DescriptorFormat {
     /// Every format, in table order.
-    pub const ALL: [Format; 4] = [
-        Format::Split,
-        Format::NvidiaA,
-        Format::NvidiaB,
-        Format::Monolithic,
+    pub const ALL: [DescriptorFormat; 4] = [
+        DescriptorFormat::Split,
+        DescriptorFormat::NvidiaA,
+        DescriptorFormat::NvidiaB,
+        DescriptorFormat::Monolithic,
     ];
 
     /// Name on the command line and in results.
     pub fn name(self) -> &'static str {
         match self {
-            Format::Split => "split",
-            Format::NvidiaA => "nvidia-a",
-            Format::NvidiaB => "nvidia-b",
-            Format::Monolithic => "monolithic",
+            DescriptorFormat::Split => "split",
+            DescriptorFormat::NvidiaA => "nvidia-a",
+            DescriptorFormat::NvidiaB => "nvidia-b",
+            DescriptorFormat::Monolithic => "monolithic",
         }
     }
 
@@ -68,20 +68,20 @@ impl Format {
 
     /// Whether culling uses quantised (looser) bounds.
     pub fn quantised(self) -> bool {
-        matches!(self, Format::NvidiaA | Format::NvidiaB)
+        matches!(self, DescriptorFormat::NvidiaA | DescriptorFormat::NvidiaB)
     }
 }
 
-impl fmt::Display for Format {
+impl fmt::Display for DescriptorFormat {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
     }
 }
 
-impl FromStr for Format {
+impl FromStr for DescriptorFormat {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        Format::ALL
+        DescriptorFormat::ALL
             .into_iter()
             .find(|f| f.name() == s)
             .ok_or_else(|| {
@@ -97,7 +97,7 @@ pub enum DescriptorError {
     #[error("{format} descriptor: meshlet {meshlet} needs {what} = {value}, which does not fit the format's {bits}-bit field (use the split or nvidia-b format for meshes this large)")]
     FieldOverflow {
         /// The format.
-        format: Format,
+        format: DescriptorFormat,
         /// The meshlet.
         meshlet: usize,
         /// The field.
@@ -173,7 +173,7 @@ pub fn sphere_cone_backfacing(
 
 /// One meshlet as read back from a packed buffer.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Decoded {
+pub struct DecodedDescriptor {
     /// Global vertex indices (every format except monolithic).
     pub vertices: Option<Vec<u32>>,
     /// Copied vertex positions (monolithic only).
@@ -193,11 +193,11 @@ pub enum Cull {
     Quantised(QuantisedBounds),
 }
 
-/// Meshlets packed in one [`Format`], as the shaders read them (buffer bindings 1–4).
+/// Meshlets packed in one [`DescriptorFormat`], as the shaders read them (buffer bindings 1–4).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Packed {
     /// The layout.
-    pub format: Format,
+    pub format: DescriptorFormat,
     /// Number of meshlets.
     pub count: usize,
     /// Binding 1: four words per meshlet (split's mesh descriptor, NVIDIA A and B), or one block
@@ -219,7 +219,7 @@ const BLOCK_HEADER: usize = 13;
 const A_OFFSET_BITS: u32 = 20;
 
 fn overflow(
-    format: Format,
+    format: DescriptorFormat,
     meshlet: usize,
     what: &'static str,
     value: u64,
@@ -235,7 +235,11 @@ fn overflow(
 }
 
 /// Packs `ml` (meshlets of `mesh`) in `format`; bounds are computed here.
-pub fn pack(mesh: &Mesh, ml: &Meshlets, format: Format) -> Result<Packed, DescriptorError> {
+pub fn pack(
+    mesh: &Mesh,
+    ml: &Meshlets,
+    format: DescriptorFormat,
+) -> Result<Packed, DescriptorError> {
     pack_with_bounds(mesh, ml, &compute_bounds(mesh, ml), format)
 }
 
@@ -244,7 +248,7 @@ pub fn pack_with_bounds(
     mesh: &Mesh,
     ml: &Meshlets,
     bounds: &[MeshletBounds],
-    format: Format,
+    format: DescriptorFormat,
 ) -> Result<Packed, DescriptorError> {
     assert_eq!(bounds.len(), ml.len(), "one bounds entry per meshlet");
     let object = object_box(mesh);
@@ -261,7 +265,7 @@ pub fn pack_with_bounds(
         let tris = ml.meshlet_triangles(i);
         let verts = ml.meshlet_vertices(i);
         match format {
-            Format::Split => {
+            DescriptorFormat::Split => {
                 p.descriptors.extend([
                     m.vertex_offset,
                     m.triangle_offset,
@@ -270,7 +274,7 @@ pub fn pack_with_bounds(
                 ]);
                 p.task.extend(exact_words(&bounds[i], m.triangle_count));
             }
-            Format::NvidiaA => {
+            DescriptorFormat::NvidiaA => {
                 let (bx, by, cone) = quantise(mesh, &object, verts, &bounds[i], m);
                 let prim_begin = p.triangles.len() as u64;
                 for (value, what) in [
@@ -290,7 +294,7 @@ pub fn pack_with_bounds(
                 ]);
                 push_bytes(&mut p.triangles, tris);
             }
-            Format::NvidiaB => {
+            DescriptorFormat::NvidiaB => {
                 let (bx, by, cone) = quantise(mesh, &object, verts, &bounds[i], m);
                 let offset = p.data.len() as u64;
                 if offset > u32::MAX as u64 {
@@ -320,7 +324,7 @@ pub fn pack_with_bounds(
                     offset as u32,
                 ]);
             }
-            Format::Monolithic => {
+            DescriptorFormat::Monolithic => {
                 p.descriptors.push(p.data.len() as u32);
                 let header = exact_words(&bounds[i], 0);
                 p.data
@@ -338,13 +342,13 @@ pub fn pack_with_bounds(
         }
     }
     match format {
-        Format::Split => {
+        DescriptorFormat::Split => {
             p.data = ml.vertices.clone();
             p.triangles = Vec::with_capacity(ml.triangles.len().div_ceil(4));
             push_bytes(&mut p.triangles, &ml.triangles);
         }
-        Format::NvidiaA => p.data = ml.vertices.clone(),
-        Format::NvidiaB | Format::Monolithic => {}
+        DescriptorFormat::NvidiaA => p.data = ml.vertices.clone(),
+        DescriptorFormat::NvidiaB | DescriptorFormat::Monolithic => {}
     }
     Ok(p)
 }
@@ -390,7 +394,7 @@ fn decode_slack(object: &ObjectBox, k: usize) -> f64 {
     magnitude * 4.0 * f32::EPSILON as f64
 }
 
-/// Decoded box coordinate, exactly (f64 holds the f32 product and sum without rounding here).
+/// DecodedDescriptor box coordinate, exactly (f64 holds the f32 product and sum without rounding here).
 fn decode_coord(object: &ObjectBox, k: usize, q: u32) -> f64 {
     object.min[k] as f64 + q as f64 * object.step[k] as f64
 }
@@ -528,7 +532,7 @@ impl Packed {
     /// it (monolithic copies positions instead).
     pub fn device_bytes(&self, vertex_count: usize) -> usize {
         let words = self.descriptors.len() + self.data.len() + self.triangles.len();
-        let positions = if self.format == Format::Monolithic {
+        let positions = if self.format == DescriptorFormat::Monolithic {
             0
         } else {
             12 * vertex_count
@@ -537,7 +541,7 @@ impl Packed {
     }
 
     /// Reads meshlet `i` back, mirroring the shaders' decoding.
-    pub fn decode(&self, i: usize) -> Decoded {
+    pub fn decode(&self, i: usize) -> DecodedDescriptor {
         let byte = |words: &[u32], k: usize| (words[k / 4] >> (8 * (k % 4))) as u8;
         let bytes = |words: &[u32], start: usize, n: usize| -> Vec<u8> {
             (start..start + n).map(|k| byte(words, k)).collect()
@@ -545,57 +549,58 @@ impl Packed {
         let floats =
             |words: &[u32]| -> Vec<f32> { words.iter().map(|&w| f32::from_bits(w)).collect() };
         match self.format {
-            Format::Split => {
+            DescriptorFormat::Split => {
                 let d = &self.descriptors[4 * i..4 * i + 4];
                 let (vo, to, vc, tc) = (d[0] as usize, d[1] as usize, d[2] as usize, d[3] as usize);
                 let t = &self.task[3 * i..3 * i + 3];
-                Decoded {
+                DecodedDescriptor {
                     vertices: Some(self.data[vo..vo + vc].to_vec()),
                     positions: None,
                     triangles: bytes(&self.triangles, to, 3 * tc),
                     cull: Cull::Exact(exact_bounds(&[t[0], t[1], t[2]])),
                 }
             }
-            Format::NvidiaA | Format::NvidiaB => {
+            DescriptorFormat::NvidiaA | DescriptorFormat::NvidiaB => {
                 let d = &self.descriptors[4 * i..4 * i + 4];
                 let vc = (d[0] >> 24) as usize + 1;
                 let tc = (d[1] >> 24) as usize + 1;
-                let (vertices, triangles, (axis, cutoff)) = if self.format == Format::NvidiaA {
-                    let vb = (d[2] & 0xfffff) as usize;
-                    let pb = (d[3] & 0xfffff) as usize;
-                    (
-                        self.data[vb..vb + vc].to_vec(),
-                        bytes(&self.triangles, 4 * pb, 3 * tc),
-                        cone_bytes(
-                            (d[2] >> 20) & 0xff,
-                            (d[3] >> 20) & 0xff,
-                            d[2] >> 28 | (d[3] >> 28) << 4,
-                        ),
-                    )
-                } else {
-                    let off = d[3] as usize;
-                    let pack = (d[2] >> 24) as usize;
-                    let vertices: Vec<u32> = (0..vc)
-                        .map(|k| {
-                            if pack == 2 {
-                                (self.data[off + k / 2] >> (16 * (k % 2))) & 0xffff
-                            } else {
-                                self.data[off + k]
-                            }
-                        })
-                        .collect();
-                    let vwords = if pack == 2 { vc.div_ceil(2) } else { vc };
-                    (
-                        vertices,
-                        bytes(&self.data, 4 * (off + vwords), 3 * tc),
-                        cone_bytes(d[2] & 0xff, (d[2] >> 8) & 0xff, (d[2] >> 16) & 0xff),
-                    )
-                };
+                let (vertices, triangles, (axis, cutoff)) =
+                    if self.format == DescriptorFormat::NvidiaA {
+                        let vb = (d[2] & 0xfffff) as usize;
+                        let pb = (d[3] & 0xfffff) as usize;
+                        (
+                            self.data[vb..vb + vc].to_vec(),
+                            bytes(&self.triangles, 4 * pb, 3 * tc),
+                            cone_bytes(
+                                (d[2] >> 20) & 0xff,
+                                (d[3] >> 20) & 0xff,
+                                d[2] >> 28 | (d[3] >> 28) << 4,
+                            ),
+                        )
+                    } else {
+                        let off = d[3] as usize;
+                        let pack = (d[2] >> 24) as usize;
+                        let vertices: Vec<u32> = (0..vc)
+                            .map(|k| {
+                                if pack == 2 {
+                                    (self.data[off + k / 2] >> (16 * (k % 2))) & 0xffff
+                                } else {
+                                    self.data[off + k]
+                                }
+                            })
+                            .collect();
+                        let vwords = if pack == 2 { vc.div_ceil(2) } else { vc };
+                        (
+                            vertices,
+                            bytes(&self.data, 4 * (off + vwords), 3 * tc),
+                            cone_bytes(d[2] & 0xff, (d[2] >> 8) & 0xff, (d[2] >> 16) & 0xff),
+                        )
+                    };
                 let o = &self.object;
                 let code = |w: u32, k: usize| (w >> (8 * k)) & 0xff;
                 let min = [0, 1, 2].map(|k| o.min[k] + code(d[0], k) as f32 * o.step[k]);
                 let max = [0, 1, 2].map(|k| o.min[k] + code(d[1], k) as f32 * o.step[k]);
-                Decoded {
+                DecodedDescriptor {
                     vertices: Some(vertices),
                     positions: None,
                     triangles,
@@ -607,7 +612,7 @@ impl Packed {
                     }),
                 }
             }
-            Format::Monolithic => {
+            DescriptorFormat::Monolithic => {
                 let off = self.descriptors[i] as usize;
                 let h = floats(&self.data[off..off + 12]);
                 let counts = self.data[off + 12];
@@ -618,7 +623,7 @@ impl Packed {
                     .map(|p| [p[0], p[1], p[2]])
                     .collect();
                 let quad = |k: usize| [h[4 * k], h[4 * k + 1], h[4 * k + 2], h[4 * k + 3]];
-                Decoded {
+                DecodedDescriptor {
                     vertices: None,
                     positions: Some(positions),
                     triangles: bytes(&self.data, 4 * (pos + 3 * vc), 3 * tc),
@@ -662,24 +667,24 @@ mod tests {
 
     #[test]
     fn format_names_round_trip() {
-        for f in Format::ALL {
-            assert_eq!(f.name().parse::<Format>().unwrap(), f);
+        for f in DescriptorFormat::ALL {
+            assert_eq!(f.name().parse::<DescriptorFormat>().unwrap(), f);
         }
-        assert!("nvidia".parse::<Format>().is_err());
+        assert!("nvidia".parse::<DescriptorFormat>().is_err());
     }
 
     #[test]
     fn every_format_round_trips_topology() {
         let (mesh, ml) = sample();
         let bounds = compute_bounds(&mesh, &ml);
-        for f in Format::ALL {
+        for f in DescriptorFormat::ALL {
             let p = pack_with_bounds(&mesh, &ml, &bounds, f).unwrap();
             assert_eq!(p.count, ml.len());
             for i in 0..ml.len() {
                 let d = p.decode(i);
                 assert_eq!(d.triangles, ml.meshlet_triangles(i), "{f} meshlet {i}");
                 match f {
-                    Format::Monolithic => {
+                    DescriptorFormat::Monolithic => {
                         let want: Vec<[f32; 3]> = ml
                             .meshlet_vertices(i)
                             .iter()
@@ -704,7 +709,7 @@ mod tests {
         let ml = crate::strategy::by_name("nvidia", &Default::default())
             .unwrap()
             .build(&mesh, Limits::DEFAULT);
-        let p = pack(&mesh, &ml, Format::NvidiaB).unwrap();
+        let p = pack(&mesh, &ml, DescriptorFormat::NvidiaB).unwrap();
         let packs: Vec<u32> = (0..ml.len())
             .map(|i| p.descriptors[4 * i + 2] >> 24)
             .collect();
@@ -718,7 +723,7 @@ mod tests {
             );
         }
         // Smaller than A, which stores every index in 32 bits.
-        let a = pack(&mesh, &ml, Format::NvidiaA).unwrap();
+        let a = pack(&mesh, &ml, DescriptorFormat::NvidiaA).unwrap();
         assert!(p.device_bytes(mesh.positions.len()) < a.device_bytes(mesh.positions.len()));
     }
 
@@ -734,7 +739,7 @@ mod tests {
             let ml = crate::strategy::by_name("bsphere", &Default::default())
                 .unwrap()
                 .build(&mesh, Limits::DEFAULT);
-            for f in [Format::NvidiaA, Format::NvidiaB] {
+            for f in [DescriptorFormat::NvidiaA, DescriptorFormat::NvidiaB] {
                 let p = pack(&mesh, &ml, f).unwrap();
                 let mut culling = 0;
                 for i in 0..ml.len() {
@@ -778,7 +783,7 @@ mod tests {
     #[test]
     fn quantised_backface_test_is_conservative() {
         let (mesh, ml) = sample();
-        let p = pack(&mesh, &ml, Format::NvidiaA).unwrap();
+        let p = pack(&mesh, &ml, DescriptorFormat::NvidiaA).unwrap();
         let exact = compute_bounds(&mesh, &ml);
         // Eyes of the paper's random-view protocol (`lod::camera::Camera::random_views`) at 2 radii.
         let (lo, hi) = mesh.bounding_box();
@@ -850,7 +855,7 @@ mod tests {
             )[0];
             n as usize
         ];
-        let err = pack_with_bounds(&mesh, &ml, &bounds, Format::NvidiaA).unwrap_err();
+        let err = pack_with_bounds(&mesh, &ml, &bounds, DescriptorFormat::NvidiaA).unwrap_err();
         assert!(
             matches!(
                 err,
@@ -860,6 +865,6 @@ mod tests {
         );
         assert!(err.to_string().contains("20-bit"));
         // B's 32-bit offset holds it.
-        assert!(pack_with_bounds(&mesh, &ml, &bounds, Format::NvidiaB).is_ok());
+        assert!(pack_with_bounds(&mesh, &ml, &bounds, DescriptorFormat::NvidiaB).is_ok());
     }
 }

@@ -22,7 +22,7 @@
 //! exactly there) and the counts within the shader variant's outputs.
 
 use super::RenderError;
-use crate::compress::file::Format;
+use crate::compress::Codec;
 use crate::compress::{DecodeError, Encoded};
 use crate::mesh::Mesh;
 use crate::meshlet::{Meshlet, Meshlets};
@@ -40,7 +40,7 @@ pub enum Decoder {
 #[derive(Clone, Debug)]
 pub struct Upload {
     /// The format.
-    pub format: Format,
+    pub format: Codec,
     /// The encoded bytes as little-endian words (zero-padded to a word).
     pub words: Vec<u32>,
     /// Byte offset of each meshlet's record.
@@ -70,25 +70,25 @@ impl Upload {
 }
 
 /// How `format` is decoded on the GPU, or why it is not.
-pub fn decoder(format: Format) -> Result<Decoder, RenderError> {
+pub fn decoder(format: Codec) -> Result<Decoder, RenderError> {
     match format {
-        Format::LacedWires | Format::ScCompact | Format::IxCompact => Ok(Decoder::Mesh),
-        Format::GiCompact | Format::TsCompact => Ok(Decoder::Vertex),
+        Codec::LacedWires | Codec::ScCompact | Codec::IxCompact => Ok(Decoder::Mesh),
+        Codec::GiCompact | Codec::TsCompact => Ok(Decoder::Vertex),
         f => Err(RenderError::NoShaderDecoder(f.name())),
     }
 }
 
 /// The formats the GPU decodes, in the order the bench reports them.
-pub const FORMATS: [Format; 5] = [
-    Format::LacedWires,
-    Format::ScCompact,
-    Format::IxCompact,
-    Format::GiCompact,
-    Format::TsCompact,
+pub const FORMATS: [Codec; 5] = [
+    Codec::LacedWires,
+    Codec::ScCompact,
+    Codec::IxCompact,
+    Codec::GiCompact,
+    Codec::TsCompact,
 ];
 
 /// Checks `enc` (in `format`) by decoding every meshlet on the CPU and lays it out for upload.
-pub fn prepare(enc: &Encoded, format: Format) -> Result<Upload, RenderError> {
+pub fn prepare(enc: &Encoded, format: Codec) -> Result<Upload, RenderError> {
     let how = decoder(format)?;
     let bad =
         |meshlet: usize, what: String| RenderError::Corrupt(DecodeError::Invalid { meshlet, what });
@@ -104,7 +104,7 @@ pub fn prepare(enc: &Encoded, format: Format) -> Result<Upload, RenderError> {
     let mut max_counts = (0, 0);
     for i in 0..enc.offsets.len() {
         let d = format.decode(enc, i)?;
-        if format == Format::LacedWires {
+        if format == Codec::LacedWires {
             // The task shader reads the culling record.
             crate::compress::laced::culling(enc, i)?;
         }
@@ -175,7 +175,7 @@ pub fn prepare(enc: &Encoded, format: Format) -> Result<Upload, RenderError> {
 /// that order too). Drawn by the uncompressed pass it must give the compressed pass's image. Each
 /// meshlet owns its vertices, so the reference holds even for a buffer whose copies of one source
 /// vertex disagree (a damaged but decodable SC record).
-pub fn decoded_reference(enc: &Encoded, format: Format) -> Result<(Mesh, Meshlets), DecodeError> {
+pub fn decoded_reference(enc: &Encoded, format: Codec) -> Result<(Mesh, Meshlets), DecodeError> {
     let mut mesh = Mesh::empty();
     let mut ml = Meshlets::default();
     for i in 0..enc.offsets.len() {

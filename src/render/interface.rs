@@ -180,7 +180,7 @@ pub fn glsl_header() -> String {
 }
 
 /// Descriptor layouts the meshlet shaders read (`DESC` in glsl/descriptors.glsl), as
-/// `meshlet::descriptor::Format`.
+/// `meshlet::descriptor::DescriptorFormat`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Layout {
     /// Separate vertex and triangle streams.
@@ -270,7 +270,7 @@ const LAYOUTS: [Layout; 4] = [
 ];
 
 impl Layout {
-    /// The name (as `meshlet::descriptor::Format` displays it).
+    /// The name (as `meshlet::descriptor::DescriptorFormat` displays it).
     pub const fn name(self) -> &'static str {
         match self {
             Layout::Split => "split",
@@ -282,7 +282,7 @@ impl Layout {
 }
 
 impl Compact {
-    /// The format's name (as `compress::file::Format` names it).
+    /// The format's name (as `compress::Codec` names it).
     pub const fn name(self) -> &'static str {
         match self {
             Compact::Ts => "ts-compact",

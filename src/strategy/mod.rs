@@ -510,7 +510,12 @@ mod tests {
             crate::meshlet::validate(&mesh, &typed, limits).unwrap();
             // The options act: the typed strategy is the bare one followed by both passes.
             let mut by_hand = k.strategy(&Options::default()).build(&mesh, limits);
-            assert_ne!(typed, by_hand, "{}: the ordering options did nothing", k.name());
+            assert_ne!(
+                typed,
+                by_hand,
+                "{}: the ordering options did nothing",
+                k.name()
+            );
             optimize_triangle_order(&mut by_hand);
             order_meshlets(&mut by_hand, opts.meshlet_order);
             assert_eq!(typed, by_hand, "{}", k.name());

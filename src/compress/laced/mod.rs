@@ -110,7 +110,7 @@ pub const SHORT_WIRE: usize = 2;
 
 /// Why a meshlet set cannot be encoded as laced wires.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
-pub enum EncodeError {
+pub enum LacedEncodeError {
     /// A meshlet above 64 vertices (or an empty one).
     #[error("meshlet {0}: laced wires take 1 to 64 vertices per meshlet (6-bit references)")]
     Size(usize),
@@ -123,12 +123,12 @@ pub enum EncodeError {
 }
 
 /// Encodes `ml` (meshlets of `mesh`, at most 64 vertices each) at `tolerance`.
-pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, EncodeError> {
+pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, LacedEncodeError> {
     let m = ml.len();
     for i in 0..m {
         let n = ml.meshlet_vertices(i).len();
         if n == 0 || n > MAX_VERTICES || ml.meshlet_triangles(i).is_empty() {
-            return Err(EncodeError::Size(i));
+            return Err(LacedEncodeError::Size(i));
         }
     }
     let (owner, pairs, corners) = owners(mesh.vertex_count(), ml);
@@ -150,7 +150,7 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Enc
         .unwrap_or(0);
     let g = width(top as u64);
     if g > 31 {
-        return Err(EncodeError::GridTooFine);
+        return Err(LacedEncodeError::GridTooFine);
     }
     let wire_count = m + wires.len() + 1;
     let all_wires: Vec<&[u32]> = shapes
@@ -354,7 +354,7 @@ fn record(
     corners: &[u32],
     wire_bits: u32,
     corner_bits: u32,
-) -> Result<(Vec<u8>, [usize; 4]), EncodeError> {
+) -> Result<(Vec<u8>, [usize; 4]), LacedEncodeError> {
     let lv = ml.meshlet_vertices(i);
     let n = lv.len();
     // The local order: internal wire, then the items expanded.
@@ -387,7 +387,7 @@ fn record(
         .collect();
     let (left, right, strips) = laces::laces(n, s.internal.len(), &tris);
     if strips.len() as u64 > STRIPS.max() {
-        return Err(EncodeError::Strips(i));
+        return Err(LacedEncodeError::Strips(i));
     }
     let mut w = BitWriter::new();
     let head = [

@@ -173,7 +173,7 @@ impl<'a> Pass<'a> {
             Source::Descriptors {
                 mesh: &mesh,
                 ml: &ml,
-                format: Format::Split,
+                format: DescriptorFormat::Split,
                 lod: None,
                 instances: &records,
                 slots,

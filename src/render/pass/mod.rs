@@ -8,7 +8,7 @@ use super::interface::{self, Compact, Layout, Shader, Size};
 use super::{vk_err, Camera, RenderError, HEIGHT, WIDTH};
 use crate::lod::flat::{loaded, Flat, Query, ViewData};
 use crate::mesh::Mesh;
-use crate::meshlet::descriptor::{self, Format};
+use crate::meshlet::descriptor::{self, DescriptorFormat};
 use crate::meshlet::{Limits, Meshlet, Meshlets};
 use ash::vk;
 
@@ -235,9 +235,9 @@ struct Uploads {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Drawn {
     /// Positions and meshlets in a descriptor layout (meshlet pipeline and vertex baseline).
-    Descriptors(Format),
+    Descriptors(DescriptorFormat),
     /// A compressed encoding decoded by the shaders ([`super::compressed`]).
-    Compressed(crate::compress::file::Format, Decoder),
+    Compressed(crate::compress::Codec, Decoder),
 }
 
 /// What `build` uploads from.
@@ -245,7 +245,7 @@ enum Source<'s> {
     Descriptors {
         mesh: &'s Mesh,
         ml: &'s Meshlets,
-        format: Format,
+        format: DescriptorFormat,
         lod: Option<&'s Flat>,
         /// Instanced passes: one record per instance (empty otherwise).
         instances: &'s [InstanceRecord],
@@ -337,12 +337,12 @@ fn shader(s: Shader) -> &'static [u8] {
 }
 
 /// The shaders' name for a descriptor layout.
-fn layout_of(f: Format) -> Layout {
+fn layout_of(f: DescriptorFormat) -> Layout {
     match f {
-        Format::Split => Layout::Split,
-        Format::NvidiaA => Layout::NvidiaA,
-        Format::NvidiaB => Layout::NvidiaB,
-        Format::Monolithic => Layout::Monolithic,
+        DescriptorFormat::Split => Layout::Split,
+        DescriptorFormat::NvidiaA => Layout::NvidiaA,
+        DescriptorFormat::NvidiaB => Layout::NvidiaB,
+        DescriptorFormat::Monolithic => Layout::Monolithic,
     }
 }
 
@@ -350,7 +350,7 @@ impl<'a> Pass<'a> {
     /// Uploads `mesh` and `ml` in the split descriptor layout (bounds computed here) and builds the
     /// pipelines.
     pub fn new(ctx: &'a Context, mesh: &Mesh, ml: &Meshlets) -> Result<Self, RenderError> {
-        Self::with_format(ctx, mesh, ml, Format::Split)
+        Self::with_format(ctx, mesh, ml, DescriptorFormat::Split)
     }
 
     /// Uploads `mesh` and `ml` packed in `format` and builds the pipelines for it.
@@ -358,7 +358,7 @@ impl<'a> Pass<'a> {
         ctx: &'a Context,
         mesh: &Mesh,
         ml: &Meshlets,
-        format: Format,
+        format: DescriptorFormat,
     ) -> Result<Self, RenderError> {
         Self::build(
             ctx,
@@ -402,7 +402,7 @@ impl<'a> Pass<'a> {
             Source::Descriptors {
                 mesh,
                 ml: &flat.meshlets,
-                format: Format::Split,
+                format: DescriptorFormat::Split,
                 lod: Some(flat),
                 instances: &[],
                 slots: 0,
@@ -501,7 +501,7 @@ impl<'a> Pass<'a> {
         small: bool,
         subgroups: bool,
     ) -> Result<Self, RenderError> {
-        use crate::compress::file::Format as C;
+        use crate::compress::Codec as C;
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         let how = super::compressed::decoder(up.format)?;
         let size = if small { Size::Small } else { Size::Large };
@@ -566,10 +566,10 @@ impl<'a> Pass<'a> {
 
     /// The descriptor layout the meshlets were uploaded in (split for a compressed pass, whose
     /// layout is [`Pass::drawn`]).
-    pub fn format(&self) -> Format {
+    pub fn format(&self) -> DescriptorFormat {
         match self.drawn {
             Drawn::Descriptors(f) => f,
-            Drawn::Compressed(..) => Format::Split,
+            Drawn::Compressed(..) => DescriptorFormat::Split,
         }
     }
 
@@ -746,10 +746,10 @@ mod tests {
     #[test]
     fn every_descriptor_layout_has_its_shaders() {
         for f in [
-            Format::Split,
-            Format::NvidiaA,
-            Format::NvidiaB,
-            Format::Monolithic,
+            DescriptorFormat::Split,
+            DescriptorFormat::NvidiaA,
+            DescriptorFormat::NvidiaB,
+            DescriptorFormat::Monolithic,
         ] {
             assert_eq!(layout_of(f).name(), f.to_string());
         }
