@@ -160,6 +160,23 @@ impl Corpus {
         for f in Codec::ALL {
             seeds.push(compressed_seed(&meshlet_source, f));
         }
+        for (name, bytes, layout) in super::library::seeds(&meshlet_source) {
+            let u32f = |at: usize| Field::Bin {
+                at,
+                width: 4,
+                be: false,
+            };
+            seeds.push(Seed {
+                name,
+                target: Target::Library,
+                boundaries: layout.boundaries,
+                numbers: layout.numbers.into_iter().map(u32f).collect(),
+                floats: layout.floats.into_iter().map(u32f).collect(),
+                text_end: 0,
+                gltf: None,
+                bytes,
+            });
+        }
         Self {
             seeds,
             meshlet_source,

@@ -1,6 +1,8 @@
 //! A seeded mutation fuzzer over every file reader: PLY (ASCII, binary little and big endian), OBJ,
 //! glTF, GLB, STL (ASCII and binary), zstd-compressed files, the meshlet file (`check`), the LOD
-//! file (`lod-check`) and the compressed-meshlet file (`check`).
+//! file (`lod-check`) and the compressed-meshlet file (`check`); and, as target `library`, the
+//! arrays an engine hands the library's constructors, on through its strategies, bounds, codecs and
+//! LOD build ([`library`]).
 //!
 //! Case `k` of a run with seed `s` is a pure function of `(s, k)`: a target format, a seed file of
 //! that format ([`corpus`]) and a mutation ([`mutate`]): bit flips, truncation at structural
@@ -24,6 +26,7 @@
 pub mod alloc;
 pub mod corpus;
 pub mod harness;
+pub mod library;
 pub mod mutate;
 
 use crate::mesh::{self, MeshErrorKind};
@@ -70,11 +73,13 @@ pub enum Target {
     Lod,
     /// The compressed-meshlet file, read and every meshlet decoded (`meshletlab check`).
     Compressed,
+    /// The library's public API on framed arrays ([`library`]).
+    Library,
 }
 
 impl Target {
     /// Every target, in report order.
-    pub const ALL: [Target; 12] = [
+    pub const ALL: [Target; 13] = [
         Target::PlyAscii,
         Target::PlyLe,
         Target::PlyBe,
@@ -87,6 +92,7 @@ impl Target {
         Target::Meshlet,
         Target::Lod,
         Target::Compressed,
+        Target::Library,
     ];
 
     /// Short name.
@@ -104,6 +110,7 @@ impl Target {
             Target::Meshlet => "meshlet",
             Target::Lod => "lod",
             Target::Compressed => "compressed",
+            Target::Library => "library",
         }
     }
 
@@ -118,6 +125,7 @@ impl Target {
             Target::Meshlet => "mlt",
             Target::Lod => "lod",
             Target::Compressed => "cmp",
+            Target::Library => "lib",
         }
     }
 }
@@ -191,11 +199,12 @@ impl Mutation {
         let gltf = matches!(t, Target::Gltf | Target::Glb);
         match self {
             Mutation::JsonIndex | Mutation::JsonType | Mutation::JsonCycle => gltf,
-            // Text exists in every format but the meshlet, LOD and compressed files (binary PLY and
-            // STL: the header; GLB: JSON).
-            Mutation::TokenDelete | Mutation::TokenRepeat => {
-                !matches!(t, Target::Meshlet | Target::Lod | Target::Compressed)
-            }
+            // Text exists in every format but the meshlet, LOD and compressed files and the
+            // library's arrays (binary PLY and STL: the header; GLB: JSON).
+            Mutation::TokenDelete | Mutation::TokenRepeat => !matches!(
+                t,
+                Target::Meshlet | Target::Lod | Target::Compressed | Target::Library
+            ),
             Mutation::FloatSpecial => t != Target::Meshlet,
             _ => true,
         }
@@ -320,6 +329,9 @@ pub fn read(case: &Case, corpus: &Corpus) -> Result<Outcome, String> {
             Err(format!("error does not name the file: {msg}"))
         }
     };
+    if case.target == Target::Library {
+        return library::drive(&library::Arrays::decode(&case.bytes));
+    }
     if case.target == Target::Compressed {
         use crate::compress::file::CompressedFile;
         return match CompressedFile::from_bytes(&case.bytes, path)
