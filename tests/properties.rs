@@ -1,6 +1,7 @@
 //! Property tests on random small meshes, including degenerate, duplicated and non-manifold
 //! triangles and coincident vertices: every strategy's output validates, bounds are conservative,
-//! and the PLY reader never panics.
+//! the PLY reader never panics, and arrays of any kind through the public API give values or typed
+//! errors.
 
 use glam::DVec3;
 use meshletlab::mesh::{ply, Mesh};
@@ -84,6 +85,102 @@ proptest! {
         // Any outcome but a panic is fine; a success must be a valid mesh or a typed error later.
         if let Ok((p, i)) = ply::parse(&buf[..end]) {
             let _ = Mesh::new(p, i, "corrupted".as_ref());
+        }
+    }
+}
+
+/// Arrays as an engine might hand them over, invalid ones included: any f32 (NaN, infinities,
+/// huge values), indices up to two past the vertex count, limits from 0 to past 256, meshlets
+/// whose ranges, counts and corners may or may not fit, any tolerance sign and size.
+fn arb_arrays() -> impl Strategy<Value = meshletlab::fuzz::library::Arrays> {
+    use meshletlab::meshlet::Meshlet;
+    let coordinate = prop_oneof![
+        4 => (-8i32..8).prop_map(|c| c as f32 * 0.5),
+        1 => any::<f32>(),
+    ];
+    (1usize..24).prop_flat_map(move |n| {
+        let positions = prop::collection::vec(prop::array::uniform3(coordinate.clone()), n);
+        let indices = prop::collection::vec(0..n as u32 + 2, 0..120);
+        let meshlet = (0u32..6, 0u32..12, 0u32..8, 0u32..6).prop_map(|(vo, to, vc, tc)| Meshlet {
+            vertex_offset: vo,
+            triangle_offset: to,
+            vertex_count: vc,
+            triangle_count: tc,
+        });
+        let meshlets = prop::collection::vec(meshlet, 0..4);
+        let vertices = prop::collection::vec(0..n as u32 + 1, 0..16);
+        let triangles = prop::collection::vec(0u8..8, 0..30);
+        let header = (
+            (0u32..300, 0u32..300),
+            any::<u32>(),
+            any::<u32>(),
+            any::<f32>(),
+        );
+        (header, positions, indices, meshlets, vertices, triangles).prop_map(
+            |(
+                (limits, strategy, codec, tolerance),
+                positions,
+                indices,
+                meshlets,
+                vertices,
+                triangles,
+            )| {
+                meshletlab::fuzz::library::Arrays {
+                    limits,
+                    strategy,
+                    codec,
+                    tolerance,
+                    positions,
+                    indices,
+                    meshlets,
+                    vertices,
+                    triangles,
+                }
+            },
+        )
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+
+    /// Every strategy, the bounds, every descriptor layout, every codec and the LOD build, driven
+    /// through the public constructors with arbitrary arrays: a value or a typed error, never a
+    /// panic, and the constructors refuse exactly what breaks their invariants.
+    #[test]
+    fn arbitrary_arrays_give_values_or_typed_errors(a in arb_arrays()) {
+        use meshletlab::fuzz::library::{drive, LABEL};
+        use meshletlab::mesh::MeshErrorKind;
+        use meshletlab::meshlet::Meshlets;
+        let outcome = drive(&a);
+        prop_assert!(outcome.is_ok(), "{:?}", outcome);
+        let limits_ok = (3..=256).contains(&a.limits.0) && (1..=256).contains(&a.limits.1);
+        prop_assert_eq!(Limits::new(a.limits.0, a.limits.1).is_ok(), limits_ok);
+        let mesh = Mesh::from_slices(&a.positions, &a.indices, LABEL);
+        let n = a.positions.len();
+        let finite = a.positions.iter().flatten().all(|c| c.is_finite());
+        let in_range = a.indices.iter().all(|&i| (i as usize) < n);
+        let whole = !a.indices.is_empty() && a.indices.len() % 3 == 0;
+        prop_assert_eq!(mesh.is_ok(), finite && in_range && whole);
+        if let Err(e) = &mesh {
+            prop_assert!(e.to_string().starts_with(LABEL));
+            if finite && whole && !in_range {
+                prop_assert!(matches!(e.kind, MeshErrorKind::IndexOutOfRange { .. }), "{}", e);
+            }
+        }
+        if let Ok(mesh) = &mesh {
+            let fits = a.meshlets.iter().all(|m| {
+                let v_end = (m.vertex_offset + m.vertex_count) as usize;
+                let t_end = (m.triangle_offset + 3 * m.triangle_count) as usize;
+                v_end <= a.vertices.len()
+                    && t_end <= a.triangles.len()
+                    && a.vertices[m.vertex_offset as usize..v_end].iter().all(|&v| (v as usize) < n)
+                    && a.triangles[m.triangle_offset as usize..t_end]
+                        .iter()
+                        .all(|&c| (c as u32) < m.vertex_count)
+            });
+            let made = Meshlets::new(mesh, a.meshlets.clone(), a.vertices.clone(), a.triangles.clone());
+            prop_assert_eq!(made.is_ok(), fits);
         }
     }
 }

@@ -69,6 +69,10 @@ pub enum BaselineEncodeError {
     /// Grid coordinates beyond 31 bits.
     #[error("grid coordinates exceed 31 bits (tolerance too small for this mesh's extent)")]
     GridTooFine,
+    /// A tolerance that is not positive and finite, or whose grid rounds a position past the
+    /// f32 range.
+    #[error("the tolerance is not positive and finite, or its grid rounds a position past f32")]
+    Tolerance,
 }
 
 /// A record's bit stream with its bits tallied by kind (connectivity, positions, headers).
@@ -109,7 +113,12 @@ pub fn encode(
     kind: Kind,
     compact: bool,
 ) -> Result<Encoded, BaselineEncodeError> {
-    let e = super::grid_exponent(tolerance);
+    // The basic formats store f32s exactly: any tolerance will do, clamped so that no exponent
+    // arithmetic overflows (0 and NaN give i32's extremes).
+    let e = match compact {
+        true => super::checked_grid(mesh, tolerance).ok_or(BaselineEncodeError::Tolerance)?,
+        false => super::grid_exponent(tolerance).clamp(-1100, 1100),
+    };
     let origin = mesh.bounding_box().0.to_array();
     let nv = mesh.vertex_count();
     let grid = |v: u32| {

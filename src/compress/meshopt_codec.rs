@@ -39,11 +39,15 @@ pub enum MeshoptEncodeError {
     /// A meshlet beyond 256 vertices or triangles, or an empty one.
     #[error("meshlet {0}: the codec takes 1 to 256 vertices and triangles")]
     Size(usize),
+    /// A tolerance that is not positive and finite, or whose grid rounds a position past the
+    /// f32 range.
+    #[error("the tolerance is not positive and finite, or its grid rounds a position past f32")]
+    Tolerance,
 }
 
 /// Encodes `ml` (meshlets of `mesh`) at `tolerance`.
 pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, MeshoptEncodeError> {
-    let e = super::grid_exponent(tolerance);
+    let e = super::checked_grid(mesh, tolerance).ok_or(MeshoptEncodeError::Tolerance)?;
     let origin = mesh.bounding_box().0.to_array();
     let mut data = Vec::new();
     let mut offsets = Vec::with_capacity(ml.len());

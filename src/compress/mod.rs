@@ -115,6 +115,20 @@ pub fn grid_exponent(tolerance: f64) -> i32 {
     (2.0 * tolerance).log2().floor() as i32
 }
 
+/// The grid exponent for `tolerance` over `mesh` (origin its box's low corner, as every codec
+/// places it), or `None` when the tolerance is not positive and finite or the grid rounds the
+/// box's high corner past the f32 range (a position near f32::MAX and a coarse step), which
+/// would decode to an infinity.
+pub(crate) fn checked_grid(mesh: &Mesh, tolerance: f64) -> Option<i32> {
+    if !(tolerance > 0.0 && tolerance.is_finite()) {
+        return None;
+    }
+    let e = grid_exponent(tolerance);
+    let (lo, hi) = mesh.bounding_box();
+    let fits = (0..3).all(|a| dequantise(quantise(hi[a], lo[a], e), lo[a], e).is_finite());
+    fits.then_some(e)
+}
+
 /// Grid coordinate of a position component relative to the grid origin `o`.
 pub fn quantise(x: f32, o: f32, e: i32) -> i64 {
     ((x as f64 - o as f64) * (-e as f64).exp2()).round() as i64

@@ -120,6 +120,10 @@ pub enum LacedEncodeError {
     /// The mesh's extent on the grid needs more than 31 bits.
     #[error("grid coordinates exceed 31 bits (tolerance too small for this mesh's extent)")]
     GridTooFine,
+    /// A tolerance that is not positive and finite, or whose grid rounds a position past the
+    /// f32 range.
+    #[error("the tolerance is not positive and finite, or its grid rounds a position past f32")]
+    Tolerance,
 }
 
 /// Encodes `ml` (meshlets of `mesh`, at most 64 vertices each) at `tolerance`.
@@ -137,7 +141,7 @@ pub fn encode(mesh: &Mesh, ml: &Meshlets, tolerance: f64) -> Result<Encoded, Lac
         .map(|i| shape(ml, i, &owner, &pairs))
         .collect();
     let wires = external_wires(&owner, &pairs, &shapes);
-    let e = super::grid_exponent(tolerance);
+    let e = super::checked_grid(mesh, tolerance).ok_or(LacedEncodeError::Tolerance)?;
     let origin = mesh.bounding_box().0.to_array();
     let grid = |v: u32| {
         let p = mesh.positions[v as usize];
