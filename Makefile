@@ -25,16 +25,17 @@ lint:
 	$(CARGO) clippy --all-targets --quiet -- -D warnings
 	$(CARGO) clippy --lib --no-default-features --quiet -- -D warnings
 	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps --lib --quiet
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps --lib --quiet --no-default-features
 
 # Unit, integration, property and doc tests; the heavy ones run in the optimised test profile.
 # The core alone too: what an engine gets with `default-features = false` builds and passes, and
-# the examples run (the core ones without default features, to show they need nothing else).
+# the examples run (the core ones with `io` alone, to show they need nothing else).
 test: setup lint
 	$(CARGO) test --all-targets
 	$(CARGO) test --doc
 	$(CARGO) test --lib --no-default-features
 	for e in build_meshlets lod_cut laced_wires; do \
-	  $(CARGO) run --profile test --quiet --no-default-features --example $$e || exit 1; done
+	  $(CARGO) run --profile test --quiet --no-default-features --features io --example $$e || exit 1; done
 	$(CARGO) run --profile test --quiet --example gpu_kmedoids
 	$(CARGO) run --profile test --quiet --example gpu_draw
 

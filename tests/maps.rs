@@ -192,3 +192,54 @@ fn the_gpu_map_and_the_wgsl_index_cover_every_shader() {
         }
     }
 }
+
+/// The figures of the front page's strategy table are cited, not typed: every number in a row's
+/// last cell is a cell of the row of that strategy (on the bunny) in the results file the cell
+/// names.
+#[test]
+fn the_front_page_figures_are_the_results_files_figures() {
+    let rows = first_table(&read("src/lib.rs"), "# Which strategy", "//! ");
+    let mut checked = 0;
+    for row in &rows {
+        let cite = row.last().unwrap();
+        let Some(file) = ticked(cite).into_iter().find(|t| t.starts_with("results/")) else {
+            continue;
+        };
+        // The strategy is the row's name in the results file: the cell's first ticked name, or
+        // the row's strategy cell's.
+        let opts = meshletlab::strategy::Options::default();
+        let name = ticked(cite)
+            .into_iter()
+            .chain(ticked(&row[1]))
+            .find(|t| meshletlab::strategy::by_name(t, &opts).is_ok())
+            .unwrap_or_else(|| panic!("no strategy named in {row:?}"));
+        let numbers: Vec<&str> = cite
+            .split(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .map(|w| w.trim_matches('.'))
+            .filter(|w| w.chars().any(|c| c.is_ascii_digit()) && *w != "64" && *w != "126")
+            .collect();
+        if numbers.is_empty() {
+            continue;
+        }
+        let text = read(&file);
+        let cells = |l: &str| -> Vec<String> {
+            l.split('|').map(|c| c.trim().to_string()).collect()
+        };
+        // strategies.md: the first table (the bunny's), strategy in the first column;
+        // kmedoids.md: the stanford_bunny rows, method in the third.
+        let row_of = text.lines().map(cells).find(|c| {
+            c.len() > 3
+                && ((c[1] == name && file.ends_with("strategies.md"))
+                    || (c[1] == "stanford_bunny" && c[3] == name))
+        });
+        let found = row_of.unwrap_or_else(|| panic!("no bunny row of {name} in {file}"));
+        for n in numbers {
+            assert!(
+                found.iter().any(|c| c == n),
+                "{name}: {n} is not in its row of {file}: {found:?}"
+            );
+        }
+        checked += 1;
+    }
+    assert!(checked >= 6, "only {checked} rows cite figures");
+}

@@ -63,8 +63,9 @@ pub enum Grouping {
 pub struct Config {
     /// How meshlets are grouped.
     pub grouping: Grouping,
-    /// Target meshlets per group (meshoptimizer's clusterlod uses 16 at 128 triangles; 8 keeps
-    /// groups near 500 triangles at 64/126, which simplify well and keep locked borders short).
+    /// Target meshlets per group, at least 1 (meshoptimizer's clusterlod uses 16 at 128
+    /// triangles; 8 keeps groups near 500 triangles at 64/126, which simplify well and keep locked
+    /// borders short).
     pub group_size: usize,
     /// A group keeping more than this share of its triangles is stuck.
     pub stuck_ratio: f64,
@@ -243,8 +244,11 @@ pub fn build(mesh: &Mesh, strategy: &dyn Strategy, limits: Limits, cfg: &Config)
             })
             .collect();
         let parts = match cfg.grouping {
-            Grouping::Meshopt => group_with_meshopt(mesh, &clusters, cfg.group_size),
-            Grouping::KMedoids => group::kmedoids(mesh.vertex_count(), &clusters, cfg.group_size),
+            // A group size of 0 would reach meshoptimizer's partitioner, which asserts it is not.
+            Grouping::Meshopt => group_with_meshopt(mesh, &clusters, cfg.group_size.max(1)),
+            Grouping::KMedoids => {
+                group::kmedoids(mesh.vertex_count(), &clusters, cfg.group_size.max(1))
+            }
         };
         let locked = shared_vertices(mesh.vertex_count(), &clusters, &parts);
         let level = (levels.len() - 1) as u32;
