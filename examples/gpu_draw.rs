@@ -115,9 +115,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let positions = buffer(
         &device,
         "positions",
-        bytemuck::cast_slice(&mesh.positions()),
+        bytemuck::cast_slice(mesh.positions()),
     );
-    let indices = buffer(&device, "indices", bytemuck::cast_slice(&mesh.indices()));
+    let indices = buffer(&device, "indices", bytemuck::cast_slice(mesh.indices()));
     let view = View::fitting(&mesh, 1.6);
     let reference = draw(&device, &queue, &view, &positions, &indices, None);
     let covered = reference.depth.iter().filter(|&&d| d != CLEAR).count();

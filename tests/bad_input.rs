@@ -12,14 +12,14 @@ const HEADER: &str = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\
 fn binary_ply() -> Vec<u8> {
     let m = mesh::generate::terrain(4, 1);
     let mut b = Vec::new();
-    mesh::ply::write_binary(&m.positions(), &m.indices(), &mut b).unwrap();
+    mesh::ply::write_binary(m.positions(), m.indices(), &mut b).unwrap();
     b
 }
 
 fn binary_stl() -> Vec<u8> {
     let m = mesh::generate::terrain(4, 1);
     let mut b = Vec::new();
-    mesh::stl::write_binary(&m.positions(), &m.indices(), &mut b).unwrap();
+    mesh::stl::write_binary(m.positions(), m.indices(), &mut b).unwrap();
     b
 }
 

@@ -311,7 +311,7 @@ fn stl_ascii_binary_and_zst_round_trip_through_load() {
             assert_eq!(back.vertex_count(), distinct, "{file}: welded exactly");
         };
         let mut bin = Vec::new();
-        mesh::stl::write_binary(&m.positions(), &m.indices(), &mut bin).unwrap();
+        mesh::stl::write_binary(m.positions(), m.indices(), &mut bin).unwrap();
         std::fs::write(dir.join(format!("{name}.stl")), &bin).unwrap();
         check(&format!("{name}.stl"));
         std::fs::write(

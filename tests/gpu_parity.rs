@@ -358,8 +358,8 @@ fn the_morton_order_and_the_seeds_match_the_cpu() {
         meshes.push((format!("sphere {name}"), m));
     }
     for (name, m) in &meshes {
-        let positions = gpu.upload("positions", &m.positions());
-        let indices = Split::upload(&gpu, "indices", &m.indices()).unwrap();
+        let positions = gpu.upload("positions", m.positions());
+        let indices = Split::upload(&gpu, "indices", m.indices()).unwrap();
         let input = || DeviceInput {
             positions: &positions,
             vertices: m.vertex_count(),
@@ -402,14 +402,14 @@ fn device_cones_are_conservative_and_cull() {
             words.push(u32::from_le_bytes(w));
         }
         let on_device = DeviceMeshlets {
-            meshlets: gpu.upload("meshlets", &ml.meshlets()),
-            vertices: gpu.upload("vertices", &ml.vertices()),
+            meshlets: gpu.upload("meshlets", ml.meshlets()),
+            vertices: gpu.upload("vertices", ml.vertices()),
             triangles: gpu.upload("triangles", &words),
             count: ml.len(),
             vertex_count: ml.vertices().len(),
             triangle_count: ml.triangles().len() / 3,
         };
-        let positions = gpu.upload("positions", &m.positions());
+        let positions = gpu.upload("positions", m.positions());
         let (task, _) = bounds::task_on_device(&gpu, &positions, &on_device).unwrap();
         let words = gpu.read(&task, 0, bounds::TASK_WORDS * ml.len()).unwrap();
         let task = bounds::cones_from_task(&words);
@@ -452,8 +452,8 @@ fn a_mesh_already_on_the_device_builds_the_cpu_meshlets() {
         (generate::cad_part(128, 1), Limits::new(64, 84).unwrap()),
         (generate::terrain(40, 2), Limits::new(8, 6).unwrap()),
     ] {
-        let positions = gpu.upload("positions", &m.positions());
-        let indices = gpu.upload("indices", &m.indices());
+        let positions = gpu.upload("positions", m.positions());
+        let indices = gpu.upload("indices", m.indices());
         let on_device = DeviceMesh {
             positions: &positions,
             vertices: m.vertex_count(),
@@ -580,7 +580,7 @@ fn coarse_regions_equal_the_cpu_regions() {
             let (cpu, k) = coarse::regions(m, &dual, size);
             let rows = members(&cpu, k);
             let (adj, _) = AdjacencyKernels::new(&gpu).build(&gpu, m).unwrap();
-            let positions = gpu.upload("positions", &m.positions());
+            let positions = gpu.upload("positions", m.positions());
             let (region, offsets) = (gpu.zeros("region", t), gpu.zeros("offsets", k + 1));
             let input = DeviceInput {
                 positions: &positions,

@@ -222,9 +222,8 @@ fn the_front_page_figures_are_the_results_files_figures() {
             continue;
         }
         let text = read(&file);
-        let cells = |l: &str| -> Vec<String> {
-            l.split('|').map(|c| c.trim().to_string()).collect()
-        };
+        let cells =
+            |l: &str| -> Vec<String> { l.split('|').map(|c| c.trim().to_string()).collect() };
         // strategies.md: the first table (the bunny's), strategy in the first column;
         // kmedoids.md: the stanford_bunny rows, method in the third.
         let row_of = text.lines().map(cells).find(|c| {

@@ -5,7 +5,7 @@
 //   decide   -> flat::decide: select::should_render_streamed (visible), outside_frustum, backfacing;
 //               writes 1/0 to flags[] and offsets[]
 //   (scan)   -> exclusive prefix sum of offsets[] (scan.wgsl), one scan over all views
-//   compact  -> flat::select: ids[offsets[i]] = i for every drawn (view, meshlet), so each view's
+//   compact  -> flat::select_meshlets: ids[offsets[i]] = i for every drawn (view, meshlet), so each view's
 //               drawn meshlets come out in ascending order after the previous view's
 //
 // Exactness: every factor of every product is cut to 12 significant bits (trunc12), so products

@@ -414,7 +414,7 @@ pub fn lod_queries(mesh: &Mesh, flat: &Flat, n: usize, seed: u64) -> Vec<Query> 
 }
 
 /// Builds the LOD DAG of `mesh` (meshoptimizer's splitter at `limits`), selects for `views` seeded
-/// queries on the CPU ([`crate::lod::flat::select`]) and with the kernel, and compares the drawn
+/// queries on the CPU ([`crate::lod::flat::select_meshlets`]) and with the kernel, and compares the drawn
 /// sets exactly.
 pub fn lod_selection(
     gpu: &Gpu,

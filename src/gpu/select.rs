@@ -1,6 +1,6 @@
 //! LOD selection on the GPU (`wgsl/select.wgsl`): for a batch of views, decide every loaded meshlet
 //! of a flattened DAG ([`crate::lod::flat`]), then compact the drawn ones in order. The CPU mirror
-//! is [`crate::lod::flat::select`]; the two agree bit for bit (see [`crate::lod::select`] for how
+//! is [`crate::lod::flat::select_meshlets`]; the two agree bit for bit (see [`crate::lod::select`] for how
 //! the arithmetic is made exact), so parity is checked by equality of the selected sets.
 
 use super::scan::Scan;

@@ -3,7 +3,7 @@
 //! streaming state a prefix: with levels `finest..` loaded, the loaded meshlets are
 //! `0..Flat::loaded(finest)`.
 //!
-//! [`select`] is the CPU reference of the selection kernel (`wgsl/select.wgsl`) and of the LOD
+//! [`select_meshlets`] is the CPU reference of the selection kernel (`wgsl/select.wgsl`) and of the LOD
 //! task shader (`glsl/meshlet_lod.task`): the streamed LOD rule of [`super::select`], then optional
 //! frustum and normal-cone culling, all in the exact arithmetic that module describes.
 

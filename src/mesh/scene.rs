@@ -1,7 +1,7 @@
 //! Scenes: meshes placed by instances, as a glTF scene's nodes (and `EXT_mesh_gpu_instancing`)
 //! place them. Meshlets are built once per mesh and drawn once per instance; [`Scene::flatten`]
-//! bakes every instance into one mesh, which is what [`super::load`] returns;
-//! [`super::load_scene`] keeps them apart.
+//! bakes every instance into one mesh, which is what `mesh::load` returns;
+//! `mesh::load_scene` keeps them apart.
 //!
 //! An instance is an affine transform. Mirrored ones (negative determinant) reverse the winding
 //! of what they draw: [`Scene::flatten`] swaps two corners of each of their triangles, and a

@@ -684,7 +684,7 @@ impl<'a> Pass<'a> {
 
     /// [`Pass::render_lod`], with the task shader also recording which meshlets it launched: the
     /// frame and the drawn meshlets' flat indices, ascending (for comparing the GPU's cut with
-    /// [`crate::lod::flat::select`] meshlet by meshlet; the benchmarks draw without it).
+    /// [`crate::lod::flat::select_meshlets`] meshlet by meshlet; the benchmarks draw without it).
     pub fn render_lod_ids(
         &self,
         camera: &Camera,
