@@ -112,11 +112,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("device: {}", gpu.describe());
 
     // The mesh as the application holds it on the device.
-    let positions = buffer(
-        &device,
-        "positions",
-        bytemuck::cast_slice(mesh.positions()),
-    );
+    let positions = buffer(&device, "positions", bytemuck::cast_slice(mesh.positions()));
     let indices = buffer(&device, "indices", bytemuck::cast_slice(mesh.indices()));
     let view = View::fitting(&mesh, 1.6);
     let reference = draw(&device, &queue, &view, &positions, &indices, None);
