@@ -29,13 +29,14 @@ lint:
 
 # Unit, integration, property and doc tests; the heavy ones run in the optimised test profile.
 # The core alone too: what an engine gets with `default-features = false` builds and passes, and
-# the examples run (the core ones with `io` alone, to show they need nothing else).
+# the examples run (in the default build the tests made: a feature set of their own would be one
+# more whole build of the crate; `required-features` says what each needs).
 test: setup lint
 	$(CARGO) test --all-targets
 	$(CARGO) test --doc
 	$(CARGO) test --lib --no-default-features
 	for e in build_meshlets lod_cut laced_wires; do \
-	  $(CARGO) run --profile test --quiet --no-default-features --features io --example $$e || exit 1; done
+	  $(CARGO) run --profile test --quiet --example $$e || exit 1; done
 	$(CARGO) run --profile test --quiet --example gpu_kmedoids
 	$(CARGO) run --profile test --quiet --example gpu_draw
 

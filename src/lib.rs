@@ -18,7 +18,19 @@
 //! code cannot hand a strategy, the bounds, the LOD build or a codec (some of which call
 //! meshoptimizer's C code) an index out of range or a limit of 0: bad arrays are a typed error at
 //! the constructor. Meshlets made elsewhere (another tool, a cache) come in through
-//! [`meshlet::Meshlets::new`], checked against their mesh.
+//! [`meshlet::Meshlets::new`], checked against their mesh. A struct literal does not compile:
+//!
+//! ```compile_fail,E0451
+//! let mesh = meshletlab::mesh::Mesh { positions: vec![[0.0; 3]; 3], indices: vec![0, 1, 7] };
+//! ```
+//!
+//! ```compile_fail,E0451
+//! let limits = meshletlab::meshlet::Limits { max_vertices: 64, max_triangles: 0 };
+//! ```
+//!
+//! ```compile_fail,E0451
+//! let ml = meshletlab::meshlet::Meshlets { meshlets: vec![], vertices: vec![], triangles: vec![7] };
+//! ```
 //!
 //! **Out:** [`meshlet::Meshlets`], flat arrays as a mesh shader reads them: per meshlet a
 //! [`meshlet::Meshlet`] (offsets and counts), the global vertex indices it uses, and three u8
