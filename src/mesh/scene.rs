@@ -296,4 +296,34 @@ mod tests {
         assert_eq!(scene.triangles_drawn(), 2);
         assert!(scene.instances[1].mirrored() && !scene.instances[0].mirrored());
     }
+
+    #[test]
+    fn new_refuses_what_would_bake_to_an_invalid_mesh() {
+        let tri = Mesh::from_slices(
+            &[[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            &[0, 1, 2],
+            "t",
+        )
+        .unwrap();
+        let place = |mesh, transform| Instance { mesh, transform };
+        let ok = Scene::new(vec![tri.clone()], vec![place(0, Mat4::IDENTITY)], "s").unwrap();
+        assert_eq!(ok.flatten(), tri);
+        let e = Scene::new(vec![tri.clone()], vec![], "s").unwrap_err();
+        assert!(matches!(e.kind, MeshErrorKind::Empty(_)), "{e}");
+        let e = Scene::new(vec![tri.clone()], vec![place(1, Mat4::IDENTITY)], "s").unwrap_err();
+        assert!(e.to_string().contains("places mesh 1 of 1"), "{e}");
+        // Finite, but it sends a vertex past f32::MAX.
+        let huge = Mat4::from_scale_rotation_translation(
+            Vec3::splat(f32::MAX),
+            glam::Quat::IDENTITY,
+            Vec3::splat(f32::MAX),
+        );
+        let e = Scene::new(vec![tri.clone()], vec![place(0, huge)], "s").unwrap_err();
+        assert!(
+            matches!(e.kind, MeshErrorKind::NonFinite { vertex: 1, .. }),
+            "{e}"
+        );
+        assert!(Scene::grid(tri.clone(), 0, 1.0).is_err());
+        assert!(Scene::grid(tri, 2, f32::NAN).is_err());
+    }
 }
