@@ -74,7 +74,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             let reports = bench::stability::run(&mesh, &m, c.limits, &c.common.out)?;
             pb.finish_and_clear();
             let bad: Vec<_> = reports.iter().filter(|r| !r.ok()).map(|r| r.name).collect();
-            println!("wrote {}", c.common.out.join("stability.md").display());
+            say!("wrote {}", c.common.out.join("stability.md").display());
             if !bad.is_empty() {
                 bail!("stability checks failed for: {}", bad.join(", "));
             }
@@ -83,7 +83,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::Gpu(mut c) => {
             complete(&mut c.common, q);
             bench::gpu::run(&c)?;
-            println!(
+            say!(
                 "wrote {}",
                 c.common.out.join(c.tag.name("gpu.md")).display()
             );
@@ -92,7 +92,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::Render(mut c) => {
             complete(&mut c.common, q);
             bench::render::run(&c)?;
-            println!(
+            say!(
                 "wrote {}",
                 c.common.out.join(c.tag.name("render.md")).display()
             );
@@ -102,13 +102,13 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             complete(&mut a.common, q);
             let cfg = a.config()?;
             bench::fidelity::run(&cfg)?;
-            println!("wrote {}", cfg.out.join("fidelity.md").display());
+            say!("wrote {}", cfg.out.join("fidelity.md").display());
             Ok(())
         }
         BenchCommand::Kmedoids(mut c) => {
             complete(&mut c.common, q);
             bench::kmedoids::run(&c)?;
-            println!(
+            say!(
                 "wrote {}",
                 c.common.out.join(c.tag.name("kmedoids.md")).display()
             );
@@ -118,7 +118,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             complete(&mut bench.common, q);
             let cfg = bench.config(args.limits, args.options())?;
             let rows = bench::build::run(&cfg)?;
-            println!(
+            say!(
                 "wrote {} and {} ({} rows)",
                 cfg.out.join("build.md").display(),
                 cfg.out.join("build.csv").display(),
@@ -129,7 +129,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::Lod(mut c) => {
             complete(&mut c.common, q);
             bench::lod::run(&c)?;
-            println!(
+            say!(
                 "wrote {}",
                 c.common.out.join(c.tag.name("lod.md")).display()
             );
@@ -138,7 +138,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::Compress(mut c) => {
             complete(&mut c.common, q);
             let rows = bench::compress::run(&c)?;
-            println!(
+            say!(
                 "wrote {} ({} encodings)",
                 c.common.out.join("compress.md").display(),
                 rows.len()
@@ -148,7 +148,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::CompressRender(mut c) => {
             complete(&mut c.common, q);
             let rows = bench::compress_render::run(&c)?;
-            println!(
+            say!(
                 "wrote {} ({} rows)",
                 c.common
                     .out
@@ -161,13 +161,13 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         BenchCommand::Robustness(mut c) => {
             if let Some(k) = c.dump {
                 let p = crate::fuzz::harness::dump(c.seed, k, &c.output)?;
-                println!("case {k} of seed {} -> {}", c.seed, p.display());
+                say!("case {k} of seed {} -> {}", c.seed, p.display());
                 return Ok(());
             }
             c.quiet = q;
             let report = bench::robustness::run(&c)?;
             let t = report.totals();
-            println!(
+            say!(
                 "{} cases in {:.0} s: {} valid, {} typed errors, {} defects; wrote {}",
                 report.cases,
                 report.seconds,

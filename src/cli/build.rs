@@ -59,7 +59,7 @@ pub(super) fn run(a: BuildArgs, quiet: bool) -> Result<()> {
         meshlets: ml,
     };
     file.save(&a.output)?;
-    println!(
+    say!(
         "{}: {} meshlets from {} triangles with {name} at {} in {ms:.1} ms{on} -> {}",
         a.mesh.display(),
         file.meshlets.len(),

@@ -22,7 +22,7 @@ pub(super) fn run(a: CheckArgs, quiet: bool) -> Result<()> {
         let f = CompressedFile::from_bytes(&data, &a.file)?;
         let m = load(&a.mesh, quiet)?;
         let worst = f.check(&m, &a.file)?;
-        println!(
+        say!(
             "{}: valid — {} compressed meshlets ({:?}), every one of {} triangles exactly once, every position within {:.3e} (largest error {worst:.3e})",
             a.file.display(),
             f.encoded.offsets.len(),
@@ -35,7 +35,7 @@ pub(super) fn run(a: CheckArgs, quiet: bool) -> Result<()> {
     let f = MeshletFile::from_bytes(&data, &a.file)?;
     let m = load(&a.mesh, quiet)?;
     f.check(&m, &a.file)?;
-    println!(
+    say!(
         "{}: valid — {} meshlets ({}), limits {}, every one of {} triangles exactly once",
         a.file.display(),
         f.meshlets.len(),

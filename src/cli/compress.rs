@@ -101,9 +101,9 @@ pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
             "encode_seconds": seconds,
             "file": a.output.display().to_string(),
         });
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        say!("{}", serde_json::to_string_pretty(&out)?);
     } else {
-        println!(
+        say!(
             "{}: {} triangles in {} {} meshlets -> {} bytes, {:.2} bytes/triangle (connectivity {:.2}, positions {:.2}, headers {:.2}, culling {:.2}, padding {:.2}); positions {:.2} bytes/vertex; max error {:.3e} (tolerance {:.3e}); encoded in {:.3} s -> {}",
             a.mesh.display(),
             m.triangle_count(),

@@ -44,7 +44,7 @@ pub(super) fn run(a: DemoArgs, quiet: bool) -> Result<()> {
             .map(|p| Ok((p.display().to_string(), load(p, quiet)?)))
             .collect::<Result<_>>()?
     };
-    println!(
+    say!(
         "== 1/3 Strategies: every strategy on {} (limits {}; every output validated) ==\n",
         if a.mesh.is_empty() {
             format!("generated meshes (seed {}); --mesh FILE for yours", a.seed)
@@ -62,33 +62,31 @@ pub(super) fn run(a: DemoArgs, quiet: bool) -> Result<()> {
         .iter()
         .min_by_key(|(_, m)| m.triangle_count())
         .expect("at least one mesh");
-    println!(
+    say!(
         "\n== 2/3 GPU compute: each kernel beside its CPU reference on {name} ({} triangles) ==\n",
         m.triangle_count()
     );
     let gpu = match crate::gpu::Gpu::new() {
         Ok(g) => g,
         Err(e) => {
-            println!(
+            say!(
                 "No Vulkan adapter ({e}); skipping the GPU parts. The CPU part above is complete."
             );
             return Ok(());
         }
     };
-    println!("GPU: {}", gpu.describe());
-    println!("(Wall-clock times, uploads, readbacks and first-use shader compilation included; `bench gpu` measures steady state.)");
+    say!("GPU: {}", gpu.describe());
+    say!("(Wall-clock times, uploads, readbacks and first-use shader compilation included; `bench gpu` measures steady state.)");
     let checks = crate::gpu::parity::run(&gpu, m, a.args.limits)
         .with_context(|| format!("{name}: GPU run failed"))?
         .checks;
     super::parity::print_checks(&checks);
     super::parity::verdict(Path::new(name), &checks)?;
-    println!(
+    say!(
         "Parity: all {} GPU kernels identical to their CPU references.",
         checks.len()
     );
-    println!(
-        "\n== 3/3 Mesh shaders: task-shader culling and a meshlet-coloured image of {name} ==\n"
-    );
+    say!("\n== 3/3 Mesh shaders: task-shader culling and a meshlet-coloured image of {name} ==\n");
     render(name, m, &a, quiet)
 }
 
@@ -96,9 +94,9 @@ fn strategy_tables(meshes: &[(String, Mesh)], args: &StrategyArgs, quiet: bool) 
     let list = strategy::all(&args.options());
     let mut totals: Vec<(String, usize)> = list.iter().map(|s| (s.name().to_string(), 0)).collect();
     for (name, m) in meshes {
-        println!("{}", describe(name, &MeshStats::of(m)));
+        say!("{}", describe(name, &MeshStats::of(m)));
         let rows = evaluate_all(m, &list, args.limits, 3, name, quiet);
-        println!("{}\n", metrics_table(&rows));
+        say!("{}\n", metrics_table(&rows));
         fail_on_invalid(&rows, name)?;
         for (t, r) in totals.iter_mut().zip(&rows) {
             t.1 += r.metrics.meshlets;
@@ -110,14 +108,14 @@ fn strategy_tables(meshes: &[(String, Mesh)], args: &StrategyArgs, quiet: bool) 
         .map(|t| t.1)
         .unwrap_or(1)
         .max(1);
-    println!(
+    say!(
         "Total meshlets over {} meshes (fewer is better; relative to meshopt):",
         meshes.len()
     );
     for (n, c) in &totals {
-        println!("  {n:<16} {c:>8}  {:>6.3}", *c as f64 / reference as f64);
+        say!("  {n:<16} {c:>8}  {:>6.3}", *c as f64 / reference as f64);
     }
-    println!("\nAll outputs validated: every triangle exactly once, limits respected.");
+    say!("\nAll outputs validated: every triangle exactly once, limits respected.");
     Ok(())
 }
 
@@ -127,7 +125,7 @@ fn render(name: &str, m: &Mesh, a: &DemoArgs, quiet: bool) -> Result<()> {
     let ctx = match Context::new(false) {
         Ok(c) => c,
         Err(e) => {
-            println!("No mesh-shader device ({e}); skipping the render.");
+            say!("No mesh-shader device ({e}); skipping the render.");
             return Ok(());
         }
     };
@@ -142,7 +140,7 @@ fn render(name: &str, m: &Mesh, a: &DemoArgs, quiet: bool) -> Result<()> {
     let all = pass.render(&cam, Pipeline::mesh(false), Shading::Lit)?;
     let v = pass.render(&cam, Pipeline::Vertex, Shading::Lit)?;
     let n = ml.len().max(1) as f64;
-    println!(
+    say!(
         "{name}, {} {STRATEGY} meshlets on {}: the task shader culled {:.1} % of meshlets by the frustum and {:.1} % by their normal cones ({} of {} triangles skipped).",
         ml.len(),
         ctx.name,
@@ -151,7 +149,7 @@ fn render(name: &str, m: &Mesh, a: &DemoArgs, quiet: bool) -> Result<()> {
         f.culled_triangles[0] + f.culled_triangles[1],
         m.triangle_count()
     );
-    println!(
+    say!(
         "GPU time per frame: mesh shaders {:.2} ms with culling, {:.2} ms without; vertex pipeline {:.2} ms.",
         f.gpu_ns * 1e-6,
         all.gpu_ns * 1e-6,
@@ -165,7 +163,7 @@ fn render(name: &str, m: &Mesh, a: &DemoArgs, quiet: bool) -> Result<()> {
     let glb = a.out.join(format!("{name}_{STRATEGY}.glb"));
     crate::atomic::write(&glb, crate::meshlet::export::glb(m, &ml))
         .with_context(|| format!("cannot write {}", glb.display()))?;
-    println!(
+    say!(
         "Wrote {} (meshlet-coloured, culled meshlets absent) and {} (open it in any glTF viewer).",
         png.display(),
         glb.display()
@@ -187,7 +185,7 @@ fn compressed(
     let enc = match Codec::LacedWires.encode(m, ml, crate::compress::paper_tolerance(m)) {
         Ok(e) => e,
         Err(e) => {
-            println!("Laced wires skipped: {e}.");
+            say!("Laced wires skipped: {e}.");
             return Ok(());
         }
     };
@@ -202,7 +200,7 @@ fn compressed(
     pass.render(cam, Pipeline::mesh(true), Shading::Lit)?;
     let f = pass.render(cam, Pipeline::mesh(true), Shading::Lit)?;
     let tris = m.triangle_count().max(1) as f64;
-    println!(
+    say!(
         "Compressed: laced wires hold {:.2} bytes per triangle on the device (uncompressed split: {:.2}); the mesh shader decodes them in {:.2} ms per frame with culling; image {} the CPU-decoded reference.",
         up.device_bytes() as f64 / tris,
         split.device_bytes() as f64 / tris,

@@ -43,7 +43,7 @@ pub(super) fn run(a: ExportArgs, quiet: bool) -> Result<()> {
         let glb = crate::meshlet::export::glb_scene(&scene, &meshlets);
         crate::atomic::write(&a.output, &glb)
             .with_context(|| format!("cannot write {}", a.output.display()))?;
-        println!(
+        say!(
             "{}: {} meshes, {} instances: {} meshlets built ({}, {}) -> {} ({:.1} KiB)",
             a.mesh.display(),
             scene.meshes.len(),
@@ -61,7 +61,7 @@ pub(super) fn run(a: ExportArgs, quiet: bool) -> Result<()> {
     let glb = crate::meshlet::export::glb(&m, &ml);
     crate::atomic::write(&a.output, &glb)
         .with_context(|| format!("cannot write {}", a.output.display()))?;
-    println!(
+    say!(
         "{}: {} meshlets ({}, {}) -> {} ({} triangles, {} vertices after splitting at meshlet borders, {:.1} KiB)",
         a.mesh.display(),
         ml.len(),

@@ -94,10 +94,10 @@ pub(super) fn run(a: LodArgs, quiet: bool) -> Result<()> {
             "all_levels_over_source": total,
             "output": a.output.display().to_string(),
         });
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        say!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
     }
-    println!(
+    say!(
         "{}: {} triangles -> {} levels in {seconds:.3} s ({:.2} M triangles/s, {} threads); {} root(s), {} stuck group(s); all levels {total:.3}x the source -> {}",
         a.mesh.display(),
         m.triangle_count(),
@@ -108,9 +108,9 @@ pub(super) fn run(a: LodArgs, quiet: bool) -> Result<()> {
         dag.stuck_groups(),
         a.output.display()
     );
-    println!("level  meshlets  triangles  ratio  groups  stuck");
+    say!("level  meshlets  triangles  ratio  groups  stuck");
     for r in &rows {
-        println!(
+        say!(
             "{:>5}  {:>8}  {:>9}  {:>5}  {:>6}  {:>5}",
             r.level,
             r.meshlets,

@@ -47,7 +47,7 @@ pub(super) fn run(a: LodCheckArgs, quiet: bool) -> Result<()> {
             cuts += 1;
         }
     }
-    println!(
+    say!(
         "{}: valid — {} levels, {} meshlets, {} groups ({} stuck), {} root(s); level 0 validated against {}; errors and bounds monotonic; {cuts} cuts ({} views x every streaming prefix) select exactly one meshlet per DAG path",
         a.file.display(),
         f.lod.levels.len(),

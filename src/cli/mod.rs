@@ -1,6 +1,17 @@
 //! The `meshletlab` command line: one file per subcommand. Every failure ends as one readable line
 //! on stderr and a non-zero exit status.
 
+/// `println!` for command output: a closed stdout (`| head`) ends the text quietly instead of
+/// panicking, and the command still writes its files (see [`output::line`]).
+macro_rules! say {
+    () => {
+        $crate::cli::output::line(format_args!(""))
+    };
+    ($($t:tt)*) => {
+        $crate::cli::output::line(format_args!($($t)*))
+    };
+}
+
 mod bench;
 mod build;
 mod check;
@@ -10,6 +21,7 @@ mod export;
 mod fuzz_worker;
 mod lod;
 mod lod_check;
+mod output;
 mod parity;
 mod render;
 mod stats;
@@ -221,12 +233,12 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
     let cli = match Cli::try_parse_from(args) {
         Ok(c) => c,
         Err(e) if !e.use_stderr() => {
-            // --help and --version.
-            e.print()?;
+            // --help and --version; a reader that left early (`| head`) is not an error.
+            let _ = e.print();
             return Ok(());
         }
         Err(e) => {
-            e.print()?;
+            let _ = e.print();
             std::process::exit(2);
         }
     };

@@ -35,9 +35,11 @@ pub(super) fn print_checks(checks: &[Check]) -> usize {
                 format!("DIFFERS: {d}")
             }
         };
-        println!(
+        say!(
             "{:<70} CPU {:>8.3} s  GPU {:>8.3} s  {verdict}",
-            c.name, c.cpu_seconds, c.gpu_seconds
+            c.name,
+            c.cpu_seconds,
+            c.gpu_seconds
         );
     }
     failed
@@ -60,7 +62,7 @@ pub(super) fn run(a: ParityArgs, quiet: bool) -> Result<()> {
     let m = load(&a.mesh, quiet)?;
     let gpu = crate::gpu::Gpu::new()?;
     if !a.json {
-        println!(
+        say!(
             "{}: {} triangles; GPU: {}",
             a.mesh.display(),
             m.triangle_count(),
@@ -82,7 +84,7 @@ pub(super) fn run(a: ParityArgs, quiet: bool) -> Result<()> {
             "identical": checks.iter().all(|c| c.mismatch.is_none()),
             "checks": checks,
         });
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        say!("{}", serde_json::to_string_pretty(&out)?);
     } else {
         print_checks(&checks);
     }

@@ -152,7 +152,7 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
         .with_context(|| format!("{}: {name}", a.mesh.display()))?;
     let bytes_per_triangle = pass.device_bytes() as f64 / m.triangle_count().max(1) as f64;
     if !a.json {
-        println!(
+        say!(
             "{}: {} triangles, {name}: {} meshlets, {} descriptors: {bytes_per_triangle:.1} bytes per triangle; device: {}",
             a.mesh.display(),
             m.triangle_count(),
@@ -214,7 +214,7 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
         print_json(out, &ctx, cull, &a, &validation_errors, &rows)?;
     }
     if let (Some(p), false) = (&a.output, a.json) {
-        println!("wrote {}", p.display());
+        say!("wrote {}", p.display());
     }
     report_validation(validation_errors, a.json)
 }
@@ -268,7 +268,7 @@ fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
     let pass = Pass::instanced(&ctx, &scene, &meshlets)
         .with_context(|| format!("{}: {name}", a.mesh.display()))?;
     if !a.json {
-        println!(
+        say!(
             "{}: {} meshes, {} instances: {} triangles built, {} drawn; {name}: {built} meshlets built, {per_instance} drawn over the instances; device: {}",
             a.mesh.display(),
             scene.meshes.len(),
@@ -331,7 +331,7 @@ fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
         print_json(out, &ctx, cull, &a, &validation_errors, &rows)?;
     }
     if let (Some(p), false) = (&a.output, a.json) {
-        println!("wrote {}", p.display());
+        say!("wrote {}", p.display());
     }
     report_validation(validation_errors, a.json)
 }
@@ -439,13 +439,14 @@ fn occlusion_paths(
         }
         print_json(out, ctx, true, a, &validation_errors, &paths)?;
     } else {
-        println!(
+        say!(
             "{line}; {} frames per view, the first apart; device: {}",
-            a.frames, ctx.name
+            a.frames,
+            ctx.name
         );
         for p in &paths {
             let t = &p.frames;
-            println!(
+            say!(
                 "view {}: triangles {} with occlusion, {} frustum+cone ({:.2}x), oracle {}; meshlets {:.2}x the oracle's; time {:.2}x ({} of {} frames without the pyramid); images {}",
                 p.view,
                 t.triangles_occlusion,
@@ -459,7 +460,7 @@ fn occlusion_paths(
                 if t.images_identical && p.warm_up.images_identical { "identical" } else { "DIFFER" }
             );
         }
-        println!(
+        say!(
             "all views: triangles {:.3}x frustum+cone, meshlets {:.3}x the oracle's, frame time {:.3}x",
             total.triangle_ratio(),
             total.oracle_ratio(),
@@ -558,7 +559,7 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
     // Full detail through the same strategy's meshlets, for the time comparison.
     let full = Pass::new(&ctx, &m, &lod.levels[0].meshlets)?;
     if !a.json {
-        println!(
+        say!(
             "{}: {} triangles, {name} LOD DAG: {levels} levels ({loaded_levels} loaded), {} meshlets; threshold {} px; device: {}",
             a.mesh.display(),
             m.triangle_count(),
@@ -634,7 +635,7 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
         });
         print_json(out, &ctx, cull, &a, &validation_errors, &rows)?;
     } else if let Some(p) = &a.output {
-        println!("wrote {} (coloured by meshlet)", p.display());
+        say!("wrote {} (coloured by meshlet)", p.display());
     }
     if let Some(r) = mismatch {
         bail!(
@@ -696,7 +697,7 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
     let reference = Pass::new(&ctx, &ref_mesh, &ref_ml)?;
     let tris = upload.triangles.max(1) as f64;
     if !a.json {
-        println!(
+        say!(
             "{}: {} triangles, {what} in {}: {} meshlets, {:.2} bytes per triangle resident (uncompressed split layout: {:.2}); device: {}",
             a.mesh.display(),
             m.triangle_count(),
@@ -774,7 +775,7 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
         });
         print_json(out, &ctx, cull, &a, &validation_errors, &rows)?;
     } else if let Some(p) = &a.output {
-        println!("wrote {}", p.display());
+        say!("wrote {}", p.display());
     }
     if let Some(r) = rows.iter().find(|r| !r.identical_to_decoded_reference) {
         bail!(
@@ -800,7 +801,7 @@ fn each_view<R>(
         let row = measure(i, cam)?;
         if !a.json {
             if let Some(text) = line(&row) {
-                println!("{text}");
+                say!("{text}");
             }
         }
         rows.push(row);
@@ -847,7 +848,7 @@ fn print_json<T: std::fmt::Debug>(
         validation_errors.as_ref().map(|e| e.0).into(),
     );
     o.insert("views".into(), serde_json::to_value(rows)?);
-    println!("{}", serde_json::to_string_pretty(&out)?);
+    say!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())
 }
 
@@ -858,7 +859,7 @@ fn report_validation<T: std::fmt::Debug>(errors: Option<(u32, T)>, json: bool) -
             bail!("the validation layer reported {errors} errors, first: {first:#?}");
         }
         if !json {
-            println!("validation layer: no errors");
+            say!("validation layer: no errors");
         }
     }
     Ok(())

@@ -58,11 +58,11 @@ pub(super) fn run(a: StatsArgs, quiet: bool) -> Result<()> {
             "device": if a.device.device == Device::Gpu { "gpu" } else { "cpu" },
             "strategies": rows,
         });
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        say!("{}", serde_json::to_string_pretty(&out)?);
     } else {
-        println!("{}", describe(&label, &st));
-        println!("limits {}\n", a.args.limits);
-        println!("{}", metrics_table(&rows));
+        say!("{}", describe(&label, &st));
+        say!("limits {}\n", a.args.limits);
+        say!("{}", metrics_table(&rows));
     }
     fail_on_invalid(&rows, &label)
 }
@@ -140,10 +140,10 @@ fn run_scene(a: &StatsArgs, scene: Scene, label: &str, quiet: bool) -> Result<()
                 "name": n, "meshlets_built": b, "meshlets_over_instances": d,
             })).collect::<Vec<_>>(),
         });
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        say!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
     }
-    println!(
+    say!(
         "{label}: {} meshes, {} instances, {} triangles built, {} drawn; limits {}\n",
         scene.meshes.len(),
         scene.instances.len(),
@@ -152,11 +152,11 @@ fn run_scene(a: &StatsArgs, scene: Scene, label: &str, quiet: bool) -> Result<()
         a.args.limits
     );
     for (l, st, rows) in &per_mesh {
-        println!("{}", describe(l, st));
-        println!("{}", metrics_table(rows));
+        say!("{}", describe(l, st));
+        say!("{}", metrics_table(rows));
     }
     for (n, b, d) in totals {
-        println!("{n}: {b} meshlets built, {d} drawn over the instances");
+        say!("{n}: {b} meshlets built, {d} drawn over the instances");
     }
     Ok(())
 }

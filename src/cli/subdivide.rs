@@ -27,7 +27,7 @@ pub(super) fn run(a: SubdivideArgs, quiet: bool) -> Result<()> {
     pb.set_message(format!("writing {}", a.output.display()));
     mesh::save_ply(&s, &a.output)?;
     pb.finish_and_clear();
-    println!(
+    say!(
         "{} -> {}: {} -> {} triangles, {} -> {} vertices",
         a.mesh.display(),
         a.output.display(),
