@@ -27,6 +27,7 @@ pub struct BuildArgs {
 pub(super) fn run(a: BuildArgs, quiet: bool) -> Result<()> {
     let name = &a.strategy;
     crate::strategy::by_name(name, &a.args.options())?;
+    super::output::check_file(&a.output, "a meshlet file", &[])?;
     let gpu = match a.device.device {
         Device::Cpu => None,
         Device::Gpu => Some(gpu_for(&[name])?),

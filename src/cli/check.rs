@@ -23,10 +23,10 @@ pub(super) fn run(a: CheckArgs, quiet: bool) -> Result<()> {
         let m = load(&a.mesh, quiet)?;
         let worst = f.check(&m, &a.file)?;
         say!(
-            "{}: valid — {} compressed meshlets ({:?}), every one of {} triangles exactly once, every position within {:.3e} (largest error {worst:.3e})",
+            "{}: valid — {} compressed meshlets ({}), every one of {} triangles exactly once, every position within {:.3e} (largest error {worst:.3e})",
             a.file.display(),
             f.encoded.offsets.len(),
-            f.format,
+            f.format.name(),
             m.triangle_count(),
             f.tolerance
         );

@@ -27,11 +27,11 @@ pub struct CompressArgs {
     strategy: String,
     /// Largest allowed position error, in mesh units (default: the paper's, the error of 14-bit
     /// quantisation of the bounding box).
-    #[arg(long, conflicts_with = "relative_tolerance")]
+    #[arg(long, conflicts_with = "relative_tolerance", value_parser = super::positive)]
     tolerance: Option<f64>,
     /// Largest allowed position error as a fraction of the bounding-box diagonal (1e-4 is the
     /// setting of the size comparison with meshoptimizer's codec).
-    #[arg(long)]
+    #[arg(long, value_parser = super::positive)]
     relative_tolerance: Option<f64>,
     /// Output file (format: see `meshletlab::compress::file`).
     #[arg(short, long)]
@@ -60,16 +60,20 @@ pub(super) fn tolerance(
 }
 
 pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
-    let m = load(&a.mesh, quiet)?;
-    let tolerance = tolerance(&m, a.tolerance, a.relative_tolerance)?;
     let format = match (a.compact, a.format.compact()) {
         (false, _) => a.format,
         (true, Some(f)) => f,
-        (true, None) => bail!(
-            "--compact applies to ts, ix, sc and gi, not {}",
-            a.format.name()
-        ),
+        (true, None) => {
+            return Err(super::usage(format!(
+                "--compact applies to ts, ix, sc and gi, not {}",
+                a.format.name()
+            )))
+        }
     };
+    super::output::check_file(&a.output, "a compressed-meshlet file", &[])?;
+    crate::strategy::by_name(&a.strategy, &a.args.options())?;
+    let m = load(&a.mesh, quiet)?;
+    let tolerance = tolerance(&m, a.tolerance, a.relative_tolerance)?;
     let ml = build_validated(&m, &a.mesh, &a.strategy, &a.args)?;
     let t0 = std::time::Instant::now();
     let encoded = format
@@ -88,7 +92,7 @@ pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
             "mesh": a.mesh.display().to_string(),
             "triangles": m.triangle_count(),
             "vertices": m.vertex_count(),
-            "format": format,
+            "format": format.name(),
             "strategy": a.strategy,
             "limits": a.args.limits.to_string(),
             "meshlets": ml.len(),

@@ -22,7 +22,10 @@ pub struct DemoArgs {
     /// Seed of the generated meshes.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Folder for the PNG and the glTF the demo writes.
+    /// Folder for the PNG and the glTF the demo writes (created; checked writable before the
+    /// run). They are named by the rendered mesh: `NAME_meshopt.png` and `.glb`, NAME the file
+    /// name without its extensions (`bunny.ply.zst` -> `bunny`), `-2`, `-3`, ... added where
+    /// `--mesh` files share a name.
     #[arg(long, default_value = "demo-output")]
     out: PathBuf,
     /// Only the CPU strategy table.
@@ -32,16 +35,38 @@ pub struct DemoArgs {
     args: StrategyArgs,
 }
 
+/// A demo mesh: its label in the text, the stem its files are named by, the mesh.
+struct DemoMesh {
+    label: String,
+    stem: String,
+    mesh: Mesh,
+}
+
 pub(super) fn run(a: DemoArgs, quiet: bool) -> Result<()> {
-    let meshes: Vec<(String, Mesh)> = if a.mesh.is_empty() {
+    if !a.no_gpu {
+        super::output::check_dir(&a.out)?;
+    }
+    let meshes: Vec<DemoMesh> = if a.mesh.is_empty() {
         generate::demo_set(a.seed)
             .into_iter()
-            .map(|g| (g.name.to_string(), g.mesh))
+            .map(|g| DemoMesh {
+                label: g.name.to_string(),
+                stem: g.name.to_string(),
+                mesh: g.mesh,
+            })
             .collect()
     } else {
+        let paths: Vec<&Path> = a.mesh.iter().map(PathBuf::as_path).collect();
         a.mesh
             .iter()
-            .map(|p| Ok((p.display().to_string(), load(p, quiet)?)))
+            .zip(super::output::stems(&paths))
+            .map(|(p, stem)| {
+                Ok(DemoMesh {
+                    label: p.display().to_string(),
+                    stem,
+                    mesh: load(p, quiet)?,
+                })
+            })
             .collect::<Result<_>>()?
     };
     say!(
@@ -58,10 +83,11 @@ pub(super) fn run(a: DemoArgs, quiet: bool) -> Result<()> {
         return Ok(());
     }
     // The GPU parts use the smallest mesh: lavapipe runs on the same two cores.
-    let (name, m) = meshes
+    let smallest = meshes
         .iter()
-        .min_by_key(|(_, m)| m.triangle_count())
+        .min_by_key(|d| d.mesh.triangle_count())
         .expect("at least one mesh");
+    let (name, m) = (&smallest.label, &smallest.mesh);
     say!(
         "\n== 2/3 GPU compute: each kernel beside its CPU reference on {name} ({} triangles) ==\n",
         m.triangle_count()
@@ -87,13 +113,18 @@ pub(super) fn run(a: DemoArgs, quiet: bool) -> Result<()> {
         checks.len()
     );
     say!("\n== 3/3 Mesh shaders: task-shader culling and a meshlet-coloured image of {name} ==\n");
-    render(name, m, &a, quiet)
+    render(smallest, &a)
 }
 
-fn strategy_tables(meshes: &[(String, Mesh)], args: &StrategyArgs, quiet: bool) -> Result<()> {
+fn strategy_tables(meshes: &[DemoMesh], args: &StrategyArgs, quiet: bool) -> Result<()> {
     let list = strategy::all(&args.options());
     let mut totals: Vec<(String, usize)> = list.iter().map(|s| (s.name().to_string(), 0)).collect();
-    for (name, m) in meshes {
+    for DemoMesh {
+        label: name,
+        mesh: m,
+        ..
+    } in meshes
+    {
         say!("{}", describe(name, &MeshStats::of(m)));
         let rows = evaluate_all(m, &list, args.limits, 3, name, quiet);
         say!("{}\n", metrics_table(&rows));
@@ -119,8 +150,9 @@ fn strategy_tables(meshes: &[(String, Mesh)], args: &StrategyArgs, quiet: bool) 
     Ok(())
 }
 
-fn render(name: &str, m: &Mesh, a: &DemoArgs, quiet: bool) -> Result<()> {
+fn render(d: &DemoMesh, a: &DemoArgs) -> Result<()> {
     const STRATEGY: &str = "meshopt";
+    let (name, m) = (d.label.as_str(), &d.mesh);
     let ml = super::build_validated(m, Path::new(name), STRATEGY, &a.args)?;
     let ctx = match Context::new(false) {
         Ok(c) => c,
@@ -129,7 +161,6 @@ fn render(name: &str, m: &Mesh, a: &DemoArgs, quiet: bool) -> Result<()> {
             return Ok(());
         }
     };
-    let _ = quiet;
     let pass = Pass::new(&ctx, m, &ml)?;
     let aspect = WIDTH as f32 / HEIGHT as f32;
     let cam = Camera::framed_views(m, 1, 1, aspect, crate::render::FRAME_FILL)[0];
@@ -156,13 +187,11 @@ fn render(name: &str, m: &Mesh, a: &DemoArgs, quiet: bool) -> Result<()> {
         v.gpu_ns * 1e-6
     );
     compressed(&ctx, m, &ml, &pass, &cam)?;
-    std::fs::create_dir_all(&a.out)
-        .with_context(|| format!("cannot create {}", a.out.display()))?;
-    let png = a.out.join(format!("{name}_{STRATEGY}.png"));
+    let png = a.out.join(format!("{}_{STRATEGY}.png", d.stem));
     crate::render::write_meshlet_png(&pass, &cam, true, &png)?;
-    let glb = a.out.join(format!("{name}_{STRATEGY}.glb"));
+    let glb = a.out.join(format!("{}_{STRATEGY}.glb", d.stem));
     crate::atomic::write(&glb, crate::meshlet::export::glb(m, &ml))
-        .with_context(|| format!("cannot write {}", glb.display()))?;
+        .with_context(|| format!("{}: cannot write", glb.display()))?;
     say!(
         "Wrote {} (meshlet-coloured, culled meshlets absent) and {} (open it in any glTF viewer).",
         png.display(),

@@ -26,6 +26,8 @@ pub struct ExportArgs {
 
 pub(super) fn run(a: ExportArgs, quiet: bool) -> Result<()> {
     crate::strategy::by_name(&a.strategy, &a.args.options())?;
+    // Binary glTF only: a `.gltf` would need its buffer as a second file beside it.
+    super::output::check_file(&a.output, "binary glTF (one .glb file)", &["glb"])?;
     let gpu = match a.device.device {
         Device::Cpu => None,
         Device::Gpu => Some(gpu_for(&[&a.strategy])?),
@@ -42,7 +44,7 @@ pub(super) fn run(a: ExportArgs, quiet: bool) -> Result<()> {
         let meshlets = scene.meshes.iter().map(build).collect::<Result<Vec<_>>>()?;
         let glb = crate::meshlet::export::glb_scene(&scene, &meshlets);
         crate::atomic::write(&a.output, &glb)
-            .with_context(|| format!("cannot write {}", a.output.display()))?;
+            .with_context(|| format!("{}: cannot write", a.output.display()))?;
         say!(
             "{}: {} meshes, {} instances: {} meshlets built ({}, {}) -> {} ({:.1} KiB)",
             a.mesh.display(),
@@ -60,7 +62,7 @@ pub(super) fn run(a: ExportArgs, quiet: bool) -> Result<()> {
     let ml = build(&m)?;
     let glb = crate::meshlet::export::glb(&m, &ml);
     crate::atomic::write(&a.output, &glb)
-        .with_context(|| format!("cannot write {}", a.output.display()))?;
+        .with_context(|| format!("{}: cannot write", a.output.display()))?;
     say!(
         "{}: {} meshlets ({}, {}) -> {} ({} triangles, {} vertices after splitting at meshlet borders, {:.1} KiB)",
         a.mesh.display(),

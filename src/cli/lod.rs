@@ -40,6 +40,7 @@ struct Row {
 
 pub(super) fn run(a: LodArgs, quiet: bool) -> Result<()> {
     let s = crate::strategy::by_name(&a.strategy, &a.args.options())?;
+    super::output::check_file(&a.output, "a LOD file", &[])?;
     let m = load(&a.mesh, quiet)?;
     let cfg = lod::Config {
         group_size: a.group_size as usize,

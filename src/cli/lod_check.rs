@@ -15,8 +15,8 @@ pub struct LodCheckArgs {
     file: PathBuf,
     /// Random views (distances 0.5-64 radii, thresholds 0.25-8 pixels) whose cuts are checked, each
     /// also for every streaming prefix of levels.
-    #[arg(long, default_value_t = 200)]
-    views: usize,
+    #[arg(long, default_value_t = 200, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    views: u32,
 }
 
 pub(super) fn run(a: LodCheckArgs, quiet: bool) -> Result<()> {
@@ -26,13 +26,14 @@ pub(super) fn run(a: LodCheckArgs, quiet: bool) -> Result<()> {
     let (lo, hi) = m.bounding_box();
     let (c, r) = ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-6));
     let mut cuts = 0;
-    for (i, dir) in crate::mesh::generate::random_directions(a.views, 1)
+    let views = a.views as usize;
+    for (i, dir) in crate::mesh::generate::random_directions(views, 1)
         .into_iter()
         .enumerate()
     {
         // Deterministic spread of distances and thresholds over the views.
-        let u = (i as f32 + 0.5) / a.views.max(1) as f32;
-        let w = ((i * 7919) % a.views.max(1)) as f32 / a.views.max(1) as f32;
+        let u = (i as f32 + 0.5) / views as f32;
+        let w = ((i * 7919) % views) as f32 / views as f32;
         let v = select::View::new(
             c + dir * r * 0.5 * 128f32.powf(u),
             crate::render::HEIGHT as f32,

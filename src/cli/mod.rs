@@ -46,8 +46,8 @@ pub struct Cli {
     #[arg(short, long, global = true)]
     pub quiet: bool,
     /// Worker threads for parallel steps (default: all cores). Results do not depend on it.
-    #[arg(long, global = true, value_name = "N")]
-    pub threads: Option<usize>,
+    #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub threads: Option<u32>,
     /// The subcommand to run.
     #[command(subcommand)]
     pub command: Command,
@@ -66,14 +66,14 @@ pub struct StrategyArgs {
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=256))]
     pub cache_size: u32,
     /// meshoptimizer spatial builder fill weight (>= 0).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, value_parser = non_negative_f32)]
     pub fill_weight: f32,
     /// k-medoids: most assign/update iterations per clustering (kmedoids-flat, kmedoids-paper);
     /// most re-assignment rounds (kmedoids).
     #[arg(long, default_value_t = 16)]
     pub kmedoids_iterations: u32,
     /// k-medoids: stop when the mean medoid shift (in hops) is at most this.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
     pub kmedoids_threshold: f64,
     /// kmedoids: what a growing cluster prefers among equally cheap triangles: `centre` (nearest its
     /// centroid: smaller spheres) or `hops` (fewest hops from its seed: fewer meshlets).
@@ -88,7 +88,7 @@ pub struct StrategyArgs {
     #[arg(long, default_value_t = strategy::kmedoids::parallel::DEFAULT_MOVE_ROUNDS)]
     pub kmedoids_moves: u32,
     /// kmedoids-paper: seconds before the remaining splits are done the flat way.
-    #[arg(long, default_value_t = 300.0)]
+    #[arg(long, default_value_t = 300.0, value_parser = positive)]
     pub paper_budget: f64,
     /// Reorder triangles inside each meshlet for vertex reuse, local vertices in first-use order.
     #[arg(long)]
@@ -99,11 +99,20 @@ pub struct StrategyArgs {
 }
 
 impl StrategyArgs {
+    /// The ids (field names) of these options, read from their definitions, for the modes that
+    /// build no meshlets and refuse them.
+    fn ids() -> Vec<String> {
+        <StrategyArgs as Args>::augment_args(clap::Command::new("strategy"))
+            .get_arguments()
+            .map(|a| a.get_id().to_string())
+            .collect()
+    }
+
     fn options(&self) -> Options {
         Options {
             cone_weight: self.cone_weight,
             cache_size: self.cache_size,
-            fill_weight: self.fill_weight.max(0.0),
+            fill_weight: self.fill_weight,
             kmedoids: self.kmedoids(),
             local_order: self.local_order,
             meshlet_order: self.meshlet_order,
@@ -134,6 +143,41 @@ impl StrategyArgs {
             },
             threading: Default::default(),
         }
+    }
+}
+
+/// A finite number at least 0 (a weight, a threshold).
+fn non_negative(s: &str) -> Result<f64, String> {
+    let v: f64 = s.parse().map_err(|_| format!("'{s}' is not a number"))?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{v} is not a finite number >= 0"))
+    }
+}
+
+/// [`non_negative`] as an f32 (it must also fit one).
+fn non_negative_f32(s: &str) -> Result<f32, String> {
+    let v = non_negative(s)?;
+    if v > f32::MAX as f64 {
+        return Err(format!("{v} does not fit an f32"));
+    }
+    Ok(v as f32)
+}
+
+/// A finite number above 0 (seconds, distances).
+pub(crate) fn positive(s: &str) -> Result<f64, String> {
+    match non_negative(s)? {
+        v if v > 0.0 => Ok(v),
+        v => Err(format!("{v} is not above 0")),
+    }
+}
+
+/// [`positive`] as an f32 (it must also fit one).
+pub(crate) fn positive_f32(s: &str) -> Result<f32, String> {
+    match positive(s)? {
+        v if v <= f32::MAX as f64 => Ok(v as f32),
+        v => Err(format!("{v} does not fit an f32")),
     }
 }
 
@@ -201,9 +245,10 @@ fn long_about() -> String {
         "Build, measure and compare meshlets (triangle clusters for GPU mesh shaders).\n\n\
          Meshes: PLY (ASCII/binary), OBJ, glTF 2.0 (.gltf/.glb), STL (ASCII/binary), each optionally \
          zstd-compressed (.zst); `gen:NAME` generates one instead ({}; the first {} are the stress \
-         meshes).\n\nStrategies (-s NAME):\n",
+         meshes), or an instanced scene ({}).\n\nStrategies (-s NAME):\n",
         mesh::generate::NAMES.join(", "),
-        mesh::generate::STRESS_NAMES.len()
+        mesh::generate::STRESS_NAMES.len(),
+        mesh::generate::SCENE_NAMES.join(", ")
     );
     for k in strategy::Kind::ALL {
         let _ = writeln!(s, "  {:<17} {}", k.name(), k.summary());
@@ -228,9 +273,54 @@ pub fn default_meshes_dir() -> PathBuf {
         .unwrap_or_else(|| PathBuf::from("../shared/meshes"))
 }
 
+/// A command line that parses but asks for what the command cannot do: an option its mode does
+/// not use, or a selection that leaves nothing to run. Reported in clap's form, exit status 2,
+/// like any other usage error.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct UsageError(pub String);
+
+/// A [`UsageError`] for `bail!`/`return Err(..)`.
+fn usage(msg: impl Into<String>) -> anyhow::Error {
+    UsageError(msg.into()).into()
+}
+
+/// Whether option `id` (its field name) was given on the command line, not taken by default.
+fn given(m: &clap::ArgMatches, id: &str) -> bool {
+    matches!(
+        m.try_get_raw(id)
+            .ok()
+            .flatten()
+            .and_then(|_| m.value_source(id)),
+        Some(clap::parser::ValueSource::CommandLine)
+    )
+}
+
+/// Refuses, by name, each of `ids` (field names) given on the command line: options the mode
+/// `mode` does not use, which would otherwise be silently ignored.
+fn refuse_unused(m: &clap::ArgMatches, ids: &[&str], mode: &str) -> Result<()> {
+    let unused: Vec<String> = ids
+        .iter()
+        .filter(|id| given(m, id))
+        .map(|id| format!("--{}", id.replace('_', "-")))
+        .collect();
+    if unused.is_empty() {
+        return Ok(());
+    }
+    Err(usage(format!(
+        "{} {} not used with {mode}",
+        unused.join(", "),
+        if unused.len() == 1 { "is" } else { "are" }
+    )))
+}
+
 /// Parses arguments and runs the command.
 pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
-    let cli = match Cli::try_parse_from(args) {
+    use clap::{CommandFactory, FromArgMatches};
+    let parsed = Cli::command()
+        .try_get_matches_from(args)
+        .and_then(|m| Cli::from_arg_matches(&m).map(|c| (c, m)));
+    let (cli, matches) = match parsed {
         Ok(c) => c,
         Err(e) if !e.use_stderr() => {
             // --help and --version; a reader that left early (`| head`) is not an error.
@@ -244,25 +334,45 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<()> {
     };
     if let Some(n) = cli.threads {
         rayon::ThreadPoolBuilder::new()
-            .num_threads(n.max(1))
+            .num_threads(n as usize)
             .build_global()
             .context("cannot set thread count")?;
     }
     let q = cli.quiet;
-    match cli.command {
+    let sub = matches
+        .subcommand()
+        .map(|(_, m)| m.clone())
+        .unwrap_or_default();
+    let result = match cli.command {
         Command::Stats(a) => stats::run(a, q),
         Command::Build(a) => build::run(a, q),
         Command::Check(a) => check::run(a, q),
         Command::Demo(a) => demo::run(a, q),
         Command::Subdivide(a) => subdivide::run(a, q),
         Command::Parity(a) => parity::run(a, q),
-        Command::Render(a) => render::run(a, q),
+        Command::Render(a) => render::run(a, &sub, q),
         Command::Export(a) => export::run(a, q),
         Command::Lod(a) => lod::run(a, q),
         Command::LodCheck(a) => lod_check::run(a, q),
         Command::Compress(a) => compress::run(a, q),
         Command::Bench(b) => bench::run(b, q),
         Command::FuzzWorker(a) => fuzz_worker::run(a),
+    };
+    match result {
+        Err(e) if e.is::<UsageError>() => {
+            let sub_name = matches.subcommand_name().unwrap_or_default().to_string();
+            let mut cmd = Cli::command();
+            let cmd = cmd
+                .find_subcommand_mut(&sub_name)
+                .cloned()
+                .unwrap_or(Cli::command());
+            let _ = cmd
+                .bin_name(format!("meshletlab {sub_name}"))
+                .error(clap::error::ErrorKind::ArgumentConflict, e.to_string())
+                .print();
+            std::process::exit(2);
+        }
+        r => r,
     }
 }
 

@@ -71,12 +71,17 @@ pub fn check_dir(dir: &Path) -> Result<()> {
     probe(dir).with_context(|| format!("{}: cannot write", dir.display()))
 }
 
-/// Creates and removes a scratch file in `dir`.
+/// Creates and removes a scratch file in `dir`; the error is the system's, without the scratch
+/// file's name.
 fn probe(dir: &Path) -> std::io::Result<()> {
     tempfile::Builder::new()
         .prefix(".meshletlab-probe")
         .tempfile_in(dir)
         .map(drop)
+        .map_err(|e| match e.raw_os_error() {
+            Some(code) => std::io::Error::from_raw_os_error(code),
+            None => std::io::Error::from(e.kind()),
+        })
 }
 
 /// A name for each input, for the files a command writes about it: the file name without its

@@ -59,6 +59,10 @@ pub(super) fn verdict(path: &Path, checks: &[Check]) -> Result<()> {
 }
 
 pub(super) fn run(a: ParityArgs, quiet: bool) -> Result<()> {
+    if Family::ALL.iter().all(|f| a.skip.contains(f)) {
+        // A run that compares nothing must not pass as a parity verdict.
+        return Err(super::usage("--skip leaves no kernel family to compare"));
+    }
     let m = load(&a.mesh, quiet)?;
     let gpu = crate::gpu::Gpu::new()?;
     if !a.json {

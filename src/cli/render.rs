@@ -5,7 +5,7 @@ use crate::compress::file::CompressedFile;
 use crate::compress::Codec;
 use crate::lod::flat::Flat;
 use crate::mesh::Scene;
-use crate::meshlet::descriptor::DescriptorFormat;
+use crate::meshlet::descriptor::{pack, DescriptorFormat};
 use crate::meshlet::Meshlets;
 use crate::render::{Camera, Context, Pass, Pipeline, Shading, HEIGHT, WIDTH};
 use anyhow::{bail, Context as _, Result};
@@ -21,14 +21,14 @@ pub struct RenderArgs {
     #[arg(short, long, default_value = "meshopt")]
     strategy: String,
     /// Views (random directions around the mesh, the paper's protocol).
-    #[arg(long, default_value_t = 5)]
-    views: usize,
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    views: u32,
     /// Seed of the view sequence (the same for every strategy).
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Camera distance from the mesh centre in bounding radii (half the box diagonal). Default:
     /// each view framed so the mesh fills most of the image.
-    #[arg(long)]
+    #[arg(long, value_parser = distance)]
     distance: Option<f32>,
     /// No task-shader culling.
     #[arg(long)]
@@ -37,7 +37,8 @@ pub struct RenderArgs {
     /// (quantised bounds), monolithic (per-meshlet vertex copies).
     #[arg(short, long, default_value = "split", value_parser = clap::value_parser!(DescriptorFormat))]
     descriptor: DescriptorFormat,
-    /// Write the first view, coloured by meshlet (the paper's Figure 1), to this PNG.
+    /// Write the first view, coloured by meshlet (the paper's Figure 1), to this PNG; with
+    /// `--occlusion`, the first path's last frame; with `--lod`, the first view's cut.
     #[arg(short, long = "output", visible_alias = "png", value_name = "PNG")]
     output: Option<PathBuf>,
     /// Cluster LOD: build the meshlet DAG with the strategy and let the task shader draw, per
@@ -47,7 +48,7 @@ pub struct RenderArgs {
     #[arg(long)]
     lod: bool,
     /// LOD error threshold in pixels (at 1280x720, 60 degree vertical field of view).
-    #[arg(long, default_value_t = 1.0, requires = "lod", value_name = "PX")]
+    #[arg(long, default_value_t = 1.0, requires = "lod", value_name = "PX", value_parser = super::positive_f32)]
     threshold: f32,
     /// Streaming: only the N coarsest levels are loaded (default: all); a meshlet of the finest
     /// loaded level is drawn where finer detail would be wanted.
@@ -84,7 +85,7 @@ pub struct RenderArgs {
     grid: Option<u32>,
     /// With `--grid`: spacing as a fraction of the mesh's largest extent (below 1 the copies
     /// interpenetrate).
-    #[arg(long, default_value_t = 0.7, requires = "grid")]
+    #[arg(long, default_value_t = 0.7, requires = "grid", value_parser = super::positive_f32)]
     spacing: f32,
     /// With `--occlusion`: build the pyramid in every frame (by default a frame whose pyramid
     /// hid under a fifth of the triangles makes the next frames skip it, trying again every 4th).
@@ -103,6 +104,38 @@ pub struct RenderArgs {
     args: StrategyArgs,
 }
 
+/// Refuses the options the chosen mode would ignore, by name, before anything is loaded.
+fn refuse_unused_options(a: &RenderArgs, m: &clap::ArgMatches) -> Result<()> {
+    if a.format.is_none() {
+        super::refuse_unused(
+            m,
+            &["tolerance", "relative_tolerance"],
+            "a mode that encodes nothing (they set --format's error)",
+        )?;
+    }
+    if a.compressed.is_some() {
+        // The file holds its meshlets: nothing is built.
+        let mut ids = super::StrategyArgs::ids();
+        ids.extend(["strategy", "descriptor"].map(String::from));
+        let ids: Vec<&str> = ids.iter().map(String::as_str).collect();
+        return super::refuse_unused(m, &ids, "--compressed (the file holds its meshlets)");
+    }
+    if a.format.is_some() {
+        return super::refuse_unused(m, &["descriptor"], "--format (it draws the encoded bytes)");
+    }
+    if a.occlusion {
+        return super::refuse_unused(
+            m,
+            &["descriptor", "no_cull"],
+            "--occlusion (it draws the split layout and culls on top of frustum and cones)",
+        );
+    }
+    if a.lod {
+        return super::refuse_unused(m, &["descriptor"], "--lod (it draws the split layout)");
+    }
+    Ok(())
+}
+
 /// One view's measurements.
 #[derive(serde::Serialize)]
 struct ViewRow {
@@ -116,7 +149,20 @@ struct ViewRow {
     mesh_primitives_generated: Option<u64>,
 }
 
-pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
+/// `--distance`: a finite number of bounding radii in (0, 1000] (farther, the depth range of a
+/// 32-bit float buffer no longer separates the mesh's own surfaces).
+fn distance(s: &str) -> Result<f32, String> {
+    match super::positive(s)? {
+        d if d <= 1000.0 => Ok(d as f32),
+        d => Err(format!("{d} is farther than 1000 bounding radii")),
+    }
+}
+
+pub(super) fn run(a: RenderArgs, matches: &clap::ArgMatches, quiet: bool) -> Result<()> {
+    refuse_unused_options(&a, matches)?;
+    if let Some(p) = &a.output {
+        super::output::check_file(p, "a PNG", &["png"])?;
+    }
     if a.lod {
         return run_lod(a, quiet);
     }
@@ -132,9 +178,6 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
                 "--grid copies one mesh; {} is already a scene",
                 a.mesh.display()
             );
-        }
-        if !(a.spacing > 0.0 && a.spacing.is_finite()) {
-            bail!("--spacing must be a positive fraction of the mesh's extent");
         }
         let m = scene.meshes.pop().expect("one mesh");
         scene = Scene::grid(m, n as usize, a.spacing)?;
@@ -153,7 +196,7 @@ pub(super) fn run(a: RenderArgs, quiet: bool) -> Result<()> {
     let bytes_per_triangle = pass.device_bytes() as f64 / m.triangle_count().max(1) as f64;
     if !a.json {
         say!(
-            "{}: {} triangles, {name}: {} meshlets, {} descriptors: {bytes_per_triangle:.1} bytes per triangle; device: {}",
+            "{}: {} triangles, {name}: {} meshlets, {} descriptors: {bytes_per_triangle:.2} bytes per triangle; device: {}",
             a.mesh.display(),
             m.triangle_count(),
             ml.len(),
@@ -254,7 +297,10 @@ fn build_per_mesh(a: &RenderArgs, scene: &Scene, quiet: bool) -> Result<Vec<Mesh
 /// `render` of an instanced scene: meshlets built once per mesh, drawn once per instance.
 fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
     if a.descriptor != DescriptorFormat::Split {
-        bail!("an instanced scene is drawn in the split descriptor layout only");
+        return Err(super::usage(format!(
+            "--descriptor is not used with an instanced scene ({} is drawn in the split layout)",
+            a.mesh.display()
+        )));
     }
     let name = &a.strategy;
     let meshlets = build_per_mesh(&a, &scene, quiet)?;
@@ -340,7 +386,6 @@ fn run_scene(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
 /// frustum-and-cone render frame by frame.
 fn run_occlusion(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
     use crate::render::occlusion::{slot_triangles, Policy};
-    check_occlusion_args(&a)?;
     let name = &a.strategy;
     let meshlets = build_per_mesh(&a, &scene, quiet)?;
     let built: usize = meshlets.iter().map(|m| m.len()).sum();
@@ -380,16 +425,6 @@ fn run_occlusion(a: RenderArgs, scene: Scene, quiet: bool) -> Result<()> {
     )
 }
 
-fn check_occlusion_args(a: &RenderArgs) -> Result<()> {
-    if a.descriptor != DescriptorFormat::Split {
-        bail!("--occlusion draws the split descriptor layout only");
-    }
-    if a.no_cull {
-        bail!("--occlusion culls on top of the frustum and cone tests: drop --no-cull");
-    }
-    Ok(())
-}
-
 /// Runs every view's camera path with occlusion culling and reports it (`header`: the command's
 /// own JSON fields; `line`: its first line of text); exit 1 unless every frame was exact.
 #[allow(clippy::too_many_arguments)]
@@ -413,8 +448,27 @@ fn occlusion_paths(
         bar.inc(1);
         Ok(path)
     };
-    // The paths are reported together once all are measured, and draw no PNG.
-    let paths = each_view(a, views, measure, |_| None, |_, _| Ok(()))?;
+    // The first path's last frame as the frustum-and-cone pass draws it: every frame of the path
+    // is checked to be pixel for pixel what occlusion culling drew.
+    let png = |cam: &Camera, p: &Path| {
+        let last = *cam
+            .approach(a.frames as usize)
+            .last()
+            .expect("a path has frames");
+        let img = match lod {
+            Some(c) => pass.render_lod_reference(
+                &last,
+                &last.lod_query(c.threshold, c.finest, true),
+                Shading::Lit,
+                false,
+            )?,
+            None => pass.render_reference(&last, Shading::Lit, false)?,
+        };
+        crate::render::write_png(p, WIDTH, HEIGHT, &img.pixels)
+            .with_context(|| format!("{}: cannot write", p.display()))
+    };
+    // The paths are reported together once all are measured.
+    let paths = each_view(a, views, measure, |_| None, png)?;
     bar.finish_and_clear();
     let mut total = Totals {
         images_identical: true,
@@ -467,6 +521,9 @@ fn occlusion_paths(
             total.time_ratio()
         );
     }
+    if let (Some(p), false) = (&a.output, a.json) {
+        say!("wrote {} (the first path's last frame)", p.display());
+    }
     let exact = paths
         .iter()
         .all(|p| p.frames.images_identical && p.warm_up.images_identical);
@@ -494,12 +551,6 @@ struct LodRow {
 
 /// `render --lod`: the task shader selects the LOD cut per view.
 fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
-    if a.descriptor != DescriptorFormat::Split {
-        bail!("--lod draws the split descriptor layout only");
-    }
-    if !(a.threshold > 0.0 && a.threshold.is_finite()) {
-        bail!("--threshold must be a positive number of pixels");
-    }
     let name = &a.strategy;
     let s = crate::strategy::by_name(name, &a.args.options())?;
     let m = load(&a.mesh, quiet)?;
@@ -515,7 +566,6 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
         .with_context(|| format!("{}: {name} LOD", a.mesh.display()))?;
     if a.occlusion {
         // The cut and occlusion culling together, checked frame by frame as for a scene.
-        check_occlusion_args(&a)?;
         if !ctx.id_check {
             bail!(crate::render::RenderError::NoIdCheck);
         }
@@ -615,7 +665,7 @@ fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
         let q = cam.lod_query(a.threshold, finest, cull);
         let img = pass.render_lod(cam, &q, true, Shading::Lit)?;
         crate::render::write_png(p, WIDTH, HEIGHT, &img.pixels)
-            .with_context(|| format!("cannot write {}", p.display()))
+            .with_context(|| format!("{}: cannot write", p.display()))
     };
     let rows = each_view(&a, &views, measure, line, png)?;
     let mismatch = rows
@@ -664,17 +714,16 @@ struct CompressedRow {
 /// `render --format F` / `--compressed FILE`: the shaders decode the compressed bytes.
 fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
     use crate::render::compressed::{decoded_reference, prepare};
-    if a.descriptor != DescriptorFormat::Split {
-        bail!("--format and --compressed draw the compressed bytes; --descriptor does not apply");
-    }
     let m = load(&a.mesh, quiet)?;
-    let (format, enc, what) = match (&a.compressed, a.format) {
+    // The baseline every mode prints: the split layout of MESH and its meshlets (`None`: those of
+    // the file, measured once it is decoded).
+    let (format, enc, what, source_split) = match (&a.compressed, a.format) {
         (Some(path), _) => {
             let data = crate::meshlet::io::read_file(path)?;
             let file = CompressedFile::from_bytes(&data, path)?;
             // The file must be an encoding of this mesh (and decode, which `prepare` repeats).
             file.check(&m, path)?;
-            (file.format, file.encoded, path.display().to_string())
+            (file.format, file.encoded, path.display().to_string(), None)
         }
         (None, Some(format)) => {
             let tolerance = super::compress::tolerance(&m, a.tolerance, a.relative_tolerance)?;
@@ -682,7 +731,8 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
             let enc = format
                 .encode(&m, &ml, tolerance)
                 .map_err(|e| anyhow::anyhow!("{}: {e}", a.mesh.display()))?;
-            (format, enc, format!("{} meshlets", a.strategy))
+            let split = pack(&m, &ml, DescriptorFormat::Split)?.device_bytes(m.vertex_count());
+            (format, enc, format!("{} meshlets", a.strategy), Some(split))
         }
         (None, None) => unreachable!("run_compressed needs --format or --compressed"),
     };
@@ -692,18 +742,25 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
     };
     let upload = prepare(&enc, format).with_context(label)?;
     let (ref_mesh, ref_ml) = decoded_reference(&enc, format).with_context(label)?;
+    // The decoded reference copies each meshlet's vertices; the meshlets' own words are the same
+    // as the source's, so only the position array is counted at MESH's vertex count.
+    let split_bytes = match source_split {
+        Some(b) => b,
+        None => pack(&ref_mesh, &ref_ml, DescriptorFormat::Split)?.device_bytes(m.vertex_count()),
+    };
     let ctx = Context::new(a.validate)?;
     let pass = Pass::compressed(&ctx, &upload).with_context(label)?;
     let reference = Pass::new(&ctx, &ref_mesh, &ref_ml)?;
     let tris = upload.triangles.max(1) as f64;
     if !a.json {
         say!(
-            "{}: {} triangles, {what} in {}: {} meshlets, {:.2} bytes per triangle resident (uncompressed split layout: {:.2}); device: {}",
+            "{}: {} triangles, {what} in {}: {} meshlets, {:.2} bytes per triangle resident (uncompressed split layout of the mesh and its meshlets: {:.2}; CPU-decoded reference drawn beside it: {:.2}); device: {}",
             a.mesh.display(),
             m.triangle_count(),
             format.name(),
             upload.meshlets(),
             upload.device_bytes() as f64 / tris,
+            split_bytes as f64 / tris,
             reference.device_bytes() as f64 / tris,
             ctx.name
         );
@@ -759,7 +816,7 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
         };
         let img = pass.render(cam, colour, Shading::Lit)?;
         crate::render::write_png(p, WIDTH, HEIGHT, &img.pixels)
-            .with_context(|| format!("cannot write {}", p.display()))
+            .with_context(|| format!("{}: cannot write", p.display()))
     };
     let rows = each_view(&a, &views, measure, line, png)?;
     let validation_errors = ctx.validation.as_ref().map(|v| v.errors());
@@ -771,7 +828,8 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
             "source": what,
             "meshlets": upload.meshlets(),
             "device_bytes": upload.device_bytes(),
-            "uncompressed_device_bytes": reference.device_bytes(),
+            "uncompressed_device_bytes": split_bytes,
+            "decoded_reference_device_bytes": reference.device_bytes(),
         });
         print_json(out, &ctx, cull, &a, &validation_errors, &rows)?;
     } else if let Some(p) = &a.output {
@@ -819,8 +877,14 @@ fn each_view<R>(
 fn cameras(a: &RenderArgs, m: &crate::mesh::Mesh) -> (Vec<Camera>, f32) {
     let aspect = WIDTH as f32 / HEIGHT as f32;
     let views = match a.distance {
-        Some(d) => Camera::random_views(m, a.views, a.seed, d),
-        None => Camera::framed_views(m, a.views, a.seed, aspect, crate::render::FRAME_FILL),
+        Some(d) => Camera::random_views(m, a.views as usize, a.seed, d),
+        None => Camera::framed_views(
+            m,
+            a.views as usize,
+            a.seed,
+            aspect,
+            crate::render::FRAME_FILL,
+        ),
     };
     let (lo, hi) = m.bounding_box();
     (views, ((hi - lo).length() * 0.5).max(1e-6))

@@ -19,8 +19,8 @@ pub struct StatsArgs {
     #[arg(short, long, default_value = "all")]
     strategy: String,
     /// Builds per strategy; the time column is their median.
-    #[arg(long, default_value_t = 1)]
-    runs: usize,
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    runs: u32,
     /// Print JSON instead of tables.
     #[arg(long)]
     json: bool,
@@ -40,7 +40,7 @@ pub(super) fn run(a: StatsArgs, quiet: bool) -> Result<()> {
         Device::Cpu => {
             let list = strategies(&a.strategy, &a.args.options())?;
             let m = scene.meshes.into_iter().next().expect("one mesh");
-            let rows = evaluate_all(&m, &list, a.args.limits, a.runs.max(1), &label, quiet);
+            let rows = evaluate_all(&m, &list, a.args.limits, a.runs as usize, &label, quiet);
             (m, rows)
         }
         Device::Gpu => {
@@ -85,7 +85,7 @@ fn on_gpu(a: &StatsArgs, m: &crate::mesh::Mesh) -> Result<Vec<Evaluation>> {
     for name in names {
         let warm_ms = warm_up(&gpu, name, limits, &opts)? * 1e3;
         let run = || build(&gpu, name, m, limits, &opts).map(|b| b.meshlets);
-        let mut e = evaluate_builds(m, name, limits, a.runs.max(1), run)?;
+        let mut e = evaluate_builds(m, name, limits, a.runs as usize, run)?;
         e.device = "gpu";
         e.setup_ms = Some(device_ms + warm_ms);
         rows.push(e);
@@ -102,7 +102,7 @@ fn run_scene(a: &StatsArgs, scene: Scene, label: &str, quiet: bool) -> Result<()
         let rows = match a.device.device {
             Device::Cpu => {
                 let list = strategies(&a.strategy, &a.args.options())?;
-                evaluate_all(m, &list, a.args.limits, a.runs.max(1), &mesh_label, quiet)
+                evaluate_all(m, &list, a.args.limits, a.runs as usize, &mesh_label, quiet)
             }
             Device::Gpu => on_gpu(a, m)?,
         };

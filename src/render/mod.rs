@@ -104,7 +104,7 @@ pub fn write_meshlet_png(
     };
     let img = pass.render(cam, how, Shading::Lit)?;
     write_png(path, WIDTH, HEIGHT, &img.pixels)
-        .with_context(|| format!("cannot write {}", path.display()))
+        .with_context(|| format!("{}: cannot write", path.display()))
 }
 
 /// Writes RGBA8 `pixels` of a `width` x `height` image as a PNG.
