@@ -37,6 +37,9 @@ fn ends_in(path: &Path, ext: &str) -> bool {
 /// one of `extensions` (none: any name), it is not a directory, its folder exists, and a file can
 /// be created there.
 pub fn check_file(path: &Path, what: &str, extensions: &[&str]) -> Result<()> {
+    if path.is_dir() {
+        bail!("{}: is a directory", path.display());
+    }
     if !extensions.is_empty() && !extensions.iter().any(|e| ends_in(path, e)) {
         let names: Vec<String> = extensions.iter().map(|e| format!(".{e}")).collect();
         bail!(
@@ -44,9 +47,6 @@ pub fn check_file(path: &Path, what: &str, extensions: &[&str]) -> Result<()> {
             path.display(),
             names.join(" or ")
         );
-    }
-    if path.is_dir() {
-        bail!("{}: is a directory", path.display());
     }
     let folder = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
