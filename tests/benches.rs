@@ -1,10 +1,12 @@
 //! Every `meshletlab bench` subcommand in its smoke mode (tiny generated meshes, one run): it
-//! exits 0 and writes its results files, each markdown file with its title and its tables. A bench
-//! whose writer breaks is found here, not at the next full bench run. The numbers are not checked:
-//! a smoke run measures nothing.
+//! exits 0 and writes its results files, each markdown file with its title and its tables, a
+//! header that says it is a smoke run, and every image it embeds. A bench whose writer breaks is
+//! found here, not at the next full bench run. The numbers are not checked: a smoke run measures
+//! nothing.
 
 mod common;
 
+use std::path::Path;
 use std::process::Command;
 
 /// (subcommand, title of its markdown, the files it must write).
@@ -12,7 +14,13 @@ const BENCHES: [(&str, &str, &[&str]); 10] = [
     (
         "build",
         "# Meshlet build benchmark",
-        &["build.md", "build.csv", "strategies.md"],
+        &[
+            "build.md",
+            "build.csv",
+            "strategies.md",
+            "figure9_vertices.svg",
+            "figure9_triangles.svg",
+        ],
     ),
     (
         "fidelity",
@@ -32,7 +40,12 @@ const BENCHES: [(&str, &str, &[&str]); 10] = [
     (
         "render",
         "# Mesh-shader rendering",
-        &["render.md", "render.csv", "render_experiments.csv"],
+        &[
+            "render.md",
+            "render.csv",
+            "render_experiments.csv",
+            "render_sphere_meshopt.png",
+        ],
     ),
     (
         "stability",
@@ -68,17 +81,73 @@ fn meshletlab(args: &[&str]) -> std::process::Output {
         .expect("meshletlab runs")
 }
 
-/// `meshletlab -q bench BENCH --smoke [extra] --out OUT`, which must succeed.
-fn smoke(bench: &str, extra: &[&str], out: &std::path::Path) {
-    let mut args = vec!["-q", "bench", bench, "--smoke"];
+/// `meshletlab -q bench BENCH --smoke [extra] --out OUT`, which must succeed; its stdout and
+/// stderr together.
+fn smoke(bench: &str, extra: &[&str], out: &Path) -> String {
+    smoke_with(&["-q"], bench, extra, out)
+}
+
+/// [`smoke`] with `global` options before `bench` (none: the progress messages too).
+fn smoke_with(global: &[&str], bench: &str, extra: &[&str], out: &Path) -> String {
+    let mut args = global.to_vec();
+    args.extend(["bench", bench, "--smoke"]);
     args.extend_from_slice(extra);
     args.extend(["--out", out.to_str().unwrap()]);
     let o = meshletlab(&args);
-    assert!(
-        o.status.success(),
-        "bench {bench} --smoke {extra:?}: {}",
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr)
     );
+    assert!(
+        o.status.success(),
+        "bench {bench} --smoke {extra:?}: {text}"
+    );
+    text
+}
+
+/// The files a markdown report embeds: `![alt](file)` and `<img src="file">`, as written.
+fn embedded(md: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for rest in md.split("![").skip(1) {
+        if let Some(link) = rest.split_once("](").and_then(|(_, r)| r.split(')').next()) {
+            out.push(link.trim().to_string());
+        }
+    }
+    for rest in md.split("<img").skip(1) {
+        let tag = rest.split('>').next().unwrap_or_default();
+        if let Some(src) = tag.split("src=").nth(1) {
+            let src = src.trim_start_matches(['"', '\'']);
+            let end = src.find(['"', '\'', ' ', '/']).unwrap_or(src.len());
+            out.push(src[..end].to_string());
+        }
+    }
+    out
+}
+
+/// A smoke report, `file` in `out`: its header (the lines before the first section or table)
+/// says that it is a smoke run and gives the smoke command line, and every file it embeds is
+/// there, beside it.
+fn check_smoke_report(bench: &str, out: &Path, file: &str, text: &str) {
+    let header: Vec<&str> = text
+        .lines()
+        .skip(1)
+        .take_while(|l| !l.starts_with('#') && !l.starts_with('|'))
+        .collect();
+    let header = header.join("\n");
+    assert!(
+        header.contains("Smoke run, not a measurement")
+            && header.contains(&format!("meshletlab bench {bench}"))
+            && header.contains("--smoke"),
+        "bench {bench}: {file} does not say in its header that it is a smoke run: {header}"
+    );
+    for link in embedded(text) {
+        let path = out.join(&link);
+        assert!(
+            path.is_file() && std::fs::metadata(&path).unwrap().len() > 0,
+            "bench {bench}: {file} embeds {link}, which the smoke run did not write"
+        );
+    }
 }
 
 #[test]
@@ -86,8 +155,26 @@ fn every_bench_writes_its_tables_in_smoke_mode() {
     let root = common::scratch("bench-smoke");
     for (bench, title, files) in BENCHES {
         let out = root.join(bench);
-        smoke(bench, &[], &out);
+        // Without -q: what a bench prints on the way is checked too.
+        let said = smoke_with(&[], bench, &[], &out);
+        assert!(
+            !said.contains("Some(") && !said.contains("None"),
+            "bench {bench} printed a Rust value: {said}"
+        );
+        // Every report the run wrote, listed or not.
+        for e in std::fs::read_dir(&out).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_some_and(|x| x == "md") {
+                let name = p.file_name().unwrap().to_string_lossy().into_owned();
+                check_smoke_report(bench, &out, &name, &std::fs::read_to_string(&p).unwrap());
+            }
+        }
         for f in files {
+            if f.ends_with(".svg") || f.ends_with(".png") {
+                let len = std::fs::metadata(out.join(f)).map_or(0, |m| m.len());
+                assert!(len > 0, "bench {bench}: {f} not written");
+                continue;
+            }
             let text = std::fs::read_to_string(out.join(f))
                 .unwrap_or_else(|e| panic!("bench {bench}: {f}: {e}"));
             if f.ends_with(".md") {
@@ -153,12 +240,11 @@ fn a_tagged_run_names_every_file_and_link_with_its_tag() {
         for f in &files {
             assert!(f.contains("-t1."), "bench {bench}: untagged file {f}");
         }
-        // Every plot the markdown links to is there (the smoke meshes hold no bunny, so the
-        // render bench writes no bunny images).
+        // Every plot and image the markdown links to is there, tagged.
         let md = std::fs::read_to_string(out.join(format!("{bench}-t1.md"))).unwrap();
         for link in md.split("](").skip(1).filter_map(|r| r.split(')').next()) {
             assert!(link.contains("-t1."), "bench {bench}: untagged link {link}");
-            if link.ends_with(".svg") {
+            if link.ends_with(".svg") || link.ends_with(".png") {
                 assert!(out.join(link).is_file(), "bench {bench}: {link} missing");
             }
         }
@@ -167,4 +253,67 @@ fn a_tagged_run_names_every_file_and_link_with_its_tag() {
     let o = meshletlab(&["-q", "bench", "render", "--smoke", "--tag", "parallel"]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("overwrite"));
+}
+
+/// Options that would make a bench run nothing, or fail after the meshes load, are refused while
+/// the command line is parsed; strategy lists take commas; errors name the file first.
+#[test]
+fn bench_options_are_checked_as_they_are_parsed() {
+    let refused = |args: &[&str], says: &str| {
+        let o = meshletlab(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    };
+    refused(
+        &["bench", "robustness", "--smoke", "--cases", "0"],
+        "--cases",
+    );
+    refused(&["bench", "robustness", "--workers", "0"], "--workers");
+    refused(&["bench", "render", "--views", "0"], "--views");
+    refused(&["bench", "render", "--distance", "nan"], "--distance");
+    refused(&["bench", "lod", "--threshold", "inf"], "--threshold");
+    refused(&["bench", "lod", "--select-views", "0"], "--select-views");
+    refused(&["bench", "kmedoids", "--runs", "0"], "--runs");
+    refused(
+        &["bench", "kmedoids", "--paper-budget=-1"],
+        "--paper-budget",
+    );
+    refused(
+        &["bench", "kmedoids", "--paper-budget", "0"],
+        "--paper-budget",
+    );
+    refused(&["bench", "fidelity", "--runs", "0"], "--runs");
+    // A comma-separated list is split: the unknown name is reported alone, the known one passed.
+    for bench in ["build", "render", "lod"] {
+        refused(
+            &["bench", bench, "-s", "meshopt,bogus"],
+            "unknown strategy 'bogus'",
+        );
+    }
+}
+
+#[test]
+fn tag_help_names_no_device_and_is_the_same_on_every_bench() {
+    let help = |bench: &str| {
+        let o = meshletlab(&["bench", bench, "--help"]);
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        // The flag's help (clap lays it out beside the flag or below it).
+        let at = text.find("--tag <TAG>").expect("--tag in the help") + "--tag <TAG>".len();
+        let rest = text[at..].trim_start();
+        rest.lines().next().unwrap_or_default().to_string()
+    };
+    let gpu = help("gpu");
+    assert!(!gpu.contains("h100") && gpu.contains("<bench>"), "{gpu}");
+    for bench in ["kmedoids", "render", "lod", "compress-render"] {
+        assert_eq!(help(bench), gpu, "bench {bench}");
+    }
+}
+
+#[test]
+fn a_dump_that_cannot_be_written_names_the_folder_first() {
+    let o = meshletlab(&["bench", "robustness", "--dump", "3", "-o", "/proc/xx"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.starts_with("error: /proc/xx: cannot "), "{err}");
 }

@@ -8,8 +8,8 @@ use super::table::{
     Style, Table,
 };
 use super::{
-    evaluate, median, paper, plot, quality_cells, right_align_numbers, write_header, Common,
-    Evaluation, QUALITY_HEADER,
+    create_dir, evaluate, median, paper, plot, quality_cells, right_align_numbers, smoke,
+    write_file, write_header, Common, Evaluation, QUALITY_HEADER,
 };
 use crate::mesh::{self, Mesh};
 use crate::meshlet::Limits;
@@ -54,9 +54,9 @@ pub struct Args {
     /// Mesh folder, output folder, smoke run (one run, no `+refine-max` rows), quiet.
     #[command(flatten)]
     pub common: Common,
-    /// Only these strategies (repeatable; default all but the slow kmedoids-paper, plus the
-    /// `+refine` rows and the per-preset count comparison).
-    #[arg(short, long)]
+    /// Only these strategies (comma-separated or repeated; default all but the slow
+    /// kmedoids-paper, plus the `+refine` rows and the per-preset count comparison).
+    #[arg(short, long, value_delimiter = ',', value_parser = super::strategy_name)]
     pub strategy: Vec<String>,
     /// Skip the `+refine` rows and the per-preset count comparison (64/84, 128/128).
     #[arg(long)]
@@ -82,6 +82,29 @@ impl Args {
             refine_max: !self.no_refine_max && !self.common.smoke,
             stress: !self.common.smoke,
         })
+    }
+}
+
+impl Config {
+    /// Whether this is a smoke run: its meshes are the smoke meshes in its own output folder
+    /// ([`smoke::prepare`] put them there).
+    pub fn smoke(&self) -> bool {
+        self.meshes == smoke::dir(&self.out)
+    }
+
+    /// The output folder of a smoke run, `None` for a measurement (see [`super::write_header`]).
+    fn smoke_out(&self) -> Option<&Path> {
+        self.smoke().then_some(self.out.as_path())
+    }
+
+    /// The mesh of the Figure-9 histograms (file stem): the bunny, as in the paper, or in a smoke
+    /// run the first smoke mesh, so that the smoke run writes the plots too.
+    fn figure9_mesh(&self) -> &'static str {
+        if self.smoke() {
+            smoke::FIRST
+        } else {
+            "stanford_bunny"
+        }
     }
 }
 
@@ -276,14 +299,12 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
         }
     }
     pb.finish_and_clear();
-    std::fs::create_dir_all(&cfg.out)
-        .with_context(|| format!("{}: cannot create", cfg.out.display()))?;
-    let csv = cfg.out.join("build.csv");
-    crate::atomic::write(&csv, table().csv(rows.iter().chain(&preset_rows)))
-        .with_context(|| format!("{}: cannot write", csv.display()))?;
-    let md = cfg.out.join("build.md");
-    crate::atomic::write(&md, to_markdown(&rows, &loads, cfg))
-        .with_context(|| format!("{}: cannot write", md.display()))?;
+    create_dir(&cfg.out)?;
+    write_file(
+        cfg.out.join("build.csv"),
+        table().csv(rows.iter().chain(&preset_rows)),
+    )?;
+    write_file(cfg.out.join("build.md"), to_markdown(&rows, &loads, cfg))?;
     write_strategies(&rows, &preset_rows, cfg)?;
     if let Some(bad) = rows
         .iter()
@@ -380,7 +401,8 @@ fn flags(cfg: &Config) -> String {
     }
     if !cfg.refined {
         f += " --no-refined";
-    } else if !cfg.refine_max {
+    } else if !cfg.refine_max && !cfg.smoke() {
+        // A smoke run leaves the `+refine-max` rows out by itself.
         f += " --no-refine-max";
     }
     f
@@ -398,7 +420,13 @@ fn command(cfg: &Config) -> String {
 
 fn to_markdown(rows: &[Row], loads: &[LoadRow], cfg: &Config) -> String {
     let mut s = String::new();
-    write_header(&mut s, "Meshlet build benchmark", &command(cfg), "");
+    write_header(
+        &mut s,
+        "Meshlet build benchmark",
+        &command(cfg),
+        "",
+        cfg.smoke_out(),
+    );
     let _ = writeln!(
         s,
         "Time is the median of {} builds (wall clock, one thread unless the strategy parallelises; `+refine` rows: \
@@ -452,6 +480,7 @@ fn write_strategies(rows: &[Row], preset_rows: &[Row], cfg: &Config) -> Result<(
         "Strategies compared",
         &command(cfg),
         " (same run as build.md)",
+        cfg.smoke_out(),
     );
     let strategies: Vec<String> = {
         let mut v: Vec<String> = rows.iter().map(|r| r.eval.strategy.clone()).collect();
@@ -550,15 +579,20 @@ fn write_strategies(rows: &[Row], preset_rows: &[Row], cfg: &Config) -> Result<(
         write_presets(&mut s, rows, preset_rows, cfg);
     }
 
-    if rows.iter().any(|r| r.mesh == "stanford_bunny") {
+    let fig9 = cfg.figure9_mesh();
+    if rows.iter().any(|r| r.mesh == fig9) {
+        let (on, plotted, note) = match fig9 {
+            "stanford_bunny" => ("the bunny".to_string(), "Bunny", ""),
+            m => (m.to_string(), m, "; the bunny in a full run"),
+        };
         let _ = writeln!(
             s,
-            "## Vertices and triangles per meshlet on the bunny (paper Figure 9)\n"
+            "## Vertices and triangles per meshlet on {on} (paper Figure 9{note})\n"
         );
         let _ = writeln!(s, "![vertices per meshlet](figure9_vertices.svg)\n\n![triangles per meshlet](figure9_triangles.svg)\n");
         let hist = |f: &dyn Fn(&Row) -> &Vec<u32>| -> Vec<plot::Series> {
             rows.iter()
-                .filter(|r| r.mesh == "stanford_bunny")
+                .filter(|r| r.mesh == fig9)
                 .map(|r| plot::Series {
                     label: r.eval.strategy.clone(),
                     points: f(r)
@@ -571,7 +605,7 @@ fn write_strategies(rows: &[Row], preset_rows: &[Row], cfg: &Config) -> Result<(
         };
         plot::line_chart(
             &cfg.out.join("figure9_vertices.svg"),
-            &format!("Bunny: vertices per meshlet ({})", cfg.limits),
+            &format!("{plotted}: vertices per meshlet ({})", cfg.limits),
             "vertices in the meshlet",
             "meshlets",
             &hist(&|r| &r.eval.metrics.vertex_histogram),
@@ -583,7 +617,7 @@ fn write_strategies(rows: &[Row], preset_rows: &[Row], cfg: &Config) -> Result<(
         )?;
         plot::line_chart(
             &cfg.out.join("figure9_triangles.svg"),
-            &format!("Bunny: triangles per meshlet ({})", cfg.limits),
+            &format!("{plotted}: triangles per meshlet ({})", cfg.limits),
             "triangles in the meshlet",
             "meshlets",
             &hist(&|r| &r.eval.metrics.triangle_histogram),
@@ -594,8 +628,7 @@ fn write_strategies(rows: &[Row], preset_rows: &[Row], cfg: &Config) -> Result<(
             },
         )?;
     }
-    let path = cfg.out.join("strategies.md");
-    crate::atomic::write(&path, s).with_context(|| format!("{}: cannot write", path.display()))
+    write_file(cfg.out.join("strategies.md"), s)
 }
 
 /// The count comparison: at every preset and on every mesh, the refined meshoptimizer output

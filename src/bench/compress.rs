@@ -17,13 +17,13 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{median, write_header, Common};
+use super::{create_dir, median, write_file, write_header, Common};
 use crate::compress::Codec;
 use crate::compress::{Encoded, Sizes};
 use crate::mesh::{self, Mesh};
 use crate::meshlet::{Limits, Meshlets};
 use crate::strategy::{self, Options};
-use anyhow::{Context as _, Result};
+use anyhow::Result;
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -77,7 +77,8 @@ pub struct Row {
     pub triangles: usize,
     /// Vertices used by a triangle.
     pub vertices: usize,
-    /// Codec.
+    /// Codec (serialised by its command-line name).
+    #[serde(serialize_with = "codec_name")]
     pub format: Codec,
     /// Strategy and limits of the meshlets.
     pub meshlets_from: String,
@@ -99,6 +100,11 @@ pub struct Row {
     pub encode_mtps: [f64; 2],
     /// Decode speed (every meshlet at random access), M triangles/s on 1 and 2 threads.
     pub decode_mtps: [f64; 2],
+}
+
+/// A codec as the command line names it (`laced-wires`), not as Rust does.
+fn codec_name<S: serde::Serializer>(c: &Codec, s: S) -> std::result::Result<S::Ok, S::Error> {
+    s.serialize_str(&c.name())
 }
 
 impl Row {
@@ -248,8 +254,7 @@ fn scene(files: &[PathBuf]) -> Result<(String, Mesh)> {
 /// Runs the benchmark.
 pub fn run(cfg: &Config) -> Result<Vec<Row>> {
     let files = mesh_files(&cfg.common.meshes_dir()?)?;
-    std::fs::create_dir_all(&cfg.common.out)
-        .with_context(|| format!("{}: cannot create", cfg.common.out.display()))?;
+    create_dir(&cfg.common.out)?;
     let pools = [crate::common::one_thread_pool(), pool(2)?];
     let mut meshes: Vec<(String, Mesh)> = Vec::new();
     for f in &files {
@@ -339,14 +344,14 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
 type Fig8 = (String, u32, &'static str, f64, f64, f64);
 
 fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
-    crate::atomic::write(cfg.common.out.join("compress.csv"), encodings().csv(rows))?;
+    write_file(cfg.common.out.join("compress.csv"), encodings().csv(rows))?;
     let mut f8 = String::from(
         "mesh,bits_per_axis,series,max_error_rel,geometry_bits_per_vertex,encode_seconds\n",
     );
     for (m, b, s, e, bits, secs) in fig8 {
         writeln!(f8, "{m},{b},{s},{e:.4e},{bits:.3},{secs:.4}")?;
     }
-    crate::atomic::write(cfg.common.out.join("compress_fig8.csv"), f8)?;
+    write_file(cfg.common.out.join("compress_fig8.csv"), f8)?;
 
     // Figure 8 per mesh.
     let mut names: Vec<&String> = fig8.iter().map(|f| &f.0).collect();
@@ -431,8 +436,9 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
     write_header(
         &mut md,
         "Compressed meshlets",
-        "meshletlab bench compress",
+        &format!("meshletlab bench compress --runs {}", cfg.runs()),
         "",
+        cfg.common.smoke_out(),
     );
     writeln!(
         md,
@@ -530,7 +536,7 @@ fn write(cfg: &Config, rows: &[Row], fig8: &[Fig8]) -> Result<()> {
     for p in &plots {
         writeln!(md, "![{p}]({p})")?;
     }
-    crate::atomic::write(cfg.common.out.join("compress.md"), md)?;
+    write_file(cfg.common.out.join("compress.md"), md)?;
     Ok(())
 }
 
@@ -550,7 +556,7 @@ fn encodings<'a>() -> Table<'a, Row> {
         .col("mesh", Left, |r: &Row| r.mesh.clone())
         .csv_only("triangles", |r| r.triangles.to_string())
         .csv_only("vertices", |r| r.vertices.to_string())
-        .col("format", Left, |r| format!("{:?}", r.format))
+        .col("format", Left, |r| r.format.name())
         .renamed("meshlets from", "meshlets_from", Left, |r| {
             r.meshlets_from.to_string()
         })

@@ -16,7 +16,7 @@
 
 use super::build::{mesh_files, mesh_name};
 use super::plot::{line_chart, Axes, Series};
-use super::{is_lavapipe, median, p95, write_header, Common, Tag};
+use super::{create_dir, is_lavapipe, median, p95, write_file, write_header, Common, Tag};
 use crate::compress::paper_tolerance;
 use crate::compress::Codec;
 use crate::mesh::{self, Mesh};
@@ -262,8 +262,7 @@ fn measure(ctx: &Context, name: &str, m: &Mesh, cfg: &Config) -> Result<Vec<Row>
 /// Runs the benchmark and writes results/.
 pub fn run(cfg: &Config) -> Result<Vec<Row>> {
     let files = mesh_files(&cfg.common.meshes_dir()?)?;
-    std::fs::create_dir_all(&cfg.common.out)
-        .with_context(|| format!("{}: cannot create", cfg.common.out.display()))?;
+    create_dir(&cfg.common.out)?;
     let ctx = Context::new(false)?;
     let bar = super::progress::bar(cfg.common.quiet, files.len() as u64 + 1);
     let mut rows = Vec::new();
@@ -542,7 +541,7 @@ impl<'a> Report<'a> {
                 r.mesh, r.triangles, r.meshlets, r.variant, r.bytes, r.culled
             )?;
         }
-        crate::atomic::write(
+        write_file(
             self.cfg
                 .common
                 .out
@@ -560,8 +559,14 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
     write_header(
         &mut md,
         "Compressed meshlets rendered from their encoded bytes",
-        "meshletlab bench compress-render",
+        &format!(
+            "meshletlab bench compress-render --views {} --scene-copies {}{}",
+            cfg.views(),
+            cfg.scene_copies(),
+            cfg.tag.flag()
+        ),
         "",
+        cfg.common.smoke_out(),
     );
     report.write_setup(&mut md)?;
     report.write_bytes(&mut md)?;
@@ -569,6 +574,6 @@ fn write(cfg: &Config, ctx: &Context, rows: &[Row]) -> Result<()> {
     report.write_culled(&mut md)?;
     report.write_ratios(&mut md)?;
     report.write_tradeoff(&mut md)?;
-    crate::atomic::write(cfg.common.out.join(cfg.tag.name("compress-render.md")), md)?;
+    write_file(cfg.common.out.join(cfg.tag.name("compress-render.md")), md)?;
     report.write_csv()
 }

@@ -13,11 +13,13 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{evaluate, median, paper, write_header, Common, Evaluation};
+use super::{
+    create_dir, evaluate, median, paper, smoke, write_file, write_header, Common, Evaluation,
+};
 use crate::mesh;
 use crate::meshlet::Limits;
 use crate::strategy::{self, GreedyPaper, Options, Strategy};
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -42,7 +44,7 @@ pub struct Args {
     #[arg(long, default_value = "stanford_bunny", display_order = 1)]
     pub mesh: String,
     /// Builds per row (median time).
-    #[arg(long, default_value_t = 9, display_order = 2)]
+    #[arg(long, default_value_t = 9, display_order = 2, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub runs: usize,
     /// Mesh folder, output folder, smoke run (the first smoke mesh, one build per row), quiet.
     #[command(flatten)]
@@ -55,9 +57,17 @@ impl Args {
     pub fn config(&self) -> Result<Config> {
         Ok(Config {
             mesh: self.common.mesh_file(&self.mesh)?.1,
-            runs: self.common.or_smoke(self.runs.max(1), 1),
+            runs: self.common.or_smoke(self.runs, 1),
             out: self.common.out.clone(),
         })
+    }
+}
+
+impl Config {
+    /// The output folder of a smoke run (its mesh is the first smoke mesh in its own output
+    /// folder, where [`smoke::prepare`] put it), `None` for a measurement.
+    fn smoke_out(&self) -> Option<&std::path::Path> {
+        (self.mesh == smoke::first(&smoke::dir(&self.out)).1).then_some(self.out.as_path())
     }
 }
 
@@ -102,7 +112,8 @@ fn strategies() -> Vec<(Box<dyn Strategy>, &'static str)> {
 
 /// Runs the experiment and writes fidelity.md and fidelity.csv; returns the rows.
 pub fn run(cfg: &Config) -> Result<Vec<Row>> {
-    let m = mesh::load(&cfg.mesh).with_context(|| format!("loading {}", cfg.mesh.display()))?;
+    // The error names the file.
+    let m = mesh::load(&cfg.mesh)?;
     let limits_125 = Limits::new(64, 125).map_err(anyhow::Error::msg)?;
     let mut rows = Vec::new();
     for limits in [Limits::DEFAULT, limits_125] {
@@ -120,13 +131,12 @@ pub fn run(cfg: &Config) -> Result<Vec<Row>> {
             });
         }
     }
-    std::fs::create_dir_all(&cfg.out).with_context(|| format!("creating {}", cfg.out.display()))?;
-    let md = cfg.out.join("fidelity.md");
-    crate::atomic::write(&md, markdown(cfg, &mesh_name(&cfg.mesh), &m, &rows))
-        .with_context(|| format!("writing {}", md.display()))?;
-    let csv = cfg.out.join("fidelity.csv");
-    crate::atomic::write(&csv, table().csv(&rows))
-        .with_context(|| format!("writing {}", csv.display()))?;
+    create_dir(&cfg.out)?;
+    write_file(
+        cfg.out.join("fidelity.md"),
+        markdown(cfg, &mesh_name(&cfg.mesh), &m, &rows),
+    )?;
+    write_file(cfg.out.join("fidelity.csv"), table().csv(&rows))?;
     Ok(rows)
 }
 
@@ -235,6 +245,7 @@ fn markdown(cfg: &Config, name: &str, m: &mesh::Mesh, rows: &[Row]) -> String {
         "Paper fidelity: greedy and bounding sphere on the bunny",
         &format!("meshletlab bench fidelity --runs {}", cfg.runs),
         &format!(" from {name} ({} triangles)", m.triangle_count()),
+        cfg.smoke_out(),
     );
     let _ = writeln!(
         s,

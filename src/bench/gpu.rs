@@ -12,7 +12,7 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{floor, is_lavapipe, Common, Tag};
+use super::{create_dir, floor, is_lavapipe, write_file, Common, Tag};
 use crate::adjacency::{dual_graph, vertex_triangles};
 use crate::gpu::source::MeshSource;
 use crate::gpu::{self, timed as secs, Gpu, Profile};
@@ -304,7 +304,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             eprintln!("{m}");
         }
     };
-    say(format!("GPU: {}", g.describe()));
+    say(format!("GPU: {}", super::gpu_name(&g)));
     warm_up(&g, cfg.limits)?;
     // The bandwidths the physical limits are taken at (64 MiB copied on the GPU, 256 MiB on the
     // host; medians).
@@ -317,12 +317,13 @@ pub fn run(cfg: &Config) -> Result<()> {
     for (name, m) in &inputs {
         let profiled = PROFILED.contains(&name.as_str()) || (cfg.common.smoke && rows.is_empty());
         let row = measure_mesh(cfg, &g, &one, name, m, profiled)?;
+        let km_gpu = row
+            .km_gpu
+            .as_ref()
+            .map_or("left out".to_string(), |k| format!("{:.2}s", k.seconds));
         say(format!(
-            "{name}: adjacency cpu {:.3}s gpu kernel {:.3}s; kmedoids-flat rayon {:.2}s gpu {:?}",
-            row.adj_cpu,
-            row.adj_gpu.kernel,
-            row.km_rayon,
-            row.km_gpu.as_ref().map(|k| k.seconds)
+            "{name}: adjacency cpu {:.3}s gpu kernel {:.3}s; kmedoids-flat rayon {:.2}s gpu {km_gpu}",
+            row.adj_cpu, row.adj_gpu.kernel, row.km_rayon,
         ));
         rows.push(row);
     }
@@ -354,7 +355,10 @@ fn warm_up(g: &Gpu, limits: Limits) -> Result<()> {
 fn load_inputs(cfg: &Config, meshes: &std::path::Path) -> Result<Vec<(String, Mesh)>> {
     let load = |stem: &str| -> Result<Mesh> {
         let p = meshes.join(format!("{stem}.ply.zst"));
-        mesh::load(&p).with_context(|| format!("bench gpu needs {}", p.display()))
+        // The error names the file first; what needs it follows.
+        mesh::load(&p).map_err(|e| {
+            anyhow::anyhow!("{e} (bench gpu runs on the bunny, igea and the dragon of --meshes)")
+        })
     };
     let mut inputs: Vec<(String, Mesh)> = Vec::new();
     if cfg.common.smoke {
@@ -943,21 +947,22 @@ fn write(
     sweep: &Sweep,
     floors: &Floors,
 ) -> Result<()> {
-    std::fs::create_dir_all(&cfg.common.out)?;
+    create_dir(&cfg.common.out)?;
     let mut md = String::new();
-    let tag = cfg
-        .tag
-        .tag
-        .as_ref()
-        .map_or(String::new(), |t| format!(" --tag {t}"));
-    let command = format!("meshletlab bench gpu{tag}");
+    let quick = if cfg.quick && !cfg.common.smoke {
+        " --quick"
+    } else {
+        ""
+    };
+    let command = format!("meshletlab bench gpu{quick}{}", cfg.tag.flag());
     super::write_header(
         &mut md,
         "GPU kernels against their CPU references",
         &command,
         "",
+        cfg.common.smoke_out(),
     );
-    writeln!(md, "GPU adapter: **{}**{}. Every GPU output below was compared with the CPU reference and is identical (adjacency CSR arrays; k-medoids labels and meshlets; parallel-grower claims, orders and meshlets); a difference aborts the benchmark.\n", g.describe(), if g.timestamps { "; kernel times from GPU timestamp queries" } else { "; no timestamp queries: kernel times are wall time" })?;
+    writeln!(md, "GPU adapter: **{}**{}. Every GPU output below was compared with the CPU reference and is identical (adjacency CSR arrays; k-medoids labels and meshlets; parallel-grower claims, orders and meshlets); a difference aborts the benchmark.\n", super::gpu_name(g), if g.timestamps { "; kernel times from GPU timestamp queries" } else { "; no timestamp queries: kernel times are wall time" })?;
     if is_lavapipe(&g.info.name) {
         writeln!(md, "Lavapipe is itself a CPU renderer on this machine's cores: a GPU/CPU ratio here compares LLVM-compiled compute shaders with native Rust on the same {} cores, not a GPU with a CPU.\n", std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1))?;
     }
@@ -982,12 +987,12 @@ fn write(
         cfg.tag.name("gpu_time_vs_error.svg"),
         cfg.tag.name("gpu_grower_sweep.svg")
     )?;
-    crate::atomic::write(cfg.common.out.join(cfg.tag.name("gpu.md")), md)?;
-    crate::atomic::write(
+    write_file(cfg.common.out.join(cfg.tag.name("gpu.md")), md)?;
+    write_file(
         cfg.common.out.join(cfg.tag.name("gpu.csv")),
         adjacency_table().csv(rows),
     )?;
-    crate::atomic::write(
+    write_file(
         cfg.common.out.join(cfg.tag.name("gpu_floor.csv")),
         floor::table().csv(&floor_rows),
     )?;

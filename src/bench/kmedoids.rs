@@ -10,7 +10,7 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{plot, Common};
+use super::{create_dir, plot, write_file, Common};
 use crate::mesh;
 use crate::meshlet::{bounds, validate, Limits, Metrics};
 use crate::strategy::kmedoids::{cluster, Clustering, Config as KConfig, Grow, Mode};
@@ -37,7 +37,7 @@ pub struct Config {
     #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
     pub limits: Limits,
     /// Seconds paper mode may spend per mesh before finishing the fast way.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 60.0, value_parser = super::positive::<f64>)]
     pub paper_budget: f64,
     /// Leave out the paper's mode.
     #[arg(long)]
@@ -51,7 +51,7 @@ pub struct Config {
     /// Timed runs of `kmedoids`, `kmedoids-parallel` and meshoptimizer,
     /// interleaved, per mesh under 2 M triangles (the median is reported); one run above. Small
     /// meshes get more rounds, until the rounds add up to half a second (at most 31).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub runs: usize,
     /// Mesh (file stem) for the iteration/threshold sweep.
     #[arg(long, default_value = "stanford_bunny")]
@@ -64,7 +64,7 @@ pub struct Config {
 impl Config {
     /// Paper mode's time budget per mesh (half a second in a smoke run).
     pub fn paper_budget(&self) -> Duration {
-        Duration::from_secs_f64(self.common.or_smoke(self.paper_budget, 0.5).max(0.0))
+        Duration::from_secs_f64(self.common.or_smoke(self.paper_budget, 0.5))
     }
 
     /// The sweep's mesh (file stem): the first smoke mesh in a smoke run.
@@ -550,7 +550,12 @@ fn corpus(cfg: &Config, dir: &std::path::Path) -> Result<Vec<(String, mesh::Mesh
             .iter()
             .find(|(n, _)| n == stem)
             .map(|(_, m)| m.clone())
-            .with_context(|| format!("the scaled runs need {stem} in {}", dir.display()))?;
+            .with_context(|| {
+                format!(
+                    "{}: no {stem} mesh here (the scaled runs need it; --skip-scaled leaves them out)",
+                    dir.display()
+                )
+            })?;
         for (levels, label) in [(1, "x4"), (2, "x16")] {
             let m = mesh::subdivide::subdivide(&dragon, levels).map_err(anyhow::Error::msg)?;
             out.push((format!("{stem} {label}"), m));
@@ -604,16 +609,18 @@ pub fn run(cfg: &Config) -> Result<()> {
     // The sweep: each method's knobs on one mesh.
     let Some((_, sm)) = inputs.iter().find(|(n, _)| *n == cfg.sweep_mesh()) else {
         bail!(
-            "sweep mesh '{}' is not in {}",
-            cfg.sweep_mesh(),
-            meshes.display()
+            "{}: no mesh '{}' here for the sweep (--sweep-mesh)",
+            meshes.display(),
+            cfg.sweep_mesh()
         );
     };
     let mut sweep = run_sweep(cfg, sm)?;
     mark_pareto(&mut sweep);
     write_data(cfg, &runs, &sweep)?;
-    let out = cfg.common.out.join(cfg.tag.name("kmedoids.md"));
-    crate::atomic::write(out, report(cfg, &runs, &sweep))?;
+    write_file(
+        cfg.common.out.join(cfg.tag.name("kmedoids.md")),
+        report(cfg, &runs, &sweep),
+    )?;
     Ok(())
 }
 
@@ -807,9 +814,9 @@ fn run_sweep(cfg: &Config, sm: &mesh::Mesh) -> Result<Vec<SweepRow>> {
 fn write_data(cfg: &Config, runs: &[Run], sweep: &[SweepRow]) -> Result<()> {
     let thresholds = SWEEP_THRESHOLDS;
     let out = |f: &str| cfg.common.out.join(cfg.tag.name(f));
-    std::fs::create_dir_all(&cfg.common.out)?;
-    crate::atomic::write(out("kmedoids.csv"), runs_table().csv(runs))?;
-    crate::atomic::write(
+    create_dir(&cfg.common.out)?;
+    write_file(out("kmedoids.csv"), runs_table().csv(runs))?;
+    write_file(
         out("kmedoids_sweep.csv"),
         sweep_table(cfg.sweep_mesh()).csv(sweep),
     )?;
@@ -910,16 +917,14 @@ fn report(cfg: &Config, runs: &[Run], sweep: &[SweepRow]) -> String {
         "meshletlab bench kmedoids --limits {} --paper-budget {}{}",
         cfg.limits,
         cfg.paper_budget().as_secs_f64(),
-        cfg.tag
-            .tag
-            .as_ref()
-            .map_or(String::new(), |t| format!(" --tag {t}")),
+        cfg.tag.flag(),
     );
     super::write_header(
         &mut s,
         "k-medoids at scale, and run time against error",
         &command,
         "",
+        cfg.common.smoke_out(),
     );
     let _ = writeln!(
         s,
@@ -1029,8 +1034,11 @@ fn report(cfg: &Config, runs: &[Run], sweep: &[SweepRow]) -> String {
          too few clusters are light for a round to run: `iterations run` says how many ran); `kmedoids-flat`: the iteration limit and \
          convergence threshold (mean medoid shift in hops) of its clustering. One run per point. Error: mean \
          hops to the medoid, and the meshlet count. The Pareto front is taken over time and meshlets. Data: \
-         kmedoids_sweep.csv.\n\n\
-         ![hops](kmedoids_sweep_hops.svg)\n\n![meshlets](kmedoids_sweep_meshlets.svg)\n"
+         {}.\n\n\
+         ![hops]({})\n\n![meshlets]({})\n",
+        cfg.tag.name("kmedoids_sweep.csv"),
+        cfg.tag.name("kmedoids_sweep_hops.svg"),
+        cfg.tag.name("kmedoids_sweep_meshlets.svg")
     );
     let _ = writeln!(s, "{}", sweep_table(cfg.sweep_mesh()).markdown(sweep));
     s

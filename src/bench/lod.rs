@@ -19,7 +19,7 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{is_lavapipe, median, write_header, Common, Tag};
+use super::{create_dir, is_lavapipe, median, write_file, write_header, Common, Tag};
 use crate::common::one_thread_pool;
 use crate::lod::flat::{self, Flat};
 use crate::lod::{self, Grouping, Level, LodInfo, NO_GROUP};
@@ -28,7 +28,7 @@ use crate::meshlet::bounds::Sphere;
 use crate::meshlet::{Limits, Meshlet, Meshlets};
 use crate::render::{Camera, Context, Pass, Pipeline, RenderError, Shading};
 use crate::strategy::{self, Options};
-use anyhow::{Context as _, Result};
+use anyhow::Result;
 use indicatif::ProgressBar;
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -47,16 +47,16 @@ pub struct Config {
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     pub runs: u32,
     /// Random directions per camera distance for the triangle counts.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub select_views: usize,
     /// Views per camera distance for frame times (0: do not render).
     #[arg(long, default_value_t = 3)]
     pub render_views: usize,
     /// LOD threshold in pixels.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::positive::<f32>)]
     pub threshold: f32,
     /// Level-0 strategies to compare (comma-separated).
-    #[arg(short, long, value_delimiter = ',', default_values_t = DEFAULT_STRATEGIES.iter().map(|s| s.to_string()))]
+    #[arg(short, long, value_delimiter = ',', value_parser = super::strategy_name, default_values_t = DEFAULT_STRATEGIES.iter().map(|s| s.to_string()))]
     pub strategy: Vec<String>,
     /// Largest mesh (triangles) of the level-0 strategy comparison.
     #[arg(long, default_value_t = 400_000)]
@@ -81,9 +81,9 @@ impl Config {
         self.common.or_smoke(self.runs as usize, 1)
     }
 
-    /// Views per distance for the triangle counts (at least one; two in a smoke run).
+    /// Views per distance for the triangle counts: two in a smoke run.
     pub fn select_views(&self) -> usize {
-        self.common.or_smoke(self.select_views.max(1), 2)
+        self.common.or_smoke(self.select_views, 2)
     }
 
     /// Views per distance for frame times (0: no rendering; at most one in a smoke run).
@@ -608,12 +608,12 @@ fn fmt_ratio(a: usize, b: usize) -> String {
 
 /// Runs the benchmark and writes the results.
 pub fn run(cfg: &Config) -> Result<()> {
+    // A library caller's configuration skips the command line's check.
     if !(cfg.threshold > 0.0 && cfg.threshold.is_finite()) {
         anyhow::bail!("--threshold must be a positive number of pixels");
     }
     let files = mesh_files(&cfg.common.meshes_dir()?)?;
-    std::fs::create_dir_all(&cfg.common.out)
-        .with_context(|| format!("{}: cannot create", cfg.common.out.display()))?;
+    create_dir(&cfg.common.out)?;
     let ctx = if cfg.render_views() > 0 {
         Some(Context::new(false)?)
     } else {
@@ -688,6 +688,21 @@ pub fn run(cfg: &Config) -> Result<()> {
     )
 }
 
+/// The command line of the run, for the report's header: the options that change what is
+/// measured.
+fn lod_command(cfg: &Config) -> String {
+    let mut c = format!(
+        "meshletlab bench lod --runs {} --threshold {} --strategy {}",
+        cfg.runs(),
+        cfg.threshold,
+        cfg.strategy.join(",")
+    );
+    if cfg.quick && !cfg.common.smoke {
+        c += " --quick";
+    }
+    c + &cfg.tag.flag()
+}
+
 fn write_results(
     cfg: &Config,
     results: &[MeshResult],
@@ -699,8 +714,9 @@ fn write_results(
     write_header(
         &mut md,
         "Cluster LOD: ours beside meshoptimizer's clusterlod",
-        "meshletlab bench lod",
+        &lod_command(cfg),
         "",
+        cfg.common.smoke_out(),
     );
     writeln!(
         md,
@@ -960,16 +976,16 @@ fn write_results(
                 .join(", ")
         )?;
     }
-    crate::atomic::write(cfg.common.out.join(cfg.tag.name("lod.md")), md)?;
-    crate::atomic::write(
+    write_file(cfg.common.out.join(cfg.tag.name("lod.md")), md)?;
+    write_file(
         cfg.common.out.join(cfg.tag.name("lod.csv")),
         dag_table().csv(&dags),
     )?;
-    crate::atomic::write(
+    write_file(
         cfg.common.out.join(cfg.tag.name("lod_levels.csv")),
         level_csv,
     )?;
-    crate::atomic::write(
+    write_file(
         cfg.common.out.join(cfg.tag.name("lod_curve.csv")),
         curve_csv,
     )?;

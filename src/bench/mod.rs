@@ -26,9 +26,9 @@ pub mod table;
 use crate::mesh::Mesh;
 use crate::meshlet::{bounds, validate, Limits, Meshlets, Metrics};
 use crate::strategy::Strategy;
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 use serde::Serialize;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 /// Help of every bench's `--smoke`.
@@ -87,19 +87,35 @@ impl Common {
             n
         }
     }
+
+    /// The output folder of a smoke run, `None` for a measurement: what [`write_header`] takes.
+    pub fn smoke_out(&self) -> Option<&Path> {
+        self.smoke.then_some(self.out.as_path())
+    }
 }
+
+/// The help of every bench's `--tag`: one text, since the flag is one [`Tag`] wherever it appears.
+pub const TAG_HELP: &str = "Suffix for every file this bench writes, for a run on another device \
+    beside the committed results: `--tag TAG` writes results/<bench>-TAG.md and its tables and \
+    plots tagged alike (letters, digits, '-')";
 
 /// The `--tag` of the benches that measure a GPU: a run on another device writes its files beside
 /// the committed lavapipe ones instead of over them.
 #[derive(clap::Args, Clone, Debug, Default)]
 pub struct Tag {
-    /// Suffix for every file this bench writes, for a run on another device beside the committed
-    /// results: `--tag h100` writes gpu-h100.md, gpu_scaling-h100.svg, ... (letters, digits, '-').
-    #[arg(long, value_parser = parse_tag)]
+    /// A suffix for the file names ([`TAG_HELP`] is its help).
+    #[arg(long, value_name = "TAG", help = TAG_HELP, value_parser = parse_tag)]
     pub tag: Option<String>,
 }
 
 impl Tag {
+    /// The flag as a command line spells it (` --tag TAG`), or empty: for the reports' headers.
+    pub fn flag(&self) -> String {
+        self.tag
+            .as_ref()
+            .map_or(String::new(), |t| format!(" --tag {t}"))
+    }
+
     /// `file` with the tag before its extension (`gpu.md` -> `gpu-h100.md`); `file` untagged.
     pub fn name(&self, file: &str) -> String {
         match (&self.tag, file.rsplit_once('.')) {
@@ -131,6 +147,72 @@ fn parse_tag(s: &str) -> std::result::Result<String, String> {
         ));
     }
     Ok(s.to_string())
+}
+
+/// The value parser of every bench's strategy list (`-s a,b` or `-s a -s b`, with
+/// `value_delimiter = ','`): the name trimmed, as `stats` trims it, and known, so that a typo is
+/// refused before any mesh loads.
+pub fn strategy_name(s: &str) -> std::result::Result<String, String> {
+    let s = s.trim();
+    if s.is_empty() {
+        return Err("empty strategy name".into());
+    }
+    crate::strategy::by_name(s, &Default::default()).map_err(|e| e.to_string())?;
+    Ok(s.to_string())
+}
+
+/// [`strategy_name`] for the lists where an empty name means "none" (`--experiment-strategy ''`).
+pub fn strategy_name_or_none(s: &str) -> std::result::Result<String, String> {
+    match s.trim() {
+        "" => Ok(String::new()),
+        n => strategy_name(n),
+    }
+}
+
+/// The value parser of the bench options that are a distance, a threshold or a time: a finite
+/// number above 0 (a NaN or an infinity would only fail, or run forever, after the meshes load).
+pub fn positive<T>(s: &str) -> std::result::Result<T, String>
+where
+    T: std::str::FromStr + Into<f64> + Copy,
+{
+    let v: T = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{s}' is not a number"))?;
+    let x: f64 = v.into();
+    if x.is_finite() && x > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("{s} is not a finite number above 0"))
+    }
+}
+
+/// Creates `dir` and its parents; the error names the folder first.
+pub fn create_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))
+}
+
+/// Writes a report, table or image file whole ([`crate::atomic::write`]); the error names the file
+/// first.
+pub fn write_file(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> Result<()> {
+    let path = path.as_ref();
+    crate::atomic::write(path, bytes).with_context(|| format!("{}: cannot write", path.display()))
+}
+
+/// A GPU as the reports name it: adapter, driver and kind in words ([`crate::gpu::Gpu::describe`]
+/// prints the kind as wgpu's Rust name, `Cpu`).
+pub fn gpu_name(g: &crate::gpu::Gpu) -> String {
+    let kind = match g.info.device_type {
+        wgpu::DeviceType::Cpu => "software renderer on the CPU",
+        wgpu::DeviceType::IntegratedGpu => "integrated GPU",
+        wgpu::DeviceType::DiscreteGpu => "discrete GPU",
+        wgpu::DeviceType::VirtualGpu => "virtual GPU",
+        wgpu::DeviceType::Other => "other device",
+    };
+    format!(
+        "{} ({} {}, {kind})",
+        g.info.name, g.info.driver, g.info.driver_info
+    )
 }
 
 /// Whether a device name is Mesa's lavapipe (whose "GPU" is this machine's CPU cores): the
@@ -283,17 +365,45 @@ pub fn machine_note() -> String {
 /// wrote it and today's date (`context` follows the date in that sentence: `" (same run as
 /// build.md)"`, or empty), and this machine ([`machine_note`]). One format, so that a reader finds
 /// where and how any report was made in the same place.
-pub fn write_header(md: &mut String, title: &str, command: &str, context: &str) {
+///
+/// `smoke` is the output folder of a smoke run ([`Common::smoke_out`]), `None` for a measurement:
+/// a smoke report says first that it is one, with the command line that wrote it (`command`, then
+/// `--smoke --out DIR`), so that nobody takes its numbers for measurements.
+pub fn write_header(
+    md: &mut String,
+    title: &str,
+    command: &str,
+    context: &str,
+    smoke: Option<&Path>,
+) {
     use std::fmt::Write as _;
     // Writing into a String cannot fail.
     let _ = writeln!(md, "# {title}\n");
-    let _ = writeln!(
-        md,
-        "Written by `{command}` on {}{context}. Do not edit: rerun the command.\n",
-        today()
-    );
+    match smoke {
+        None => {
+            let _ = writeln!(
+                md,
+                "Written by `{command}` on {}{context}. Do not edit: rerun the command.\n",
+                today()
+            );
+        }
+        Some(out) => {
+            let _ = writeln!(
+                md,
+                "**{SMOKE_NOTE}.** Written by `{} --smoke --out {}` on {}{context}, on tiny \
+                 inputs, to check that the bench runs and writes its files: no number here is a \
+                 measurement (the bench without `--smoke` writes the real report).\n",
+                command,
+                out.display(),
+                today()
+            );
+        }
+    }
     let _ = writeln!(md, "Machine: {}.\n", machine_note());
 }
+
+/// The words every smoke report opens with ([`write_header`]).
+pub const SMOKE_NOTE: &str = "Smoke run, not a measurement";
 
 /// Today's date (UTC) as YYYY-MM-DD, without a date crate.
 pub fn today() -> String {
@@ -386,6 +496,37 @@ mod tests {
         let d = today();
         assert_eq!(d.len(), 10);
         assert!(d.starts_with("20"));
+    }
+
+    #[test]
+    fn a_smoke_header_says_so_first_with_its_command_line() {
+        let mut md = String::new();
+        write_header(&mut md, "T", "meshletlab bench x", "", None);
+        assert!(
+            md.starts_with("# T\n\nWritten by `meshletlab bench x` on "),
+            "{md}"
+        );
+        assert!(!md.contains(SMOKE_NOTE));
+        let mut md = String::new();
+        write_header(&mut md, "T", "meshletlab bench x", "", Some(Path::new("o")));
+        let second = md.lines().nth(2).unwrap_or_default();
+        assert!(second.starts_with(&format!("**{SMOKE_NOTE}.**")), "{md}");
+        assert!(
+            second.contains("`meshletlab bench x --smoke --out o`"),
+            "{md}"
+        );
+    }
+
+    #[test]
+    fn options_are_checked_where_they_are_parsed() {
+        assert_eq!(positive::<f32>("2.5"), Ok(2.5));
+        for bad in ["0", "-1", "nan", "inf", "1e40", "x", ""] {
+            assert!(positive::<f32>(bad).is_err(), "{bad}");
+        }
+        assert_eq!(strategy_name(" meshopt "), Ok("meshopt".into()));
+        assert!(strategy_name("").is_err());
+        assert!(strategy_name("bogus").is_err());
+        assert_eq!(strategy_name_or_none(""), Ok(String::new()));
     }
 
     #[test]

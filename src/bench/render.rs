@@ -12,7 +12,7 @@ use super::table::{
     Align::{Left, Right},
     Style, Table,
 };
-use super::{is_lavapipe, median, p95, write_header, Common, Tag};
+use super::{create_dir, is_lavapipe, median, p95, smoke, write_file, write_header, Common, Tag};
 use crate::mesh::{self, Mesh};
 use crate::meshlet::descriptor::DescriptorFormat;
 use crate::meshlet::order::{
@@ -41,24 +41,24 @@ pub struct Config {
     #[arg(short, long, default_value = "64/126", value_parser = clap::value_parser!(Limits))]
     pub limits: Limits,
     /// Strategies (comma-separated).
-    #[arg(short, long, value_delimiter = ',', default_values_t = DEFAULT_STRATEGIES.iter().map(|s| s.to_string()))]
+    #[arg(short, long, value_delimiter = ',', value_parser = super::strategy_name, default_values_t = DEFAULT_STRATEGIES.iter().map(|s| s.to_string()))]
     pub strategy: Vec<String>,
     /// Strategies of the experiments: the four descriptor layouts, meshlets ordered by
     /// primitive count, triangle order inside meshlets (comma-separated; empty: none).
-    #[arg(long, value_delimiter = ',', default_values_t = DEFAULT_EXPERIMENT_STRATEGIES.iter().map(|s| s.to_string()))]
+    #[arg(long, value_delimiter = ',', value_parser = super::strategy_name_or_none, default_values_t = DEFAULT_EXPERIMENT_STRATEGIES.iter().map(|s| s.to_string()))]
     pub experiment_strategy: Vec<String>,
     /// Views per mesh (sized for lavapipe; the paper used 100,000 frames on a GPU).
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub views: usize,
     /// Seed of the view sequence.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Camera distance from the mesh centre in bounding radii (every view sees the whole mesh).
-    #[arg(long, default_value_t = 2.5)]
+    #[arg(long, default_value_t = 2.5, value_parser = super::positive::<f32>)]
     pub distance: f32,
     /// Distance of the close views for the culling shares (inside the bounding sphere, so the
     /// frustum culls).
-    #[arg(long, default_value_t = 0.9)]
+    #[arg(long, default_value_t = 0.9, value_parser = super::positive::<f32>)]
     pub near_distance: f32,
     /// The occlusion-culling scenes.
     #[command(flatten)]
@@ -69,6 +69,24 @@ impl Config {
     /// Views per mesh (one more is rendered first and discarded): one in a smoke run.
     pub fn views(&self) -> usize {
         self.common.or_smoke(self.views, 1)
+    }
+
+    /// The mesh of the Figure-1 images (file stem) and the name their files carry
+    /// (`render_<name>_<strategy>.png`): the bunny, or in a smoke run the first smoke mesh, so that
+    /// the smoke run writes the images it links.
+    pub fn figure_mesh(&self) -> (&'static str, &'static str) {
+        if self.common.smoke {
+            (smoke::FIRST, smoke::FIRST)
+        } else {
+            ("stanford_bunny", "bunny")
+        }
+    }
+
+    /// The Figure-1 image of strategy `s`.
+    fn figure_file(&self, s: &str) -> String {
+        let short = self.figure_mesh().1;
+        self.tag
+            .name(&format!("render_{short}_{}.png", s.replace('+', "_")))
     }
 
     /// Strategies of the layout and ordering experiments (Figures 10 and 12, triangle order), the
@@ -177,6 +195,8 @@ struct Row {
     near: [f64; 3],
     /// Per frame with culling (far views): task and mesh invocations, primitives generated.
     invocations: [f64; 3],
+    /// The Figure-1 image written for this row (the figure mesh's rows only).
+    image: Option<String>,
 }
 
 /// One variant of an experiment on one mesh and strategy.
@@ -198,7 +218,8 @@ struct Variant {
 }
 
 fn load(path: &std::path::Path) -> Result<Mesh> {
-    mesh::load(path).with_context(|| format!("loading {}", path.display()))
+    // The error names the file.
+    Ok(mesh::load(path)?)
 }
 
 fn build(m: &Mesh, s: &str, limits: Limits, name: &str) -> Result<Meshlets> {
@@ -212,7 +233,7 @@ pub fn run(cfg: &Config) -> Result<()> {
     let meshes = cfg.common.meshes_dir()?;
     let ctx = Context::new(false)?;
     let files = mesh_files(&meshes)?;
-    std::fs::create_dir_all(&cfg.common.out)?;
+    create_dir(&cfg.common.out)?;
     let per_mesh = cfg.strategy.len() + cfg.experiment_strategies().len();
     let pb = super::progress::bar(cfg.common.quiet, (files.len() * per_mesh) as u64);
     let mut rows = Vec::new();
@@ -265,24 +286,20 @@ fn strategy_row(
     for v in near {
         near_counts.add(&pass.render(v, CULL, Shading::Lit)?);
     }
-    if name == "stanford_bunny" {
-        // Figure 1: the first view's direction, framed so the bunny fills the picture.
+    let image = if name == cfg.figure_mesh().0 {
+        // Figure 1: the first view's direction, framed so the mesh fills the picture.
         let fig = Camera::framed(
             m,
             views[0].eye - views[0].target,
             WIDTH as f32 / HEIGHT as f32,
             crate::render::FRAME_FILL,
         );
-        crate::render::write_meshlet_png(
-            &pass,
-            &fig,
-            true,
-            &cfg.common.out.join(
-                cfg.tag
-                    .name(&format!("render_bunny_{}.png", s.replace('+', "_"))),
-            ),
-        )?;
-    }
+        let file = cfg.figure_file(s);
+        crate::render::write_meshlet_png(&pass, &fig, true, &cfg.common.out.join(&file))?;
+        Some(file)
+    } else {
+        None
+    };
     let n = views.len() as f64;
     Ok(Row {
         mesh: name.to_string(),
@@ -299,6 +316,7 @@ fn strategy_row(
             counts.mesh_invocations as f64 / n,
             counts.primitives as f64 / n,
         ],
+        image,
     })
 }
 
@@ -398,6 +416,13 @@ fn measure(
         .collect())
 }
 
+/// `s` with its first letter upper-case (a heading that starts with a name).
+fn capitalised(s: &str) -> String {
+    let mut c = s.chars();
+    c.next()
+        .map_or(String::new(), |f| f.to_uppercase().chain(c).collect())
+}
+
 /// Least-squares slope and intercept of y on x.
 fn fit(pts: &[(f64, f64)]) -> (f64, f64) {
     let n = pts.len() as f64;
@@ -430,8 +455,14 @@ fn write(
     write_header(
         &mut md,
         "Mesh-shader rendering against the vertex pipeline",
-        "meshletlab bench render",
+        &format!(
+            "meshletlab bench render --views {} --strategy {}{}",
+            cfg.views(),
+            cfg.strategy.join(","),
+            cfg.tag.flag()
+        ),
         "",
+        cfg.common.smoke_out(),
     );
     writeln!(md, "Device: **{}** (Vulkan, VK_EXT_mesh_shader). {}×{}, 4× MSAA resolved, D32 depth, back faces culled by the rasteriser in both pipelines. {} seeded random views per mesh at {} bounding radii (seed {}; every view sees the whole mesh), the first frame discarded; GPU time from timestamps around the draw. Close views for the culling shares: the same directions at {} radii. Limits {}/{}. Meshlets in the split layout unless a table says otherwise.\n", ctx.name, WIDTH, HEIGHT, cfg.views(), cfg.distance, cfg.seed, cfg.near_distance, cfg.limits.max_vertices, cfg.limits.max_triangles)?;
     if is_lavapipe(&ctx.name) {
@@ -479,23 +510,30 @@ fn write(
         "\n![ms per frame against triangles]({})\n",
         cfg.tag.name("render_per_triangle.svg")
     )?;
-    writeln!(
-        md,
-        "## The bunny coloured by meshlet (paper Figure 1)\n\nThe first view's direction, the camera moved in until the bunny fills {:.0} % of the frame's height or width; task-shader culling on, so culled meshlets are absent.\n",
-        100.0 * crate::render::FRAME_FILL
-    )?;
-    for s in &cfg.strategy {
+    // Only the images this run wrote: none when the folder has no figure mesh.
+    let images: Vec<(&str, &str)> = rows
+        .iter()
+        .filter_map(|r| Some((r.strategy.as_str(), r.image.as_deref()?)))
+        .collect();
+    if !images.is_empty() {
+        let (what, note) = match cfg.figure_mesh() {
+            (mesh, _) if cfg.common.smoke => (mesh.to_string(), "; the bunny in a full run"),
+            (_, short) => (format!("the {short}"), ""),
+        };
         writeln!(
             md,
-            "{s}:\n\n![{s}]({})\n",
-            cfg.tag
-                .name(&format!("render_bunny_{}.png", s.replace('+', "_")))
+            "## {} coloured by meshlet (paper Figure 1{note})\n\nThe first view's direction, the camera moved in until {what} fills {:.0} % of the frame's height or width; task-shader culling on, so culled meshlets are absent.\n",
+            capitalised(&what),
+            100.0 * crate::render::FRAME_FILL
         )?;
+        for (s, file) in images {
+            writeln!(md, "{s}:\n\n![{s}]({file})\n")?;
+        }
     }
     super::render_occlusion::write(&mut md, &cfg.occlusion, occlusion)?;
     write_experiments(cfg, &mut md, variants)?;
-    crate::atomic::write(cfg.common.out.join(cfg.tag.name("render.md")), md)?;
-    crate::atomic::write(
+    write_file(cfg.common.out.join(cfg.tag.name("render.md")), md)?;
+    write_file(
         cfg.common.out.join(cfg.tag.name("render.csv")),
         frame_table().csv(rows),
     )?;
@@ -654,7 +692,7 @@ fn write_experiments(cfg: &Config, md: &mut String, variants: &[Variant]) -> Res
             p95(&v.no_cull)
         )?;
     }
-    crate::atomic::write(
+    write_file(
         cfg.common.out.join(cfg.tag.name("render_experiments.csv")),
         csv,
     )?;

@@ -20,13 +20,13 @@ use std::fmt::Write as _;
 pub struct OcclusionArgs {
     /// Strategies compared under occlusion culling on the grid scene (comma-separated; empty:
     /// no occlusion section).
-    #[arg(long, value_delimiter = ',', default_values_t = ["meshopt", "kmedoids", "bsphere", "nvidia"].map(String::from))]
+    #[arg(long, value_delimiter = ',', value_parser = super::strategy_name_or_none, default_values_t = ["meshopt", "kmedoids", "bsphere", "nvidia"].map(String::from))]
     pub occlusion_strategy: Vec<String>,
     /// Camera paths per scene.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub occlusion_views: usize,
-    /// Frames per path (the first warms the visibility and is reported apart).
-    #[arg(long, default_value_t = 8)]
+    /// Frames per path, at least 2 (the first warms the visibility and is reported apart).
+    #[arg(long, default_value_t = 8, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(2..))]
     pub occlusion_frames: usize,
     /// The shared mesh copied on the 4 x 4 x 4 grid.
     #[arg(long, default_value = "stanford_bunny")]

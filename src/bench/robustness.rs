@@ -2,7 +2,7 @@
 //! results/robustness.md and robustness.csv: cases per format and mutation, their outcomes, the
 //! typed-error kinds each format gave, the heaviest and slowest case, and every defect found.
 
-use super::write_header;
+use super::{create_dir, write_file, write_header};
 use crate::fuzz::harness::{self, Report, Verdict};
 use crate::fuzz::{memory_bound, Mutation, Target, HANG_SECONDS};
 use anyhow::{Context, Result};
@@ -19,14 +19,14 @@ pub struct Config {
     /// A smoke run ([`super::SMOKE_HELP`] is its help).
     #[arg(long, help = super::SMOKE_HELP)]
     pub smoke: bool,
-    /// Number of cases.
-    #[arg(long, default_value_t = 1_000_000)]
+    /// Number of cases (at least 1).
+    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(1..))]
     pub cases: u64,
     /// Run seed (case k of seed s is always the same file).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Worker processes (default: one per core).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
     pub workers: Option<usize>,
     /// Write case K's file to -o instead of running (to reproduce a reported case).
     #[arg(long, value_name = "K")]
@@ -85,9 +85,9 @@ pub fn run(cfg: &Config) -> Result<Report> {
     })?;
     pb.finish_and_clear();
     let _ = std::fs::remove_dir_all(&scratch);
-    std::fs::create_dir_all(&cfg.out)?;
-    crate::atomic::write(cfg.out.join("robustness.md"), markdown(cfg, &report)?)?;
-    crate::atomic::write(cfg.out.join("robustness.csv"), csv(&report))?;
+    create_dir(&cfg.out)?;
+    write_file(cfg.out.join("robustness.md"), markdown(cfg, &report)?)?;
+    write_file(cfg.out.join("robustness.csv"), csv(&report))?;
     Ok(report)
 }
 
@@ -115,6 +115,7 @@ fn markdown(cfg: &Config, r: &Report) -> Result<String> {
             r.seed
         ),
         "",
+        cfg.smoke.then_some(cfg.out.as_path()),
     );
     writeln!(
         md,

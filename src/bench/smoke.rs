@@ -20,17 +20,22 @@ pub fn meshes() -> Vec<(&'static str, Mesh)> {
     ]
 }
 
-/// The folder the smoke meshes are written to inside `out`, written: `out/smoke-meshes`. Refuses
-/// `results` itself, so a smoke run never overwrites reported tables.
+/// The folder of the smoke meshes inside a smoke run's output folder `out`: `out/smoke-meshes`.
+pub fn dir(out: &Path) -> PathBuf {
+    out.join("smoke-meshes")
+}
+
+/// The folder the smoke meshes are written to inside `out` ([`dir`]), written. Refuses `results`
+/// itself, so a smoke run never overwrites reported tables.
 pub fn prepare(out: &Path) -> Result<PathBuf> {
     if out.file_name().is_some_and(|n| n == "results") {
         bail!(
-            "--smoke writes throwaway tables: give --out a folder other than {}",
+            "{}: --smoke writes throwaway tables, never into results: give --out another folder",
             out.display()
         );
     }
-    let dir = out.join("smoke-meshes");
-    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let dir = dir(out);
+    std::fs::create_dir_all(&dir).with_context(|| format!("{}: cannot create", dir.display()))?;
     for (name, m) in meshes() {
         save_ply(&m, &dir.join(format!("{name}.ply")))?;
     }

@@ -10,7 +10,7 @@
 //! (adjacency, k-medoids) never look at coordinates, and k-medoids' seeding quantises centroids
 //! relative to the bounding box, so they are unaffected by translation and scale.
 
-use super::{write_header, Common};
+use super::{create_dir, write_file, write_header, Common};
 use crate::gpu::{self, Gpu, GpuError};
 use crate::mesh::Mesh;
 use crate::meshlet::bounds::{check_cones, compute_bounds};
@@ -185,12 +185,14 @@ pub fn check(g: &Gpu, name: &'static str, mesh: &Mesh, limits: Limits) -> Result
     })
 }
 
-/// Runs every variant of `base` and writes results/stability.md.
+/// Runs every variant of `base` and writes results/stability.md into `out` (its header says so
+/// when `smoke`: see [`super::write_header`]).
 pub fn run(
     base_name: &str,
     base: &Mesh,
     limits: Limits,
     out: &std::path::Path,
+    smoke: bool,
 ) -> anyhow::Result<Vec<Report>> {
     let g = Gpu::new()?;
     let mut reports = Vec::new();
@@ -201,10 +203,15 @@ pub fn run(
     write_header(
         &mut md,
         "Numerical stability under stress",
-        "meshletlab bench stability",
+        &if smoke {
+            format!("meshletlab bench stability --limits {limits}")
+        } else {
+            format!("meshletlab bench stability --mesh {base_name} --limits {limits}")
+        },
         "",
+        smoke.then_some(out),
     );
-    writeln!(md, "GPU: {}.\n", g.describe())?;
+    writeln!(md, "GPU: {}.\n", super::gpu_name(&g))?;
     writeln!(md, "Base mesh: {base_name}, meshlet limits {}/{}. For each variant: every GPU kernel against its CPU reference, as `meshletlab parity` runs them (exactly: adjacency CSR and side flags; k-medoids medoids, labels, distances, iteration, split and skipped-update counts, objective and meshlets; the parallel grower; the LOD selection's drawn meshlets. Within tolerance: sphere centres within 2 ulps of their largest coordinate, radii within 2^-16 relative plus 2 ulps of the centre, whose use the radius columns show), spheres checked in f64 (every vertex inside), cones checked from 27 cameras around and inside the mesh (a culled meshlet must have no front-facing triangle; edge-on within 1e-6 does not count), and NaN/Inf counted.\n", limits.max_vertices, limits.max_triangles)?;
     writeln!(md, "| variant | triangles | GPU against CPU | max radius diff (rel) | max radius diff (ulps of the centre) | vertices outside GPU spheres | outside CPU spheres | cone culls checked | front faces culled | NaN/Inf |")?;
     writeln!(md, "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|")?;
@@ -243,7 +250,7 @@ pub fn run(
     writeln!(md, "- GPU spheres (`wgsl/bounds.wgsl`) take every difference relative to the meshlet's first vertex, where subtracting nearby floats is exact, round the centre once, then measure the radius and pad it by 2^-16 relative (WGSL's loose sqrt) plus two ulps of the centre's largest coordinate: this stress test found that the shader compiler folds `(p0 + h) - p0` back into `h`, measuring from the unrounded centre, which at 1e6 put thousands of vertices up to 0.03 outside before the padding. The CPU sphere (Welzl) works in f64 and rounds the radius up.")?;
     writeln!(md, "- Cones (CPU, `src/meshlet/bounds.rs`) are computed in f64 and widened by a safety margin so that they stay conservative after rounding to f32; a cutoff of 1 means the meshlet is never culled.")?;
     writeln!(md, "- The integer kernels (adjacency, k-medoids) never read coordinates except k-medoids' seeding, which quantises centroids relative to the bounding box, so they give the same result under translation and scale.")?;
-    std::fs::create_dir_all(out)?;
-    crate::atomic::write(out.join("stability.md"), md)?;
+    create_dir(out)?;
+    write_file(out.join("stability.md"), md)?;
     Ok(reports)
 }

@@ -5,7 +5,7 @@
 
 use super::{default_meshes_dir, load, spinner, StrategyArgs};
 use crate::bench::{self, Common};
-use anyhow::{bail, Result};
+use anyhow::{bail, Context as _, Result};
 use clap::Subcommand;
 
 /// Benchmarks.
@@ -71,12 +71,18 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             let (mesh, path) = c.common.mesh_file(&c.mesh)?;
             let m = load(&path, q)?;
             let pb = spinner(q, format!("stress variants of {mesh}"));
-            let reports = bench::stability::run(&mesh, &m, c.limits, &c.common.out)?;
+            let reports =
+                bench::stability::run(&mesh, &m, c.limits, &c.common.out, c.common.smoke)?;
             pb.finish_and_clear();
             let bad: Vec<_> = reports.iter().filter(|r| !r.ok()).map(|r| r.name).collect();
-            say!("wrote {}", c.common.out.join("stability.md").display());
+            let md = c.common.out.join("stability.md");
+            say!("wrote {}", md.display());
             if !bad.is_empty() {
-                bail!("stability checks failed for: {}", bad.join(", "));
+                bail!(
+                    "{}: stability checks failed for: {}",
+                    md.display(),
+                    bad.join(", ")
+                );
             }
             Ok(())
         }
@@ -160,7 +166,10 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
         }
         BenchCommand::Robustness(mut c) => {
             if let Some(k) = c.dump {
-                let p = crate::fuzz::harness::dump(c.seed, k, &c.output)?;
+                // Created if missing; errors name the folder first (an I/O error alone does not).
+                super::output::check_dir(&c.output)?;
+                let p = crate::fuzz::harness::dump(c.seed, k, &c.output)
+                    .with_context(|| format!("{}: cannot write", c.output.display()))?;
                 say!("case {k} of seed {} -> {}", c.seed, p.display());
                 return Ok(());
             }
@@ -178,7 +187,8 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             );
             if t.defects() > 0 {
                 bail!(
-                    "{} fuzz cases were defects (see robustness.md)",
+                    "{}: {} fuzz cases were defects (listed there)",
+                    c.out.join("robustness.md").display(),
                     t.defects()
                 );
             }
