@@ -199,20 +199,9 @@ pub fn write_file(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> Result<()>
     crate::atomic::write(path, bytes).with_context(|| format!("{}: cannot write", path.display()))
 }
 
-/// A GPU as the reports name it: adapter, driver and kind in words ([`crate::gpu::Gpu::describe`]
-/// prints the kind as wgpu's Rust name, `Cpu`).
+/// A GPU as the reports name it ([`crate::gpu::Gpu::describe`]).
 pub fn gpu_name(g: &crate::gpu::Gpu) -> String {
-    let kind = match g.info.device_type {
-        wgpu::DeviceType::Cpu => "software renderer on the CPU",
-        wgpu::DeviceType::IntegratedGpu => "integrated GPU",
-        wgpu::DeviceType::DiscreteGpu => "discrete GPU",
-        wgpu::DeviceType::VirtualGpu => "virtual GPU",
-        wgpu::DeviceType::Other => "other device",
-    };
-    format!(
-        "{} ({} {}, {kind})",
-        g.info.name, g.info.driver, g.info.driver_info
-    )
+    g.describe()
 }
 
 /// Whether a device name is Mesa's lavapipe (whose "GPU" is this machine's CPU cores): the

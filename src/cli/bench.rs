@@ -59,15 +59,17 @@ pub enum BenchCommand {
 
 /// What the command adds to a bench's common arguments: the global `--quiet` and the default
 /// mesh folder.
-fn complete(c: &mut Common, quiet: bool) {
+fn complete(c: &mut Common, quiet: bool) -> Result<()> {
     c.quiet = quiet;
     c.meshes.get_or_insert_with(default_meshes_dir);
+    // A long run must not end on a folder it cannot write.
+    super::output::check_dir(&c.out)
 }
 
 pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
     match cmd {
         BenchCommand::Stability(mut c) => {
-            complete(&mut c.common, q);
+            complete(&mut c.common, q)?;
             let (mesh, path) = c.common.mesh_file(&c.mesh)?;
             let m = load(&path, q)?;
             let pb = spinner(q, format!("stress variants of {mesh}"));
@@ -87,7 +89,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             Ok(())
         }
         BenchCommand::Gpu(mut c) => {
-            complete(&mut c.common, q);
+            complete(&mut c.common, q)?;
             bench::gpu::run(&c)?;
             say!(
                 "wrote {}",
@@ -96,7 +98,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             Ok(())
         }
         BenchCommand::Render(mut c) => {
-            complete(&mut c.common, q);
+            complete(&mut c.common, q)?;
             bench::render::run(&c)?;
             say!(
                 "wrote {}",
@@ -105,14 +107,14 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             Ok(())
         }
         BenchCommand::Fidelity(mut a) => {
-            complete(&mut a.common, q);
+            complete(&mut a.common, q)?;
             let cfg = a.config()?;
             bench::fidelity::run(&cfg)?;
             say!("wrote {}", cfg.out.join("fidelity.md").display());
             Ok(())
         }
         BenchCommand::Kmedoids(mut c) => {
-            complete(&mut c.common, q);
+            complete(&mut c.common, q)?;
             bench::kmedoids::run(&c)?;
             say!(
                 "wrote {}",
@@ -121,7 +123,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             Ok(())
         }
         BenchCommand::Build { mut bench, args } => {
-            complete(&mut bench.common, q);
+            complete(&mut bench.common, q)?;
             let cfg = bench.config(args.limits, args.options())?;
             let rows = bench::build::run(&cfg)?;
             say!(
@@ -133,7 +135,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             Ok(())
         }
         BenchCommand::Lod(mut c) => {
-            complete(&mut c.common, q);
+            complete(&mut c.common, q)?;
             bench::lod::run(&c)?;
             say!(
                 "wrote {}",
@@ -142,7 +144,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             Ok(())
         }
         BenchCommand::Compress(mut c) => {
-            complete(&mut c.common, q);
+            complete(&mut c.common, q)?;
             let rows = bench::compress::run(&c)?;
             say!(
                 "wrote {} ({} encodings)",
@@ -152,7 +154,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
             Ok(())
         }
         BenchCommand::CompressRender(mut c) => {
-            complete(&mut c.common, q);
+            complete(&mut c.common, q)?;
             let rows = bench::compress_render::run(&c)?;
             say!(
                 "wrote {} ({} rows)",
@@ -174,6 +176,7 @@ pub(super) fn run(cmd: BenchCommand, q: bool) -> Result<()> {
                 return Ok(());
             }
             c.quiet = q;
+            super::output::check_dir(&c.out)?;
             let report = bench::robustness::run(&c)?;
             let t = report.totals();
             say!(

@@ -360,9 +360,16 @@ impl Gpu {
 
     /// "name (driver, type)".
     pub fn describe(&self) -> String {
+        let kind = match self.info.device_type {
+            wgpu::DeviceType::Cpu => "software renderer on the CPU",
+            wgpu::DeviceType::IntegratedGpu => "integrated GPU",
+            wgpu::DeviceType::DiscreteGpu => "discrete GPU",
+            wgpu::DeviceType::VirtualGpu => "virtual GPU",
+            wgpu::DeviceType::Other => "other device",
+        };
         format!(
-            "{} ({} {}, {:?})",
-            self.info.name, self.info.driver, self.info.driver_info, self.info.device_type
+            "{} ({} {}, {kind})",
+            self.info.name, self.info.driver, self.info.driver_info
         )
     }
 
