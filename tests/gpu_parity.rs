@@ -280,10 +280,13 @@ fn same_output_on_every_run() {
     assert!(a.timing.kernel > 0.0);
 }
 
+/// Every GPU kernel agrees with its CPU reference on the stressed copies of fandisk, and the bounds
+/// stay conservative and still cull. (`bench stability` runs the same checks on the bunny; fandisk,
+/// a fifth of its size, keeps this test under half a minute on lavapipe.)
 #[test]
 fn stressed_meshes_agree_and_stay_conservative() {
     let gpu = gpu();
-    let base = common::load("stanford_bunny");
+    let base = common::load("fandisk");
     for (name, m) in stability::cases(&base) {
         let r = stability::check(&gpu, name, &m, Limits::DEFAULT).unwrap();
         assert!(r.ok(), "{name}: {r:?}");
