@@ -72,8 +72,11 @@ fn cases() -> Vec<Case> {
         ("corrupt.ply.zst", b"\x28\xb5\x2f\xfd garbage".to_vec(), |k| matches!(k, MeshErrorKind::Decompress(_))),
         ("cut.ply.zst", { let z = zst(&binary_ply()); z[..z.len() / 2].to_vec() }, |k| matches!(k, MeshErrorKind::Decompress(_))),
         ("nan_in.ply.zst", zst(format!("{HEADER}0 0 0\n1 0 0\n0 inf 0\n3 0 1 2\n").as_bytes()), |k| matches!(k, MeshErrorKind::NonFinite { vertex: 2, .. })),
-        ("range.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n".to_vec(), |k| matches!(k, MeshErrorKind::Parse { .. })),
-        ("nan.obj", b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n".to_vec(), |k| matches!(k, MeshErrorKind::NonFinite { .. })),
+        // OBJ errors name their line (tobj's own errors do not).
+        ("range.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n".to_vec(), |k| matches!(k, MeshErrorKind::Parse { location, .. } if location == "line 4")),
+        ("number.obj", b"v 0 0 0\nv 1 0,5 0\nv 0 1 0\nf 1 2 3\n".to_vec(), |k| matches!(k, MeshErrorKind::Parse { location, .. } if location == "line 2")),
+        ("index.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf 1 2 3\nf 1 2 3.0\n".to_vec(), |k| matches!(k, MeshErrorKind::Parse { location, .. } if location == "line 6")),
+        ("nan.obj", b"v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n".to_vec(), |k| matches!(k, MeshErrorKind::Parse { location, message } if location == "line 2" && message.contains("non-finite"))),
         ("empty.obj", b"# nothing\nv 0 0 0\n".to_vec(), |k| matches!(k, MeshErrorKind::Empty(_))),
         ("truncated.stl", stl_with(|b| b.truncate(b.len() - 7)), |k| matches!(k, MeshErrorKind::Truncated(_))),
         ("too_long.stl", stl_with(|b| b.extend_from_slice(&[0u8; 13])), |k| matches!(k, MeshErrorKind::CountMismatch(_))),
@@ -218,4 +221,133 @@ fn degenerate_duplicate_and_non_manifold_input_is_legal_and_counted() {
     );
     let fast = meshletlab::strategy::NAMES.len() - meshletlab::strategy::SLOW.len();
     assert_eq!(stdout.matches("| ok").count(), fast, "{stdout}");
+}
+
+#[test]
+fn a_directory_is_refused_as_a_directory() {
+    let dir = common::scratch("bad-dir");
+    // Also one whose name says PLY: the folder is refused before the format is looked at.
+    let named = dir.join("folder.ply");
+    std::fs::create_dir(&named).unwrap();
+    for path in [dir.to_path_buf(), named, dir.join("scene.gltf")] {
+        std::fs::create_dir_all(&path).unwrap();
+        for e in [
+            mesh::load(&path).unwrap_err(),
+            mesh::load_scene(&path).unwrap_err(),
+        ] {
+            assert!(matches!(e.kind, MeshErrorKind::IsDirectory), "{e}");
+            assert_eq!(e.to_string(), format!("{}: is a directory", path.display()));
+        }
+        let p = path.display().to_string();
+        let out = cli(&["stats", "-q", &p]);
+        assert!(!out.status.success());
+        assert_eq!(
+            String::from_utf8_lossy(&out.stderr).trim_end(),
+            format!("error: {p}: is a directory")
+        );
+    }
+}
+
+#[test]
+fn a_failed_write_is_a_write_error() {
+    let m = mesh::generate::terrain(4, 1);
+    let dir = common::scratch("bad-write");
+    for path in [
+        std::path::PathBuf::from("/proc/meshletlab.ply"),
+        dir.join("no/such/folder.ply"),
+    ] {
+        let e = mesh::save_ply(&m, &path).unwrap_err();
+        assert!(matches!(e.kind, MeshErrorKind::Write(_)), "{e}");
+        let msg = e.to_string();
+        assert!(
+            msg.starts_with(&format!("{}: cannot write: ", path.display())),
+            "{msg}"
+        );
+    }
+    let e = mesh::save_ply(&m, &dir).unwrap_err();
+    assert!(matches!(e.kind, MeshErrorKind::IsDirectory), "{e}");
+}
+
+#[test]
+fn subdivide_over_the_budget_is_refused_at_once() {
+    use meshletlab::mesh::subdivide::{subdivide, SubdivideError, MAX_TRIANGLES};
+    let m = mesh::generate::terrain(4, 1);
+    let t0 = std::time::Instant::now();
+    // 18 triangles x 4^20 is 2 x 10^13: any allocation or level of work would take far longer.
+    let e = subdivide(&m, 20).unwrap_err();
+    assert!(t0.elapsed().as_secs() < 1);
+    assert!(
+        matches!(e, SubdivideError::OverBudget { levels: 20, .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains(&MAX_TRIANGLES.to_string()), "{e}");
+    // The command says so naming the input, and writes nothing.
+    let dir = common::scratch("bad-subdivide");
+    let out_path = dir.join("out.ply");
+    let big = dir.join("big.ply");
+    // 2,178 triangles: 8 levels would make 143 M, over 2^27.
+    mesh::save_ply(&mesh::generate::terrain(34, 1), &big).unwrap();
+    let (b, o) = (big.display().to_string(), out_path.display().to_string());
+    let out = cli(&["subdivide", "-q", &b, "-o", &o, "--levels", "8"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.starts_with(&format!(
+            "error: {b}: 8 level(s) would turn 2178 triangles into 142737408"
+        )) && stderr.contains("at most 7 level(s)"),
+        "{stderr}"
+    );
+    assert!(!out_path.exists());
+    let help = cli(&["subdivide", "--help"]);
+    let help = String::from_utf8_lossy(&help.stdout);
+    assert!(
+        help.contains(&format!("at most {MAX_TRIANGLES} triangles")),
+        "{help}"
+    );
+}
+
+#[test]
+fn subdivide_writes_only_ply_names_and_says_why_a_write_fails() {
+    let dir = common::scratch("bad-subdivide-out");
+    let input = dir.join("in.ply");
+    mesh::save_ply(&mesh::generate::terrain(4, 1), &input).unwrap();
+    let i = input.display().to_string();
+    for name in ["out.obj", "out.PLY.gz", "out"] {
+        let o = dir.join(name).display().to_string();
+        let out = cli(&["subdivide", "-q", &i, "-o", &o]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{name}");
+        assert!(
+            stderr.starts_with(&format!("error: {o}: "))
+                && stderr.contains("binary PLY")
+                && stderr.contains(".ply or .ply.zst"),
+            "{name}: {stderr}"
+        );
+        assert!(!dir.join(name).exists(), "{name}");
+    }
+    // Refused before the input is read: a missing input is not what it reports.
+    let o = dir.join("out.obj").display().to_string();
+    let out = cli(&["subdivide", "-q", "missing.ply", "-o", &o]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("binary PLY"));
+    let out = cli(&["subdivide", "-q", &i, "-o", "/proc/x.ply"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.starts_with("error: /proc/x.ply: cannot write") && !stderr.contains("cannot read"),
+        "{stderr}"
+    );
+    // Both accepted names, in any case, are written and read back.
+    for name in ["out.PLY", "out.Ply.ZST"] {
+        let o = dir.join(name).display().to_string();
+        let out = cli(&["subdivide", "-q", &i, "-o", &o]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert_eq!(
+            mesh::load(&dir.join(name)).unwrap().triangle_count(),
+            18 * 4
+        );
+    }
 }

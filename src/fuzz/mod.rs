@@ -303,6 +303,8 @@ pub enum Outcome {
 pub fn kind_name(k: &MeshErrorKind) -> &'static str {
     match k {
         MeshErrorKind::Io(_) => "io",
+        MeshErrorKind::IsDirectory => "is-directory",
+        MeshErrorKind::Write(_) => "write",
         MeshErrorKind::UnknownFormat => "unknown-format",
         MeshErrorKind::UnknownGenerated(_) => "unknown-generated",
         MeshErrorKind::Decompress(_) => "decompress",

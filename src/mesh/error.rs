@@ -1,4 +1,4 @@
-//! Typed errors for mesh input. Every error names the file it came from.
+//! Typed errors for mesh files, read or written. Every error names the file it is about.
 
 use std::path::PathBuf;
 use thiserror::Error;
@@ -19,6 +19,12 @@ pub enum MeshErrorKind {
     /// The file could not be opened or read.
     #[error("cannot read file: {0}")]
     Io(#[from] std::io::Error),
+    /// The path names a directory, not a mesh file.
+    #[error("is a directory")]
+    IsDirectory,
+    /// The file could not be written (the folder is missing or read-only, the disk is full, ...).
+    #[error("cannot write: {0}")]
+    Write(std::io::Error),
     /// The file extension names no supported format.
     #[error(
         "unknown mesh format (expected .ply, .obj, .stl, .gltf or .glb, optionally with .zst)"

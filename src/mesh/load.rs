@@ -62,11 +62,22 @@ pub fn load(path: &Path) -> Result<Mesh, MeshError> {
             )
         });
     }
+    // Before the format: a folder named `x.ply` is no PLY file, and `/tmp` no unknown format.
+    if path.is_dir() {
+        return Err(MeshError::new(path, MeshErrorKind::IsDirectory));
+    }
     if MeshFormat::of(path).is_none() {
         return Err(MeshError::new(path, MeshErrorKind::UnknownFormat));
     }
-    let bytes = std::fs::read(path).map_err(|e| MeshError::new(path, MeshErrorKind::Io(e)))?;
-    load_bytes(&bytes, path)
+    load_bytes(&read(path)?, path)
+}
+
+/// The bytes of the file at `path`; a directory is refused by name rather than as a read error.
+fn read(path: &Path) -> Result<Vec<u8>, MeshError> {
+    if path.is_dir() {
+        return Err(MeshError::new(path, MeshErrorKind::IsDirectory));
+    }
+    std::fs::read(path).map_err(|e| MeshError::new(path, MeshErrorKind::Io(e)))
 }
 
 /// Loads and validates a mesh from bytes; `path` picks the format and labels errors (and is the base
@@ -102,8 +113,7 @@ pub fn load_scene(path: &Path) -> Result<Scene, MeshError> {
     if !gltf {
         return load(path).map(Scene::single);
     }
-    let bytes = std::fs::read(path).map_err(|e| MeshError::new(path, MeshErrorKind::Io(e)))?;
-    scene_from_bytes(&bytes, path)
+    scene_from_bytes(&read(path)?, path)
 }
 
 /// [`load_scene`] of a glTF file's bytes (`path` labels errors and resolves external buffers).
@@ -178,8 +188,12 @@ pub fn decompress(bytes: &[u8]) -> Result<Vec<u8>, MeshErrorKind> {
 }
 
 /// Writes a mesh as binary PLY, zstd-compressed when the name ends in `.zst` (atomically: an
-/// interrupted write leaves the previous file).
+/// interrupted write leaves the previous file). A failure is [`MeshErrorKind::Write`] (or
+/// [`MeshErrorKind::IsDirectory`]), never a read error.
 pub fn save_ply(mesh: &Mesh, path: &Path) -> Result<(), MeshError> {
+    if path.is_dir() {
+        return Err(MeshError::new(path, MeshErrorKind::IsDirectory));
+    }
     let zst = path
         .to_string_lossy()
         .to_ascii_lowercase()
@@ -194,5 +208,5 @@ pub fn save_ply(mesh: &Mesh, path: &Path) -> Result<(), MeshError> {
             ply::write_binary(&mesh.positions, &mesh.indices, file)
         }
     })
-    .map_err(|e| MeshError::new(path, MeshErrorKind::Io(e)))
+    .map_err(|e| MeshError::new(path, MeshErrorKind::Write(e)))
 }
