@@ -329,7 +329,7 @@ fn meaningless_values_are_refused() {
     let file_errors: &[(&[&str], &str)] = &[
         (&["render", MESH, "-o", unwritable], unwritable),
         (
-            &["render", MESH, "-o", &dir.to_str().unwrap()],
+            &["render", MESH, "-o", dir.to_str().unwrap()],
             "is a directory",
         ),
         (&["render", MESH, "-o", "r.jpg"], "r.jpg: "),
