@@ -304,7 +304,7 @@ pub fn run(cfg: &Config) -> Result<()> {
             eprintln!("{m}");
         }
     };
-    say(format!("GPU: {}", super::gpu_name(&g)));
+    say(format!("GPU: {}", g.describe()));
     warm_up(&g, cfg.limits)?;
     // The bandwidths the physical limits are taken at (64 MiB copied on the GPU, 256 MiB on the
     // host; medians).
@@ -962,7 +962,7 @@ fn write(
         "",
         cfg.common.smoke_out(),
     );
-    writeln!(md, "GPU adapter: **{}**{}. Every GPU output below was compared with the CPU reference and is identical (adjacency CSR arrays; k-medoids labels and meshlets; parallel-grower claims, orders and meshlets); a difference aborts the benchmark.\n", super::gpu_name(g), if g.timestamps { "; kernel times from GPU timestamp queries" } else { "; no timestamp queries: kernel times are wall time" })?;
+    writeln!(md, "GPU adapter: **{}**{}. Every GPU output below was compared with the CPU reference and is identical (adjacency CSR arrays; k-medoids labels and meshlets; parallel-grower claims, orders and meshlets); a difference aborts the benchmark.\n", g.describe(), if g.timestamps { "; kernel times from GPU timestamp queries" } else { "; no timestamp queries: kernel times are wall time" })?;
     if is_lavapipe(&g.info.name) {
         writeln!(md, "Lavapipe is itself a CPU renderer on this machine's cores: a GPU/CPU ratio here compares LLVM-compiled compute shaders with native Rust on the same {} cores, not a GPU with a CPU.\n", std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1))?;
     }

@@ -199,11 +199,6 @@ pub fn write_file(path: impl AsRef<Path>, bytes: impl AsRef<[u8]>) -> Result<()>
     crate::atomic::write(path, bytes).with_context(|| format!("{}: cannot write", path.display()))
 }
 
-/// A GPU as the reports name it ([`crate::gpu::Gpu::describe`]).
-pub fn gpu_name(g: &crate::gpu::Gpu) -> String {
-    g.describe()
-}
-
 /// Whether a device name is Mesa's lavapipe (whose "GPU" is this machine's CPU cores): the
 /// benches say so only then.
 pub fn is_lavapipe(device: &str) -> bool {

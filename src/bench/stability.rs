@@ -211,7 +211,7 @@ pub fn run(
         "",
         smoke.then_some(out),
     );
-    writeln!(md, "GPU: {}.\n", super::gpu_name(&g))?;
+    writeln!(md, "GPU: {}.\n", g.describe())?;
     writeln!(md, "Base mesh: {base_name}, meshlet limits {}/{}. For each variant: every GPU kernel against its CPU reference, as `meshletlab parity` runs them (exactly: adjacency CSR and side flags; k-medoids medoids, labels, distances, iteration, split and skipped-update counts, objective and meshlets; the parallel grower; the LOD selection's drawn meshlets. Within tolerance: sphere centres within 2 ulps of their largest coordinate, radii within 2^-16 relative plus 2 ulps of the centre, whose use the radius columns show), spheres checked in f64 (every vertex inside), cones checked from 27 cameras around and inside the mesh (a culled meshlet must have no front-facing triangle; edge-on within 1e-6 does not count), and NaN/Inf counted.\n", limits.max_vertices, limits.max_triangles)?;
     writeln!(md, "| variant | triangles | GPU against CPU | max radius diff (rel) | max radius diff (ulps of the centre) | vertices outside GPU spheres | outside CPU spheres | cone culls checked | front faces culled | NaN/Inf |")?;
     writeln!(md, "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|")?;

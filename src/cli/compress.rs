@@ -27,11 +27,11 @@ pub struct CompressArgs {
     strategy: String,
     /// Largest allowed position error, in mesh units (default: the paper's, the error of 14-bit
     /// quantisation of the bounding box).
-    #[arg(long, conflicts_with = "relative_tolerance", value_parser = super::positive)]
+    #[arg(long, conflicts_with = "relative_tolerance", value_parser = crate::bench::positive::<f64>)]
     tolerance: Option<f64>,
     /// Largest allowed position error as a fraction of the bounding-box diagonal (1e-4 is the
     /// setting of the size comparison with meshoptimizer's codec).
-    #[arg(long, value_parser = super::positive)]
+    #[arg(long, value_parser = crate::bench::positive::<f64>)]
     relative_tolerance: Option<f64>,
     /// Output file (format: see `meshletlab::compress::file`).
     #[arg(short, long)]

@@ -88,7 +88,7 @@ pub struct StrategyArgs {
     #[arg(long, default_value_t = strategy::kmedoids::parallel::DEFAULT_MOVE_ROUNDS)]
     pub kmedoids_moves: u32,
     /// kmedoids-paper: seconds before the remaining splits are done the flat way.
-    #[arg(long, default_value_t = 300.0, value_parser = positive)]
+    #[arg(long, default_value_t = 300.0, value_parser = crate::bench::positive::<f64>)]
     pub paper_budget: f64,
     /// Reorder triangles inside each meshlet for vertex reuse, local vertices in first-use order.
     #[arg(long)]
@@ -163,22 +163,6 @@ fn non_negative_f32(s: &str) -> Result<f32, String> {
         return Err(format!("{v} does not fit an f32"));
     }
     Ok(v as f32)
-}
-
-/// A finite number above 0 (seconds, distances).
-pub(crate) fn positive(s: &str) -> Result<f64, String> {
-    match non_negative(s)? {
-        v if v > 0.0 => Ok(v),
-        v => Err(format!("{v} is not above 0")),
-    }
-}
-
-/// [`positive`] as an f32 (it must also fit one).
-pub(crate) fn positive_f32(s: &str) -> Result<f32, String> {
-    match positive(s)? {
-        v if v <= f32::MAX as f64 => Ok(v as f32),
-        v => Err(format!("{v} does not fit an f32")),
-    }
 }
 
 fn unit_interval(s: &str) -> Result<f32, String> {

@@ -48,7 +48,7 @@ pub struct RenderArgs {
     #[arg(long)]
     lod: bool,
     /// LOD error threshold in pixels (at 1280x720, 60 degree vertical field of view).
-    #[arg(long, default_value_t = 1.0, requires = "lod", value_name = "PX", value_parser = super::positive_f32)]
+    #[arg(long, default_value_t = 1.0, requires = "lod", value_name = "PX", value_parser = crate::bench::positive::<f32>)]
     threshold: f32,
     /// Streaming: only the N coarsest levels are loaded (default: all); a meshlet of the finest
     /// loaded level is drawn where finer detail would be wanted.
@@ -85,7 +85,7 @@ pub struct RenderArgs {
     grid: Option<u32>,
     /// With `--grid`: spacing as a fraction of the mesh's largest extent (below 1 the copies
     /// interpenetrate).
-    #[arg(long, default_value_t = 0.7, requires = "grid", value_parser = super::positive_f32)]
+    #[arg(long, default_value_t = 0.7, requires = "grid", value_parser = crate::bench::positive::<f32>)]
     spacing: f32,
     /// With `--occlusion`: build the pyramid in every frame (by default a frame whose pyramid
     /// hid under a fifth of the triangles makes the next frames skip it, trying again every 4th).
@@ -152,7 +152,7 @@ struct ViewRow {
 /// `--distance`: a finite number of bounding radii in (0, 1000] (farther, the depth range of a
 /// 32-bit float buffer no longer separates the mesh's own surfaces).
 fn distance(s: &str) -> Result<f32, String> {
-    match super::positive(s)? {
+    match crate::bench::positive::<f64>(s)? {
         d if d <= 1000.0 => Ok(d as f32),
         d => Err(format!("{d} is farther than 1000 bounding radii")),
     }
