@@ -1,8 +1,10 @@
 //! `meshletlab build`: build meshlets, validate them, write the meshlet file.
 
+use super::clusters::ClusterArgs;
 use super::{build_validated, build_validated_on_gpu, gpu_for, load, spinner};
 use super::{Device, DeviceArgs, StrategyArgs};
 use crate::meshlet::io::MeshletFile;
+use crate::meshlet::Meshlets;
 use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
@@ -12,22 +14,36 @@ use std::path::PathBuf;
 pub struct BuildArgs {
     /// Mesh file.
     mesh: PathBuf,
-    /// Strategy name (`meshletlab --help` lists them, e.g. meshopt, kmedoids, partition).
-    #[arg(short, long)]
-    strategy: String,
+    /// Strategy name (`meshletlab --help` lists them, e.g. meshopt, kmedoids, partition);
+    /// needed unless --labels or --meshlets brings the clusters.
+    #[arg(short, long, required_unless_present_any = ["labels", "meshlets"])]
+    strategy: Option<String>,
     /// Output file.
     #[arg(short, long)]
     output: PathBuf,
+    /// Also write the meshlets as one cluster id per triangle (each triangle's meshlet, in the
+    /// mesh's triangle order), for another tool or `--labels`: a numpy .npy (u32) when FILE ends
+    /// in .npy, else text, one id a line.
+    #[arg(long, value_name = "FILE")]
+    labels_out: Option<PathBuf>,
     #[command(flatten)]
     args: StrategyArgs,
     #[command(flatten)]
     device: DeviceArgs,
+    #[command(flatten)]
+    clusters: ClusterArgs,
 }
 
 pub(super) fn run(a: BuildArgs, quiet: bool) -> Result<()> {
-    let name = &a.strategy;
-    crate::strategy::by_name(name, &a.args.options())?;
+    a.clusters.check(a.strategy.is_some())?;
     super::output::check_file(&a.output, "a meshlet file", &[])?;
+    if let Some(p) = &a.labels_out {
+        super::output::check_file(p, "a label file", &[])?;
+    }
+    let Some(name) = a.strategy.as_deref() else {
+        return from_file(&a, quiet);
+    };
+    crate::strategy::by_name(name, &a.args.options())?;
     let gpu = match a.device.device {
         Device::Cpu => None,
         Device::Gpu => Some(gpu_for(&[name])?),
@@ -51,15 +67,7 @@ pub(super) fn run(a: BuildArgs, quiet: bool) -> Result<()> {
         }
     };
     pb.finish_and_clear();
-    let file = MeshletFile {
-        limits: a.args.limits,
-        source_vertices: m.vertex_count() as u32,
-        source_triangles: m.triangle_count() as u32,
-        fingerprint: m.fingerprint(),
-        strategy: name.to_string(),
-        meshlets: ml,
-    };
-    file.save(&a.output)?;
+    let file = save(&a, &m, name, ml)?;
     say!(
         "{}: {} meshlets from {} triangles with {name} at {} in {ms:.1} ms{on} -> {}",
         a.mesh.display(),
@@ -69,4 +77,47 @@ pub(super) fn run(a: BuildArgs, quiet: bool) -> Result<()> {
         a.output.display()
     );
     Ok(())
+}
+
+/// `build --labels`/`--meshlets`: the file's clusters, held to the limits, as a meshlet file.
+fn from_file(a: &BuildArgs, quiet: bool) -> Result<()> {
+    if a.device.device == Device::Gpu {
+        return Err(super::usage(
+            "--device gpu builds with a strategy, not with --labels or --meshlets",
+        ));
+    }
+    let m = load(&a.mesh, quiet)?;
+    let i = a
+        .clusters
+        .import(&m, a.args.limits)?
+        .expect("a file is given");
+    let (name, note, ms) = (i.name.clone(), i.split_note(), i.ms);
+    let file = save(a, &m, &name, i.meshlets)?;
+    say!(
+        "{}: {} meshlets from {} triangles from {name}{note} at {} in {ms:.1} ms -> {}",
+        a.mesh.display(),
+        file.meshlets.len(),
+        m.triangle_count(),
+        a.args.limits,
+        a.output.display()
+    );
+    Ok(())
+}
+
+/// Writes the meshlet file and, with `--labels-out`, the per-triangle ids.
+fn save(a: &BuildArgs, m: &crate::mesh::Mesh, name: &str, ml: Meshlets) -> Result<MeshletFile> {
+    if let Some(p) = &a.labels_out {
+        let labels = crate::strategy::labels::triangle_labels(m, &ml)?;
+        crate::strategy::labels::file::write_labels(p, &labels)?;
+    }
+    let file = MeshletFile {
+        limits: a.args.limits,
+        source_vertices: m.vertex_count() as u32,
+        source_triangles: m.triangle_count() as u32,
+        fingerprint: m.fingerprint(),
+        strategy: name.to_string(),
+        meshlets: ml,
+    };
+    file.save(&a.output)?;
+    Ok(file)
 }

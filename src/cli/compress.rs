@@ -1,6 +1,7 @@
 //! `meshletlab compress`: encode a mesh's meshlets in a compressed format and write the file.
 
-use super::{build_validated, load, StrategyArgs};
+use super::clusters::{meshlets_or_build, ClusterArgs};
+use super::{load, StrategyArgs};
 use crate::compress::file::CompressedFile;
 use crate::compress::paper_tolerance;
 use crate::compress::Codec;
@@ -22,9 +23,9 @@ pub struct CompressArgs {
     /// The compact variant of ts, ix, sc or gi (quantised positions, packed indices).
     #[arg(long)]
     compact: bool,
-    /// Strategy that builds the meshlets.
-    #[arg(short, long, default_value = "meshopt")]
-    strategy: String,
+    /// Strategy that builds the meshlets [default: meshopt].
+    #[arg(short, long)]
+    strategy: Option<String>,
     /// Largest allowed position error, in mesh units (default: the paper's, the error of 14-bit
     /// quantisation of the bounding box).
     #[arg(long, conflicts_with = "relative_tolerance", value_parser = crate::bench::positive::<f64>)]
@@ -41,6 +42,8 @@ pub struct CompressArgs {
     json: bool,
     #[command(flatten)]
     args: StrategyArgs,
+    #[command(flatten)]
+    clusters: ClusterArgs,
 }
 
 /// The position tolerance from `--tolerance` (mesh units) or `--relative-tolerance` (of the
@@ -71,10 +74,14 @@ pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
         }
     };
     super::output::check_file(&a.output, "a compressed-meshlet file", &[])?;
-    crate::strategy::by_name(&a.strategy, &a.args.options())?;
+    a.clusters.check(a.strategy.is_some())?;
+    let strategy = a.strategy.as_deref().unwrap_or("meshopt");
+    crate::strategy::by_name(strategy, &a.args.options())?;
     let m = load(&a.mesh, quiet)?;
     let tolerance = tolerance(&m, a.tolerance, a.relative_tolerance)?;
-    let ml = build_validated(&m, &a.mesh, &a.strategy, &a.args)?;
+    let imported = meshlets_or_build(&m, &a.mesh, strategy, &a.args, &a.clusters)?;
+    let (note, split) = (imported.split_note(), imported.split);
+    let (ml, name) = (imported.meshlets, imported.name);
     let t0 = std::time::Instant::now();
     let encoded = format
         .encode(&m, &ml, tolerance)
@@ -93,7 +100,8 @@ pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
             "triangles": m.triangle_count(),
             "vertices": m.vertex_count(),
             "format": format.name(),
-            "strategy": a.strategy,
+            "strategy": name,
+            "split_clusters": split,
             "limits": a.args.limits.to_string(),
             "meshlets": ml.len(),
             "tolerance": tolerance,
@@ -108,11 +116,11 @@ pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
         say!("{}", serde_json::to_string_pretty(&out)?);
     } else {
         say!(
-            "{}: {} triangles in {} {} meshlets -> {} bytes, {:.2} bytes/triangle (connectivity {:.2}, positions {:.2}, headers {:.2}, culling {:.2}, padding {:.2}); positions {:.2} bytes/vertex; max error {:.3e} (tolerance {:.3e}); encoded in {:.3} s -> {}",
+            "{}: {} triangles in {} {} meshlets{note} -> {} bytes, {:.2} bytes/triangle (connectivity {:.2}, positions {:.2}, headers {:.2}, culling {:.2}, padding {:.2}); positions {:.2} bytes/vertex; max error {:.3e} (tolerance {:.3e}); encoded in {:.3} s -> {}",
             a.mesh.display(),
             m.triangle_count(),
             ml.len(),
-            a.strategy,
+            name,
             sizes.total(),
             sizes.total() as f64 / tris,
             sizes.connectivity as f64 / tris,

@@ -1,5 +1,6 @@
 //! `meshletlab lod`: build the cluster-LOD DAG and write the LOD file.
 
+use super::clusters::ClusterArgs;
 use super::{load, spinner, StrategyArgs};
 use crate::lod::{self, io::LodFile};
 use anyhow::Result;
@@ -11,7 +12,7 @@ use std::path::PathBuf;
 pub struct LodArgs {
     /// Mesh file.
     mesh: PathBuf,
-    /// Strategy of level 0 and of every split.
+    /// Strategy of level 0 and of every split (with --labels or --meshlets: of every split).
     #[arg(short, long, default_value = "meshopt")]
     strategy: String,
     /// Output LOD file (format: see `meshletlab::lod::io`).
@@ -25,6 +26,9 @@ pub struct LodArgs {
     json: bool,
     #[command(flatten)]
     args: StrategyArgs,
+    /// With --labels or --meshlets, the file's clusters are level 0.
+    #[command(flatten)]
+    clusters: ClusterArgs,
 }
 
 /// One level's row.
@@ -41,14 +45,28 @@ struct Row {
 pub(super) fn run(a: LodArgs, quiet: bool) -> Result<()> {
     let s = crate::strategy::by_name(&a.strategy, &a.args.options())?;
     super::output::check_file(&a.output, "a LOD file", &[])?;
+    a.clusters.check(false)?;
     let m = load(&a.mesh, quiet)?;
+    let level0 = a.clusters.import(&m, a.args.limits)?;
     let cfg = lod::Config {
         group_size: a.group_size as usize,
         ..Default::default()
     };
     let pb = spinner(quiet, format!("building the LOD DAG with {}", a.strategy));
     let t0 = std::time::Instant::now();
-    let dag = lod::build(&m, s.as_ref(), a.args.limits, &cfg);
+    let (dag, level0_name) = match level0 {
+        Some(i) => {
+            let name = i.name.clone() + &i.split_note();
+            (
+                lod::build_from(&m, i.meshlets, s.as_ref(), a.args.limits, &cfg),
+                name,
+            )
+        }
+        None => (
+            lod::build(&m, s.as_ref(), a.args.limits, &cfg),
+            a.strategy.clone(),
+        ),
+    };
     let seconds = t0.elapsed().as_secs_f64();
     pb.finish_and_clear();
     let rows: Vec<Row> = dag
@@ -87,6 +105,7 @@ pub(super) fn run(a: LodArgs, quiet: bool) -> Result<()> {
             "mesh": a.mesh.display().to_string(),
             "triangles": m.triangle_count(),
             "strategy": a.strategy,
+            "level0": level0_name,
             "limits": a.args.limits.to_string(),
             "seconds": seconds,
             "levels": rows,
@@ -99,7 +118,7 @@ pub(super) fn run(a: LodArgs, quiet: bool) -> Result<()> {
         return Ok(());
     }
     say!(
-        "{}: {} triangles -> {} levels in {seconds:.3} s ({:.2} M triangles/s, {} threads); {} root(s), {} stuck group(s); all levels {total:.3}x the source -> {}",
+        "{}: {} triangles ({level0_name} at level 0) -> {} levels in {seconds:.3} s ({:.2} M triangles/s, {} threads); {} root(s), {} stuck group(s); all levels {total:.3}x the source -> {}",
         a.mesh.display(),
         m.triangle_count(),
         dag.levels.len(),

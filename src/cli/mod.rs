@@ -15,6 +15,7 @@ macro_rules! say {
 mod bench;
 mod build;
 mod check;
+mod clusters;
 mod compress;
 mod demo;
 mod export;

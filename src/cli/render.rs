@@ -1,5 +1,6 @@
 //! `meshletlab render`: task + mesh shaders beside the vertex pipeline from seeded random views.
 
+use super::clusters::{meshlets_or_build, refuse_instanced, ClusterArgs};
 use super::{build_validated, load, load_scene, StrategyArgs};
 use crate::compress::file::CompressedFile;
 use crate::compress::Codec;
@@ -102,10 +103,26 @@ pub struct RenderArgs {
     json: bool,
     #[command(flatten)]
     args: StrategyArgs,
+    /// Plain, with --format and with --lod (level 0; --strategy splits the levels above).
+    #[command(flatten)]
+    clusters: ClusterArgs,
 }
 
 /// Refuses the options the chosen mode would ignore, by name, before anything is loaded.
 fn refuse_unused_options(a: &RenderArgs, m: &clap::ArgMatches) -> Result<()> {
+    a.clusters.check(!a.lod && super::given(m, "strategy"))?;
+    if a.clusters.file().is_some() {
+        let other = [
+            (a.occlusion, "--occlusion"),
+            (a.grid.is_some(), "--grid"),
+            (a.compressed.is_some(), "--compressed"),
+        ];
+        if let Some((_, flag)) = other.iter().find(|(on, _)| *on) {
+            return Err(super::usage(format!(
+                "--labels and --meshlets draw plain, with --format or with --lod, not with {flag}"
+            )));
+        }
+    }
     if a.format.is_none() {
         super::refuse_unused(
             m,
@@ -182,6 +199,9 @@ pub(super) fn run(a: RenderArgs, matches: &clap::ArgMatches, quiet: bool) -> Res
         let m = scene.meshes.pop().expect("one mesh");
         scene = Scene::grid(m, n as usize, a.spacing)?;
     }
+    if scene.is_instanced() && a.clusters.file().is_some() {
+        return Err(refuse_instanced(&a.mesh, "--labels and --meshlets"));
+    }
     if a.occlusion {
         return run_occlusion(a, scene, quiet);
     }
@@ -189,7 +209,9 @@ pub(super) fn run(a: RenderArgs, matches: &clap::ArgMatches, quiet: bool) -> Res
         return run_scene(a, scene, quiet);
     }
     let m = scene.meshes.into_iter().next().expect("one mesh");
-    let ml = build_validated(&m, &a.mesh, name, &a.args)?;
+    let imported = meshlets_or_build(&m, &a.mesh, name, &a.args, &a.clusters)?;
+    let name = &(imported.name.clone() + &imported.split_note());
+    let ml = imported.meshlets;
     let ctx = Context::new(a.validate)?;
     let pass = Pass::with_format(&ctx, &m, &ml, a.descriptor)
         .with_context(|| format!("{}: {name}", a.mesh.display()))?;
@@ -551,11 +573,24 @@ struct LodRow {
 
 /// `render --lod`: the task shader selects the LOD cut per view.
 fn run_lod(a: RenderArgs, quiet: bool) -> Result<()> {
-    let name = &a.strategy;
-    let s = crate::strategy::by_name(name, &a.args.options())?;
+    let s = crate::strategy::by_name(&a.strategy, &a.args.options())?;
     let m = load(&a.mesh, quiet)?;
+    let level0 = a.clusters.import(&m, a.args.limits)?;
+    let name = &match &level0 {
+        Some(i) => format!(
+            "{}{} (levels above by {})",
+            i.name,
+            i.split_note(),
+            a.strategy
+        ),
+        None => a.strategy.clone(),
+    };
     let pb = super::spinner(quiet || a.json, format!("building the LOD DAG with {name}"));
-    let lod = crate::lod::build(&m, s.as_ref(), a.args.limits, &Default::default());
+    let cfg = Default::default();
+    let lod = match level0 {
+        Some(i) => crate::lod::build_from(&m, i.meshlets, s.as_ref(), a.args.limits, &cfg),
+        None => crate::lod::build(&m, s.as_ref(), a.args.limits, &cfg),
+    };
     let flat = Flat::new(&m, &lod);
     pb.finish_and_clear();
     let levels = flat.levels();
@@ -727,12 +762,18 @@ fn run_compressed(a: RenderArgs, quiet: bool) -> Result<()> {
         }
         (None, Some(format)) => {
             let tolerance = super::compress::tolerance(&m, a.tolerance, a.relative_tolerance)?;
-            let ml = build_validated(&m, &a.mesh, &a.strategy, &a.args)?;
+            let i = meshlets_or_build(&m, &a.mesh, &a.strategy, &a.args, &a.clusters)?;
             let enc = format
-                .encode(&m, &ml, tolerance)
+                .encode(&m, &i.meshlets, tolerance)
                 .map_err(|e| anyhow::anyhow!("{}: {e}", a.mesh.display()))?;
-            let split = pack(&m, &ml, DescriptorFormat::Split)?.device_bytes(m.vertex_count());
-            (format, enc, format!("{} meshlets", a.strategy), Some(split))
+            let split =
+                pack(&m, &i.meshlets, DescriptorFormat::Split)?.device_bytes(m.vertex_count());
+            (
+                format,
+                enc,
+                format!("{}{} meshlets", i.name, i.split_note()),
+                Some(split),
+            )
         }
         (None, None) => unreachable!("run_compressed needs --format or --compressed"),
     };

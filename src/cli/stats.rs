@@ -1,5 +1,6 @@
 //! `meshletlab stats`: mesh topology counts, then one validated metrics row per strategy.
 
+use super::clusters::{refuse_instanced, ClusterArgs};
 use super::{describe, evaluate_all, fail_on_invalid, gpu_for, load_scene, strategies};
 use super::{Device, DeviceArgs, StrategyArgs};
 use crate::bench::{evaluate_builds, metrics_table, Evaluation};
@@ -28,15 +29,23 @@ pub struct StatsArgs {
     args: StrategyArgs,
     #[command(flatten)]
     device: DeviceArgs,
+    /// With --labels or --meshlets, one row more, named by the file (`labels:NAME`,
+    /// `meshlets:NAME`), measured like the strategies' (its time: reading and packing the file).
+    #[command(flatten)]
+    clusters: ClusterArgs,
 }
 
 pub(super) fn run(a: StatsArgs, quiet: bool) -> Result<()> {
     let label = a.mesh.display().to_string();
+    a.clusters.check(false)?;
     let scene = load_scene(&a.mesh, quiet)?;
     if scene.is_instanced() {
+        if a.clusters.file().is_some() {
+            return Err(refuse_instanced(&a.mesh, "--labels and --meshlets"));
+        }
         return run_scene(&a, scene, &label, quiet);
     }
-    let (m, rows) = match a.device.device {
+    let (m, mut rows) = match a.device.device {
         Device::Cpu => {
             let list = strategies(&a.strategy, &a.args.options())?;
             let m = scene.meshes.into_iter().next().expect("one mesh");
@@ -49,22 +58,59 @@ pub(super) fn run(a: StatsArgs, quiet: bool) -> Result<()> {
             (m, rows)
         }
     };
+    let imported = imported_row(&a, &m)?;
+    if let Some((row, _)) = &imported {
+        rows.push(row.clone());
+    }
     let st = MeshStats::of(&m);
     if a.json {
-        let out = serde_json::json!({
+        let mut out = serde_json::json!({
             "mesh": label,
             "stats": st,
             "limits": a.args.limits.to_string(),
             "device": if a.device.device == Device::Gpu { "gpu" } else { "cpu" },
             "strategies": rows,
         });
+        if let Some((row, (clusters, split))) = &imported {
+            out["imported"] = serde_json::json!({
+                "name": row.strategy, "clusters": clusters, "split": split,
+            });
+        }
         say!("{}", serde_json::to_string_pretty(&out)?);
     } else {
         say!("{}", describe(&label, &st));
         say!("limits {}\n", a.args.limits);
         say!("{}", metrics_table(&rows));
+        if let Some((row, (clusters, split))) = &imported {
+            say!(
+                "{}: {clusters} clusters in the file, {split} of them split by meshopt to fit the limits",
+                row.strategy
+            );
+        }
     }
     fail_on_invalid(&rows, &label)
+}
+
+/// The row of `--labels`/`--meshlets`, read and packed `--runs` times like a strategy's builds,
+/// with the file's cluster count and how many `--split` divided.
+fn imported_row(
+    a: &StatsArgs,
+    m: &crate::mesh::Mesh,
+) -> Result<Option<(Evaluation, (usize, usize))>> {
+    let Some(name) = a.clusters.name() else {
+        return Ok(None);
+    };
+    let mut counts = (0, 0);
+    let import = || {
+        let i = a
+            .clusters
+            .import(m, a.args.limits)?
+            .expect("a file is given");
+        counts = (i.clusters, i.split);
+        anyhow::Ok(i.meshlets)
+    };
+    let row = evaluate_builds(m, &name, a.args.limits, a.runs as usize, import)?;
+    Ok(Some((row, counts)))
 }
 
 /// `stats --device gpu`: the mesh and one row per strategy, each built on the GPU `--runs` times

@@ -157,6 +157,7 @@ impl Corpus {
             seeds.push(meshlet_seed(&meshlet_source, strategy, limits));
         }
         seeds.push(lod_seed(&meshlet_source));
+        seeds.extend(cluster_seeds(&meshlet_source));
         for f in Codec::ALL {
             seeds.push(compressed_seed(&meshlet_source, f));
         }
@@ -1044,6 +1045,81 @@ fn gltf_seed(name: &str, doc: Value, bin: Vec<u8>, floats: Vec<usize>, glb: bool
         floats: Vec::new(),
         gltf: Some(parts),
     }
+}
+
+/// `--labels` and `--meshlets` seeds: meshoptimizer's meshlets at 16/12 (each cluster fits)
+/// and at 32/24 (each is over 16/12, so `--split` runs) as text and `.npy` (int64) ids, and the
+/// 16/12 ones as an `.npz`.
+fn cluster_seeds(m: &Mesh) -> Vec<Seed> {
+    use crate::strategy::labels::triangle_labels;
+    use crate::strategy::Strategy as _;
+    let bare = |name: String, target: Target, bytes: Vec<u8>| Seed {
+        name,
+        target,
+        boundaries: Vec::new(),
+        numbers: Vec::new(),
+        floats: Vec::new(),
+        text_end: 0,
+        gltf: None,
+        bytes,
+    };
+    let mut out = Vec::new();
+    for (v, t) in [(16u32, 12u32), (32, 24)] {
+        let limits = crate::meshlet::Limits::new(v, t).expect("valid seed limits");
+        let ml = crate::strategy::Meshopt { cone_weight: 0.0 }.build(m, limits);
+        let labels = triangle_labels(m, &ml).expect("meshopt's meshlets are valid");
+        let mut text = bare(format!("labels/text-{v}-{t}"), Target::Labels, Vec::new());
+        for l in &labels {
+            let start = text.bytes.len();
+            text.bytes.extend_from_slice(format!("{l}\n").as_bytes());
+            text.numbers.push(Field::Text {
+                start,
+                end: text.bytes.len() - 1,
+            });
+            text.boundaries.push(text.bytes.len());
+        }
+        text.text_end = text.bytes.len();
+        out.push(text);
+        let wide: Vec<i64> = labels.iter().map(|&l| l as i64).collect();
+        let bytes = crate::meshlet::npy::write(&[wide.len() as u64], &wide);
+        let mut npy = bare(format!("labels/npy-{v}-{t}"), Target::Labels, bytes);
+        // The header is text up to its newline, then eight bytes an id.
+        let data = npy
+            .bytes
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        npy.text_end = data;
+        npy.boundaries = vec![6, 8, 10, data, data + 8, npy.bytes.len() - 8];
+        npy.numbers = (0..4)
+            .map(|k| Field::Bin {
+                at: data + 8 * k,
+                width: 8,
+                be: false,
+            })
+            .chain([Field::Bin {
+                at: 8,
+                width: 2,
+                be: false,
+            }])
+            .collect();
+        out.push(npy);
+        if (v, t) == (16, 12) {
+            let bytes = crate::meshlet::npz::to_npz(&ml);
+            let mut npz = bare("npz/meshopt-16-12".into(), Target::Npz, bytes);
+            // The first local header: sizes at 18 and 22, name length at 26.
+            npz.numbers = [18, 22, 26]
+                .map(|at| Field::Bin {
+                    at,
+                    width: if at == 26 { 2 } else { 4 },
+                    be: false,
+                })
+                .to_vec();
+            npz.boundaries = vec![30, 60, 128, npz.bytes.len() / 2, npz.bytes.len() - 22];
+            out.push(npz);
+        }
+    }
+    out
 }
 
 fn meshlet_seed(m: &Mesh, strategy: &str, (v, t): (u32, u32)) -> Seed {

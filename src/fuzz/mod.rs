@@ -1,6 +1,7 @@
 //! A seeded mutation fuzzer over every file reader: PLY (ASCII, binary little and big endian), OBJ,
 //! glTF, GLB, STL (ASCII and binary), zstd-compressed files, the meshlet file (`check`), the LOD
-//! file (`lod-check`) and the compressed-meshlet file (`check`); and, as target `library`, the
+//! file (`lod-check`), the compressed-meshlet file (`check`), the label files (text and `.npy`,
+//! `--labels`) and the `.npz` meshlets (`--meshlets`); and, as target `library`, the
 //! arrays an engine hands the library's constructors, on through its strategies, bounds, codecs and
 //! LOD build ([`library`]).
 //!
@@ -73,13 +74,18 @@ pub enum Target {
     Lod,
     /// The compressed-meshlet file, read and every meshlet decoded (`meshletlab check`).
     Compressed,
+    /// A label file (text or `.npy`), read for the meshlet files' source mesh and packed
+    /// (`--labels`, with and without `--split`).
+    Labels,
+    /// Meshlets as an `.npz`, read against that mesh and held to limits (`--meshlets`).
+    Npz,
     /// The library's public API on framed arrays ([`library`]).
     Library,
 }
 
 impl Target {
     /// Every target, in report order.
-    pub const ALL: [Target; 13] = [
+    pub const ALL: [Target; 15] = [
         Target::PlyAscii,
         Target::PlyLe,
         Target::PlyBe,
@@ -92,6 +98,8 @@ impl Target {
         Target::Meshlet,
         Target::Lod,
         Target::Compressed,
+        Target::Labels,
+        Target::Npz,
         Target::Library,
     ];
 
@@ -110,6 +118,8 @@ impl Target {
             Target::Meshlet => "meshlet",
             Target::Lod => "lod",
             Target::Compressed => "compressed",
+            Target::Labels => "labels",
+            Target::Npz => "npz",
             Target::Library => "library",
         }
     }
@@ -125,6 +135,8 @@ impl Target {
             Target::Meshlet => "mlt",
             Target::Lod => "lod",
             Target::Compressed => "cmp",
+            Target::Labels => "labels",
+            Target::Npz => "npz",
             Target::Library => "lib",
         }
     }
@@ -203,9 +215,10 @@ impl Mutation {
             // library's arrays (binary PLY and STL: the header; GLB: JSON).
             Mutation::TokenDelete | Mutation::TokenRepeat => !matches!(
                 t,
-                Target::Meshlet | Target::Lod | Target::Compressed | Target::Library
+                Target::Meshlet | Target::Lod | Target::Compressed | Target::Npz | Target::Library
             ),
-            Mutation::FloatSpecial => t != Target::Meshlet,
+            // Neither holds floats.
+            Mutation::FloatSpecial => !matches!(t, Target::Meshlet | Target::Labels | Target::Npz),
             _ => true,
         }
     }
@@ -351,6 +364,26 @@ pub fn read(case: &Case, corpus: &Corpus) -> Result<Outcome, String> {
             Err(e) => named(e.to_string()).map(|_| Outcome::Error("lod-file")),
         };
     }
+    if case.target == Target::Labels {
+        return read_labels(case, corpus).or_else(|e| named(e).map(|_| Outcome::Error("labels")));
+    }
+    if case.target == Target::Npz {
+        let m = &corpus.meshlet_source;
+        let limits = crate::meshlet::Limits::new(16, 12).expect("valid limits");
+        return match crate::meshlet::npz::meshlets_from_bytes(&case.bytes, path, m) {
+            Ok(ml) => {
+                // Over the limits: refused without --split, divided with it.
+                if crate::strategy::labels::split_meshlets(m, ml.clone(), limits, false).is_err() {
+                    let (ml, _) = crate::strategy::labels::split_meshlets(m, ml, limits, true)
+                        .map_err(|e| format!("--split refused: {e}"))?;
+                    crate::meshlet::validate(m, &ml, limits)
+                        .map_err(|e| format!("--split made invalid meshlets: {e}"))?;
+                }
+                Ok(Outcome::Valid)
+            }
+            Err(e) => named(e.to_string()).map(|_| Outcome::Error("npz")),
+        };
+    }
     if case.target == Target::Meshlet {
         return match MeshletFile::from_bytes(&case.bytes, path)
             .and_then(|f| f.check(&corpus.meshlet_source, path))
@@ -371,6 +404,31 @@ pub fn read(case: &Case, corpus: &Corpus) -> Result<Outcome, String> {
         Ok(_) => Ok(Outcome::Valid),
         Err(e) => named(e.to_string()).map(|_| Outcome::Error(kind_name(&e.kind))),
     }
+}
+
+/// `--labels` on a case: the ids parsed for the corpus mesh, packed at 16/12; a clustering
+/// over the limits must be refused without `--split` and packed valid with it. `Err` carries
+/// the message of a typed refusal (which must name the file); a wrong packing is a defect.
+fn read_labels(case: &Case, corpus: &Corpus) -> Result<Outcome, String> {
+    use crate::strategy::labels::{file::parse_labels, from_labels, LabelsError};
+    let m = &corpus.meshlet_source;
+    let limits = crate::meshlet::Limits::new(16, 12).expect("valid limits");
+    let ids = parse_labels(&case.bytes, m.triangle_count())
+        .map_err(|e| format!("{}: {e}", case.file_name))?;
+    let c = match from_labels(m, &ids, limits, false) {
+        Ok(c) => c,
+        Err(LabelsError::OverLimits { .. }) => from_labels(m, &ids, limits, true)
+            .map_err(|e| format!("defect: --split refused: {e}"))
+            .and_then(|c| {
+                (c.split > 0)
+                    .then_some(c)
+                    .ok_or("defect: nothing split".into())
+            })?,
+        Err(e) => return Err(format!("defect: {e}")),
+    };
+    crate::meshlet::validate(m, &c.meshlets, limits)
+        .map_err(|e| format!("defect: invalid meshlets from labels: {e}"))?;
+    Ok(Outcome::Valid)
 }
 
 /// The bytes the reader of `case` sees: for `.zst` the larger of the compressed and the

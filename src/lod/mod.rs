@@ -204,8 +204,21 @@ pub(crate) struct Cluster {
 
 /// Builds the DAG over `mesh` with `strategy` at `limits`.
 pub fn build(mesh: &Mesh, strategy: &dyn Strategy, limits: Limits, cfg: &Config) -> Lod {
-    let remap = weld(mesh);
     let level0 = level_zero(mesh, strategy, limits, cfg.level0_chunk);
+    build_from(mesh, level0, strategy, limits, cfg)
+}
+
+/// [`build`] over a level 0 made elsewhere (a clustering brought in from another tool): the
+/// levels above are `strategy`'s splits. `level0` must be `mesh`'s meshlets within `limits`
+/// (see [`crate::meshlet::validate`]).
+pub fn build_from(
+    mesh: &Mesh,
+    level0: Meshlets,
+    strategy: &dyn Strategy,
+    limits: Limits,
+    cfg: &Config,
+) -> Lod {
+    let remap = weld(mesh);
     let mut levels = vec![Level {
         info: (0..level0.len())
             .into_par_iter()

@@ -15,6 +15,10 @@ pub mod export;
 #[cfg(feature = "io")]
 pub mod io;
 pub mod metrics;
+#[cfg(feature = "io")]
+pub(crate) mod npy;
+#[cfg(feature = "io")]
+pub mod npz;
 pub mod order;
 mod validate;
 
@@ -225,6 +229,11 @@ impl Limits {
     pub const DEFAULT: Limits = Limits {
         max_vertices: 64,
         max_triangles: 126,
+    };
+    /// The largest limits the model allows: 256 vertices / 256 triangles (corners are u8).
+    pub const MAX: Limits = Limits {
+        max_vertices: 256,
+        max_triangles: 256,
     };
     /// The three presets the tests and benches cover: 64/126, 64/124 and 64/84.
     pub const PRESETS: [Limits; 3] = [

@@ -24,6 +24,7 @@ mod compact;
 mod greedy;
 pub mod grow;
 pub mod kmedoids;
+pub mod labels;
 mod meshopt;
 mod nvidia;
 pub mod qem;
