@@ -1,7 +1,7 @@
 # meshletlab: two-command quick start is `make demo` and `make test`.
 CARGO ?= cargo
 
-.PHONY: setup demo test lint bench build bench-robustness
+.PHONY: setup demo test lint bench build bench-robustness python-test
 
 # A CI build starts clean: incremental caches there only cost time to write.
 ifdef CI
@@ -39,6 +39,30 @@ test: setup lint
 	  $(CARGO) run --profile test --quiet --example $$e || exit 1; done
 	$(CARGO) run --profile test --quiet --example gpu_kmedoids
 	$(CARGO) run --profile test --quiet --example gpu_draw
+	$(MAKE) python-test
+
+# The Python module (python/) in a virtual environment (Debian's Python refuses system-wide pip):
+# built by cargo in the test profile and target directory the steps above filled, so only pyo3,
+# numpy and the module itself compile anew; maturin cannot, as its `cargo rustc --profile test`
+# builds a test harness. The library is put beside the package and imported from python/; the
+# command-line round trips run target/debug/meshletlab. The example runs headless.
+PYTHON ?= python3
+VENV := .venv
+PYTHON_DEPS := numpy pytest matplotlib
+
+$(VENV)/.deps:
+	@test -x $(VENV)/bin/python || $(PYTHON) -m venv $(VENV)
+	$(VENV)/bin/pip install -q $(PYTHON_DEPS)
+	@touch $@
+
+python-test: $(VENV)/.deps
+	PYO3_PYTHON=$(CURDIR)/$(VENV)/bin/python PYO3_BUILD_EXTENSION_MODULE=1 CARGO_TARGET_DIR=$(CURDIR)/target \
+	  $(CARGO) build --profile test --quiet -p meshletlab-python --features gpu
+	cp target/debug/lib_meshletlab.so \
+	  python/meshletlab/_meshletlab$$($(VENV)/bin/python -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))')
+	PYTHONPATH=python $(VENV)/bin/python -m pytest -q python/tests
+	d=$$(mktemp -d) && PYTHONPATH=python MPLBACKEND=Agg $(VENV)/bin/python python/examples/compare.py gen:noisy-sphere --out $$d \
+	  && test -s $$d/compare.png && rm -r $$d
 
 # Regenerates every table and plot in results/ from the shared real meshes.
 bench: setup
