@@ -3,8 +3,9 @@
 #
 # Installs only what is missing: Mesa's lavapipe Vulkan driver from bookworm-backports (Mesa >= 24 has
 # VK_EXT_mesh_shader; stock bookworm 22.3 does not), the Vulkan loader, shader tools, the validation layer
-# and zstd. The backports source reuses the mirror URI that this machine's apt sources already use, so no
-# host name is written here. Silent and fast when everything is present.
+# and zstd, and python3-venv (without it Debian's python3 has no ensurepip and `python3 -m venv` fails;
+# make test's Python step needs a venv, as Debian's Python refuses system-wide pip). The backports source
+# reuses the mirror URI that this machine's apt sources already use, so no host name is written here. Silent and fast when everything is present.
 set -euo pipefail
 
 log() { echo "setup: $*" >&2; }
@@ -22,6 +23,7 @@ declare -A MIN_VERSION=(
   [spirv-tools]=""
   [vulkan-validationlayers]=""
   [zstd]=""
+  [python3-venv]=""
 )
 
 installed_version() { dpkg-query -W -f='${Status} ${Version}\n' "$1" 2>/dev/null | awk '$3=="installed"{print $4}'; }
