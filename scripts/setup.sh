@@ -5,7 +5,8 @@
 # VK_EXT_mesh_shader; stock bookworm 22.3 does not), the Vulkan loader, shader tools, the validation layer
 # and zstd, and python3-venv (without it Debian's python3 has no ensurepip and `python3 -m venv` fails;
 # make test's Python step needs a venv, as Debian's Python refuses system-wide pip). The backports source
-# reuses the mirror URI that this machine's apt sources already use, so no host name is written here. Silent and fast when everything is present.
+# reuses the mirror URI that this machine's apt sources already use, so no host name is written here.
+# Silent and fast when everything is present.
 set -euo pipefail
 
 log() { echo "setup: $*" >&2; }
