@@ -16,6 +16,7 @@ pub(crate) struct IntArray {
 /// Reads an integer `.npy` array of at most `max_len` elements; a negative value is an error
 /// naming its place.
 pub(crate) fn read_integers(bytes: &[u8], max_len: u64) -> Result<IntArray, String> {
+    check_shape(bytes, max_len)?;
     let mut data = bytes;
     let header = NpyHeader::from_reader(&mut data).map_err(|e| format!("not a .npy array: {e}"))?;
     let shape = header.shape().to_vec();
@@ -58,6 +59,57 @@ pub(crate) fn read_integers(bytes: &[u8], max_len: u64) -> Result<IntArray, Stri
         values = transpose(&values, shape[0] as usize, shape[1] as usize);
     }
     Ok(IntArray { shape, values })
+}
+
+/// The header's length and shape, checked before `npyz` reads them: it allocates the announced
+/// header length up front, and its element count is a product that overflows `u64` for a shape
+/// such as `(2**32, 2**32)`; both must be errors, not an allocation or a panic. A header this
+/// cannot make out is left to `npyz` to refuse.
+fn check_shape(bytes: &[u8], max_len: u64) -> Result<(), String> {
+    let (len, start): (Option<usize>, usize) = match bytes.get(6) {
+        Some(1) => (
+            bytes
+                .get(8..10)
+                .map(|b| u16::from_le_bytes([b[0], b[1]]) as usize),
+            10,
+        ),
+        Some(2 | 3) => (
+            bytes
+                .get(8..12)
+                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize),
+            12,
+        ),
+        _ => (None, 0),
+    };
+    let Some(len) = len else {
+        return Ok(());
+    };
+    // `npyz` allocates the header's announced length before reading it.
+    let Some(header) = bytes.get(start..start + len) else {
+        return Err(format!(
+            "header of {len} bytes runs past the end of the file"
+        ));
+    };
+    let header = String::from_utf8_lossy(header);
+    let Some(tuple) = header
+        .split_once("'shape'")
+        .and_then(|(_, rest)| rest.split_once('('))
+        .and_then(|(_, rest)| rest.split_once(')'))
+        .map(|(inside, _)| inside)
+    else {
+        return Ok(());
+    };
+    let mut n = 1u64;
+    for d in tuple.split(',').map(str::trim).filter(|d| !d.is_empty()) {
+        let Ok(d) = d.parse::<u64>() else {
+            return Ok(());
+        };
+        n = n
+            .checked_mul(d)
+            .filter(|&n| n <= max_len)
+            .ok_or_else(|| format!("array of shape ({tuple}) is larger than {max_len} elements"))?;
+    }
+    Ok(())
 }
 
 fn widen<T: Into<i128>>(v: Vec<T>) -> Vec<i128> {

@@ -164,3 +164,186 @@ fn narrow<T: TryFrom<u64>>(a: super::npy::IntArray, name: &str) -> Result<Vec<T>
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::npy::read_integers;
+    use super::*;
+    use crate::strategy::Strategy as _;
+
+    /// A version-1 `.npy` of `data` (raw element bytes) under a hand-written header.
+    fn npy(descr: &str, fortran: bool, shape: &str, data: &[u8]) -> Vec<u8> {
+        let f = if fortran { "True" } else { "False" };
+        let mut h = format!("{{'descr': '{descr}', 'fortran_order': {f}, 'shape': {shape}, }}");
+        while (11 + h.len()) % 64 != 0 {
+            h.push(' ');
+        }
+        h.push('\n');
+        let mut out = b"\x93NUMPY\x01\x00".to_vec();
+        out.extend_from_slice(&(h.len() as u16).to_le_bytes());
+        out.extend_from_slice(h.as_bytes());
+        out.extend_from_slice(data);
+        out
+    }
+
+    #[test]
+    fn every_integer_dtype_and_byte_order_reads_and_floats_do_not() {
+        let want = [3u64, 0, 250];
+        let cases: [(&str, Vec<u8>); 8] = [
+            ("|u1", vec![3, 0, 250]),
+            (
+                "<u2",
+                [3u16, 0, 250]
+                    .iter()
+                    .flat_map(|v| v.to_le_bytes())
+                    .collect(),
+            ),
+            (
+                ">u4",
+                [3u32, 0, 250]
+                    .iter()
+                    .flat_map(|v| v.to_be_bytes())
+                    .collect(),
+            ),
+            (
+                "<u8",
+                [3u64, 0, 250]
+                    .iter()
+                    .flat_map(|v| v.to_le_bytes())
+                    .collect(),
+            ),
+            (
+                "<i2",
+                [3i16, 0, 250]
+                    .iter()
+                    .flat_map(|v| v.to_le_bytes())
+                    .collect(),
+            ),
+            (
+                ">i4",
+                [3i32, 0, 250]
+                    .iter()
+                    .flat_map(|v| v.to_be_bytes())
+                    .collect(),
+            ),
+            (
+                "<i8",
+                [3i64, 0, 250]
+                    .iter()
+                    .flat_map(|v| v.to_le_bytes())
+                    .collect(),
+            ),
+            (
+                ">i8",
+                [3i64, 0, 250]
+                    .iter()
+                    .flat_map(|v| v.to_be_bytes())
+                    .collect(),
+            ),
+        ];
+        for (descr, data) in cases {
+            let a = read_integers(&npy(descr, false, "(3,)", &data), 3).unwrap();
+            assert_eq!((a.shape, a.values), (vec![3], want.to_vec()), "{descr}");
+        }
+        let neg = npy("|i1", false, "(3,)", &[1, 0xFF, 2]);
+        let e = read_integers(&neg, 3).err().unwrap();
+        assert!(e.contains("element 1 is negative (-1)"), "{e}");
+        let float = npy("<f4", false, "(1,)", &1f32.to_le_bytes());
+        assert!(read_integers(&float, 1)
+            .err()
+            .unwrap()
+            .contains("not integers"));
+        // Column-major 2 x 2 reads back row-major.
+        let f = npy("|u1", true, "(2, 2)", &[1, 3, 2, 4]);
+        assert_eq!(read_integers(&f, 4).unwrap().values, vec![1, 2, 3, 4]);
+        // Lies about the size are refused before any allocation.
+        let short = npy("<u4", false, "(1000,)", &[0; 8]);
+        assert!(read_integers(&short, 1000)
+            .err()
+            .unwrap()
+            .contains("bytes follow"));
+        let huge = npy("<u4", false, "(4294967296, 4294967296)", &[]);
+        assert!(read_integers(&huge, 1000)
+            .err()
+            .unwrap()
+            .contains("larger than"));
+    }
+
+    #[test]
+    fn npz_reads_what_numpy_writes_compressed_or_not_and_refuses_broken_archives() {
+        let m = crate::mesh::generate::noisy_sphere(2, 0.1, 1);
+        let ml = crate::strategy::Meshopt { cone_weight: 0.0 }.build(&m, Limits::DEFAULT);
+        assert_eq!(from_npz(&to_npz(&ml), &m).unwrap(), ml);
+        // np.savez_compressed: deflated members; and int64 arrays, as numpy makes by default.
+        let wide = |v: &[u64]| {
+            v.iter()
+                .flat_map(|x| (*x as i64).to_le_bytes())
+                .collect::<Vec<_>>()
+        };
+        let rows: Vec<u64> = ml
+            .meshlets()
+            .iter()
+            .flat_map(|x| {
+                [
+                    x.vertex_offset,
+                    x.triangle_offset,
+                    x.vertex_count,
+                    x.triangle_count,
+                ]
+            })
+            .map(u64::from)
+            .collect();
+        let verts: Vec<u64> = ml.vertices().iter().map(|&v| v as u64).collect();
+        let tris: Vec<u64> = ml.triangles().iter().map(|&v| v as u64).collect();
+        let members = [
+            (
+                "meshlets.npy",
+                npy("<i8", false, &format!("({}, 4)", ml.len()), &wide(&rows)),
+            ),
+            (
+                "vertices.npy",
+                npy("<i8", false, &format!("({},)", verts.len()), &wide(&verts)),
+            ),
+            (
+                "triangles.npy",
+                npy("<i8", false, &format!("({},)", tris.len()), &wide(&tris)),
+            ),
+        ];
+        let archive = |members: &[(&str, Vec<u8>)]| {
+            let mut z = zip::ZipWriter::new(Cursor::new(Vec::new()));
+            let o = zip::write::SimpleFileOptions::default()
+                .compression_method(zip::CompressionMethod::Deflated);
+            for (name, bytes) in members {
+                z.start_file(*name, o).unwrap();
+                z.write_all(bytes).unwrap();
+            }
+            z.finish().unwrap().into_inner()
+        };
+        assert_eq!(from_npz(&archive(&members), &m).unwrap(), ml);
+        // A missing array, a wrong shape, a corner over 255, a range past the end.
+        let e = from_npz(&archive(&members[..2]), &m).unwrap_err();
+        assert!(e.contains("no array 'triangles'"), "{e}");
+        let mut flat = members.clone();
+        flat[0].1 = npy("<i8", false, &format!("({},)", rows.len()), &wide(&rows));
+        assert!(from_npz(&archive(&flat), &m)
+            .unwrap_err()
+            .contains("not (M, 4)"));
+        let mut big = members.clone();
+        let mut t = tris.clone();
+        t[0] = 300;
+        big[2].1 = npy("<i8", false, &format!("({},)", t.len()), &wide(&t));
+        assert!(from_npz(&archive(&big), &m)
+            .unwrap_err()
+            .contains("(300) does not fit u8"));
+        let mut past = members.clone();
+        let mut r = rows.clone();
+        r[1] = 1 << 30;
+        past[0].1 = npy("<i8", false, &format!("({}, 4)", ml.len()), &wide(&r));
+        let e = from_npz(&archive(&past), &m).unwrap_err();
+        assert!(e.contains("meshlet 0"), "{e}");
+        let cut = to_npz(&ml);
+        assert!(from_npz(&cut[..cut.len() / 2], &m)
+            .unwrap_err()
+            .contains("not an .npz"));
+    }
+}
