@@ -18,7 +18,9 @@
 //! code cannot hand a strategy, the bounds, the LOD build or a codec (some of which call
 //! meshoptimizer's C code) an index out of range or a limit of 0: bad arrays are a typed error at
 //! the constructor. Meshlets made elsewhere (another tool, a cache) come in through
-//! [`meshlet::Meshlets::new`], checked against their mesh. A struct literal does not compile:
+//! [`meshlet::Meshlets::new`], checked against their mesh; a clustering made elsewhere (one id
+//! per triangle) through [`strategy::labels::from_labels`], which packs it into meshlets and
+//! refuses, or splits with meshoptimizer, a cluster over the limits. A struct literal does not compile:
 //!
 //! ```compile_fail,E0451
 //! let mesh = meshletlab::mesh::Mesh { positions: vec![[0.0; 3]; 3], indices: vec![0, 1, 7] };
