@@ -95,6 +95,8 @@ def test_compression_errors(small):
     c = meshletlab.compress(small, ml)
     with pytest.raises(meshletlab.CompressError, match=f"meshlet {len(ml)} out of range"):
         c.decode(len(ml))
+    with pytest.raises(meshletlab.FileError, match="no-such-dir.*cannot write"):
+        c.save("/nonexistent/no-such-dir/c.mlc")
 
 
 def test_glb_export(small, tmp_path):
@@ -128,6 +130,8 @@ def test_lod_levels_and_errors(cli, medium, tmp_path):
     path = tmp_path / "m.lod"
     lod.save(path)
     cli("lod-check", "gen:noisy-sphere", path, "--views", "20")
+    with pytest.raises(meshletlab.FileError, match="cannot write"):
+        lod.save(tmp_path / "no" / "m.lod")
     with pytest.raises(meshletlab.OptionError, match="group_size must be at least 1"):
         meshletlab.lod.build(medium, group_size=0)
     with pytest.raises(meshletlab.OptionError, match="lod.build\\(\\) got an unexpected keyword argument 'levels'"):
