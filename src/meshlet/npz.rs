@@ -14,20 +14,10 @@ use std::path::Path;
 
 /// The `.npz` bytes of `ml` (stored, not compressed: numpy's `np.savez`).
 pub fn to_npz(ml: &Meshlets) -> Vec<u8> {
-    let rows: Vec<u32> = ml
-        .meshlets()
-        .iter()
-        .flat_map(|m| {
-            [
-                m.vertex_offset,
-                m.triangle_offset,
-                m.vertex_count,
-                m.triangle_count,
-            ]
-        })
-        .collect();
+    // A meshlet record is four u32s (`repr(C)`), the row numpy reads.
+    let rows: &[u32] = bytemuck::cast_slice(ml.meshlets());
     let arrays = [
-        ("meshlets.npy", write(&[ml.len() as u64, 4], &rows)),
+        ("meshlets.npy", write(&[ml.len() as u64, 4], rows)),
         (
             "vertices.npy",
             write(&[ml.vertices().len() as u64], ml.vertices()),
