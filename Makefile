@@ -50,7 +50,8 @@ PYTHON ?= python3
 VENV := .venv
 PYTHON_DEPS := numpy pytest matplotlib
 
-$(VENV)/.deps:
+# Re-checked when this file changes (PYTHON_DEPS may have).
+$(VENV)/.deps: Makefile
 	@test -x $(VENV)/bin/python || $(PYTHON) -m venv $(VENV)
 	$(VENV)/bin/pip install -q $(PYTHON_DEPS)
 	@touch $@
