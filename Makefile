@@ -8,6 +8,12 @@ ifdef CI
 export CARGO_INCREMENTAL := 0
 endif
 
+# pyo3 builds for the virtual environment's interpreter in every step (a different value would
+# rebuild it), as an extension module (not linked to libpython, which Debian ships only in -dev).
+VENV := .venv
+export PYO3_PYTHON := $(CURDIR)/$(VENV)/bin/python
+export PYO3_BUILD_EXTENSION_MODULE := 1
+
 # Idempotent: installs only what is missing (Debian 12, as root); silent when all is present.
 # Set SKIP_SETUP=1 on systems you provision by hand (see README, "Other systems").
 setup:
@@ -29,16 +35,17 @@ lint:
 
 # Unit, integration, property and doc tests; the heavy ones run in the optimised test profile.
 # The core alone too: what an engine gets with `default-features = false` builds and passes, and
-# the examples run (in the default build the tests made: a feature set of their own would be one
-# more whole build of the crate; `required-features` says what each needs).
-test: setup lint
-	$(CARGO) test --all-targets
-	$(CARGO) test --doc
+# the examples run. Every step that shares a build takes the whole workspace, so cargo resolves
+# the dependencies' features once with the Python module (pyo3 adds features to shared crates:
+# resolved apart, nearly every crate would build twice), and the module's library is built here
+# with the tests; the examples run from the binaries the first step built (`cargo run` resolves
+# the root alone). `required-features` says what each example needs.
+test: setup lint $(VENV)/.deps
+	$(CARGO) test --workspace --all-targets --features meshletlab-python/gpu
+	$(CARGO) test --workspace --doc --features meshletlab-python/gpu
 	$(CARGO) test --lib --no-default-features
-	for e in build_meshlets lod_cut laced_wires; do \
-	  $(CARGO) run --profile test --quiet --example $$e || exit 1; done
-	$(CARGO) run --profile test --quiet --example gpu_kmedoids
-	$(CARGO) run --profile test --quiet --example gpu_draw
+	for e in build_meshlets lod_cut laced_wires gpu_kmedoids gpu_draw; do \
+	  target/debug/examples/$$e || exit 1; done
 	$(MAKE) python-test
 
 # The Python module (python/) in a virtual environment (Debian's Python refuses system-wide pip):
@@ -47,7 +54,6 @@ test: setup lint
 # builds a test harness. The library is put beside the package and imported from python/; the
 # command-line round trips run target/debug/meshletlab. The example runs headless.
 PYTHON ?= python3
-VENV := .venv
 PYTHON_DEPS := numpy pytest matplotlib
 
 # Re-checked when this file changes (PYTHON_DEPS may have).
@@ -57,8 +63,8 @@ $(VENV)/.deps: Makefile
 	@touch $@
 
 python-test: $(VENV)/.deps
-	PYO3_PYTHON=$(CURDIR)/$(VENV)/bin/python PYO3_BUILD_EXTENSION_MODULE=1 CARGO_TARGET_DIR=$(CURDIR)/target \
-	  $(CARGO) build --profile test --quiet -p meshletlab-python --features gpu
+	CARGO_TARGET_DIR=$(CURDIR)/target \
+	  $(CARGO) build --profile test --quiet --workspace --all-targets --features meshletlab-python/gpu
 	cp target/debug/lib_meshletlab.so \
 	  python/meshletlab/_meshletlab$$($(VENV)/bin/python -c 'import sysconfig; print(sysconfig.get_config_var("EXT_SUFFIX"))')
 	PYTHONPATH=python $(VENV)/bin/python -m pytest -q python/tests
