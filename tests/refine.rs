@@ -42,14 +42,15 @@ fn metrics(m: &meshletlab::mesh::Mesh, ml: &Meshlets, limits: Limits) -> Metrics
     Metrics::compute(m, ml, limits, &bounds::compute_bounds(m, ml), None)
 }
 
-/// Meshes below this many triangles have every strategy's output refined; the four larger ones
-/// (270 k to 870 k triangles) only these inputs: meshoptimizer's (the count comparison's subject)
-/// at every count preset, and at the default preset the paper's greedy (loose, vertex-bound) and
-/// nvidia's (the worst input: the most dissolving), so that CI stays short. Every preset of the
-/// last two is refined on the six smaller meshes.
+/// Meshes below this many triangles have every strategy's output refined at every count preset;
+/// the four larger ones (270 k to 870 k triangles) only these inputs, at the default preset:
+/// meshoptimizer's (the count comparison's subject), the paper's greedy (loose, vertex-bound) and
+/// nvidia's (the worst input: the most dissolving), so that CI stays short. The other count
+/// presets are refined on the six smaller meshes, from every strategy (meshoptimizer's at full
+/// effort): on the large meshes they would run the same moves at another limit, which a size does
+/// not change.
 const EVERY_STRATEGY_BELOW: usize = 100_000;
 const LARGE_MESH_INPUTS: &[&str] = &["meshopt", "greedy", "nvidia"];
-const EVERY_PRESET_ON_LARGE: &str = "meshopt";
 
 /// Below this many triangles meshopt's and k-medoids' outputs get the full effort (the default
 /// `+refine`) and the thread-count check; elsewhere the fast effort runs the same boundary moves
@@ -59,20 +60,32 @@ fn full_effort(name: &str, triangles: usize) -> bool {
         || (name == "kmedoids" && triangles < 25_000)
 }
 
-/// Strategy outputs on the given meshes refined at the three count presets: each validates,
-/// never has more meshlets or more meshlets in pieces than its input, and (at full effort) does
-/// not depend on the thread count.
-fn refine_every_output(small: bool) {
+/// Strategy outputs on the shared meshes whose stem `pick` selects (which must be `meshes` of
+/// them, all small or all large) refined: each validates, never has more meshlets or more meshlets
+/// in pieces than its input, and (at full effort) does not depend on the thread count.
+fn refine_every_output(small: bool, pick: impl Fn(&str) -> bool, meshes: usize) {
     let mut opts = Options::default();
     opts.kmedoids.paper.budget = std::time::Duration::from_millis(500);
     let (one, many) = (common::pool(1), common::pool(common::MANY_THREADS));
-    let mut checked = 0;
+    let (mut checked, mut picked) = (0, 0);
+    let presets: &[Limits] = if small {
+        &Limits::COUNT_PRESETS
+    } else {
+        &[Limits::DEFAULT]
+    };
     for f in common::mesh_files() {
-        let m = mesh::load(&f).unwrap();
-        if (m.triangle_count() < EVERY_STRATEGY_BELOW) != small {
+        if !pick(&meshletlab::bench::build::mesh_name(&f)) {
             continue;
         }
-        for limits in Limits::COUNT_PRESETS {
+        let m = mesh::load(&f).unwrap();
+        assert_eq!(
+            m.triangle_count() < EVERY_STRATEGY_BELOW,
+            small,
+            "{}",
+            f.display()
+        );
+        picked += 1;
+        for &limits in presets {
             for name in strategy::NAMES
                 .iter()
                 .filter(|n| !strategy::SLOW.contains(n))
@@ -80,7 +93,6 @@ fn refine_every_output(small: bool) {
                 // new input for `+refine`, and would cost a minute of every test run.
                 .filter(|n| **n != "partition")
                 .filter(|n| small || LARGE_MESH_INPUTS.contains(n))
-                .filter(|n| small || **n == EVERY_PRESET_ON_LARGE || limits == Limits::DEFAULT)
             {
                 let input = strategy::by_name(name, &opts).unwrap().build(&m, limits);
                 let full = full_effort(name, m.triangle_count());
@@ -105,26 +117,48 @@ fn refine_every_output(small: bool) {
             }
         }
     }
-    // Six shared meshes are small and four large; a missing mesh must not pass silently.
-    let expected = if small {
-        6 * 3 * (strategy::NAMES.len() - strategy::SLOW.len() - 1)
+    // A missing mesh must not pass silently.
+    assert_eq!(picked, meshes, "shared meshes picked");
+    let per_mesh = if small {
+        3 * (strategy::NAMES.len() - strategy::SLOW.len() - 1)
     } else {
-        4 * (3 + (LARGE_MESH_INPUTS.len() - 1))
+        LARGE_MESH_INPUTS.len()
     };
-    assert_eq!(checked, expected, "refined outputs checked");
+    assert_eq!(checked, meshes * per_mesh, "refined outputs checked");
 }
 
-/// [`refine_every_output`] on the six shared meshes below 100 k triangles.
+/// The bunny is the largest of the six small meshes, as long to refine as the other five together:
+/// it has its own test, so that the test threads share the work.
+const BUNNY: &str = "stanford_bunny";
+
+/// [`refine_every_output`] on the bunny.
 #[test]
-fn every_refined_output_validates_on_the_small_meshes() {
-    refine_every_output(true);
+fn every_refined_output_validates_on_the_bunny() {
+    refine_every_output(true, |stem| stem == BUNNY, 1);
 }
 
-/// [`refine_every_output`] on the four shared meshes above 100 k triangles (its own test, so that
-/// the two halves run side by side).
+/// [`refine_every_output`] on the five other shared meshes below 100 k triangles.
+#[test]
+fn every_refined_output_validates_on_the_other_small_meshes() {
+    refine_every_output(
+        true,
+        |stem| stem != BUNNY && !LARGE_MESHES.contains(&stem),
+        5,
+    );
+}
+
+/// The shared meshes above 100 k triangles.
+const LARGE_MESHES: &[&str] = &[
+    "igea",
+    "openfoam_motorbike",
+    "pycortex_S1_pia_lh",
+    "stanford_dragon_vrip",
+];
+
+/// [`refine_every_output`] on the four shared meshes above 100 k triangles.
 #[test]
 fn refined_outputs_validate_on_the_large_meshes() {
-    refine_every_output(false);
+    refine_every_output(false, |stem| LARGE_MESHES.contains(&stem), 4);
 }
 
 /// Annealing never leaves the input worse: `+refine-max` of meshoptimizer's meshlets on the small
