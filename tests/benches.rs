@@ -81,16 +81,10 @@ fn meshletlab(args: &[&str]) -> std::process::Output {
         .expect("meshletlab runs")
 }
 
-/// `meshletlab -q bench BENCH --smoke [extra] --out OUT`, which must succeed; its stdout and
-/// stderr together.
+/// `meshletlab bench BENCH --smoke [extra] --out OUT` (without -q: the progress messages too),
+/// which must succeed; its stdout and stderr together.
 fn smoke(bench: &str, extra: &[&str], out: &Path) -> String {
-    smoke_with(&["-q"], bench, extra, out)
-}
-
-/// [`smoke`] with `global` options before `bench` (none: the progress messages too).
-fn smoke_with(global: &[&str], bench: &str, extra: &[&str], out: &Path) -> String {
-    let mut args = global.to_vec();
-    args.extend(["bench", bench, "--smoke"]);
+    let mut args = vec!["bench", bench, "--smoke"];
     args.extend_from_slice(extra);
     args.extend(["--out", out.to_str().unwrap()]);
     let o = meshletlab(&args);
@@ -150,70 +144,140 @@ fn check_smoke_report(bench: &str, out: &Path, file: &str, text: &str) {
     }
 }
 
+/// `file` with `tag` before its extension (`gpu.md` -> `gpu-t1.md`), as `--tag` names it.
+fn tagged(file: &str, tag: Option<&str>) -> String {
+    match (tag, file.rsplit_once('.')) {
+        (Some(t), Some((stem, ext))) => format!("{stem}-{t}.{ext}"),
+        _ => file.to_string(),
+    }
+}
+
+/// Runs `bench` in smoke mode into `root/bench` (with `--tag TAG` when given) and checks what it
+/// wrote: every report it wrote (listed or not) is a smoke report whose embedded files exist,
+/// every listed file is there (the first markdown under its title, with a table; each CSV with a
+/// header and rows; each image not empty). With a tag, every file and every link of its markdown
+/// carries the tag, and the linked plots and images exist.
+fn check_bench(root: &Path, (bench, title, files): (&str, &str, &[&str]), tag: Option<&str>) {
+    let out = root.join(bench);
+    let extra: Vec<&str> = tag.map_or(vec![], |t| vec!["--tag", t]);
+    // Without -q: what a bench prints on the way is checked too.
+    let said = smoke(bench, &extra, &out);
+    assert!(
+        !said.contains("Some(") && !said.contains("None"),
+        "bench {bench} printed a Rust value: {said}"
+    );
+    // Every report the run wrote, listed or not.
+    for e in std::fs::read_dir(&out).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "md") {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            check_smoke_report(bench, &out, &name, &std::fs::read_to_string(&p).unwrap());
+        }
+    }
+    for (i, listed) in files.iter().enumerate() {
+        let f = &tagged(listed, tag);
+        if f.ends_with(".svg") || f.ends_with(".png") {
+            let len = std::fs::metadata(out.join(f)).map_or(0, |m| m.len());
+            assert!(len > 0, "bench {bench}: {f} not written");
+            continue;
+        }
+        let text = std::fs::read_to_string(out.join(f))
+            .unwrap_or_else(|e| panic!("bench {bench}: {f}: {e}"));
+        if f.ends_with(".md") {
+            assert!(
+                i != 0 || text.starts_with(title),
+                "bench {bench}: {f} starts {:?}",
+                text.lines().next()
+            );
+            // A table: a header row followed by its separator row.
+            let lines: Vec<&str> = text.lines().collect();
+            // Every profiled kernel names the CPU step it mirrors.
+            if bench == "gpu" {
+                let blank: Vec<&&str> = lines
+                    .iter()
+                    .filter(|l| l.starts_with("| `") && l.contains("` |  |"))
+                    .collect();
+                assert!(
+                    blank.is_empty(),
+                    "bench gpu: kernels without a CPU step: {blank:?}"
+                );
+            }
+            assert!(
+                lines.windows(2).any(|w| w[0].starts_with('|')
+                    && ["|-", "| -", "|:"].iter().any(|s| w[1].starts_with(s))),
+                "bench {bench}: {f} has no table"
+            );
+        } else {
+            // CSV: a header line of several fields and at least one row.
+            let mut lines = text.lines();
+            let fields = lines.next().map_or(0, |h| h.split(',').count());
+            let rows: Vec<&str> = lines.collect();
+            assert!(
+                fields > 1 && !rows.is_empty(),
+                "bench {bench}: {f} is empty"
+            );
+        }
+    }
+    let Some(tag) = tag else { return };
+    let mark = format!("-{tag}.");
+    let written: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .filter(|e| e.file_type().unwrap().is_file())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(written.len() >= 3, "bench {bench}: {written:?}");
+    for f in &written {
+        assert!(f.contains(&mark), "bench {bench}: untagged file {f}");
+    }
+    // Every plot and image the markdown links to is there, tagged.
+    let md = std::fs::read_to_string(out.join(tagged(&format!("{bench}.md"), Some(tag)))).unwrap();
+    for link in md.split("](").skip(1).filter_map(|r| r.split(')').next()) {
+        assert!(link.contains(&mark), "bench {bench}: untagged link {link}");
+        if link.ends_with(".svg") || link.ends_with(".png") {
+            assert!(out.join(link).is_file(), "bench {bench}: {link} missing");
+        }
+    }
+}
+
+/// The two benches that measure a GPU and take `--tag`: their smoke runs are tagged. (`--tag` is
+/// one naming function shared by every bench that takes it, so the untagged names the other
+/// benches are checked under and the tagged ones checked here cover both of its cases; an
+/// untagged run of these two as well would only repeat their smoke runs, the render bench's the
+/// slowest of all.)
+const TAGGED: [&str; 2] = ["gpu", "render"];
+
+/// The render bench's smoke run is about half of all the smoke runs' time: it has its own test,
+/// so that the test threads share the work.
+const ALONE: &str = "render";
+
+/// Runs and checks ([`check_bench`]) the benches `pick` selects, which must be `expected` of them;
+/// the [`TAGGED`] ones with the tag `t1`.
+fn check_benches(root: &Path, pick: impl Fn(&str) -> bool, expected: usize) {
+    let mut checked = 0;
+    for b in BENCHES.iter().filter(|b| pick(b.0)) {
+        check_bench(root, *b, TAGGED.contains(&b.0).then_some("t1"));
+        checked += 1;
+    }
+    assert_eq!(checked, expected, "benches checked");
+}
+
 #[test]
 fn every_bench_writes_its_tables_in_smoke_mode() {
     let root = common::scratch("bench-smoke");
-    for (bench, title, files) in BENCHES {
-        let out = root.join(bench);
-        // Without -q: what a bench prints on the way is checked too.
-        let said = smoke_with(&[], bench, &[], &out);
-        assert!(
-            !said.contains("Some(") && !said.contains("None"),
-            "bench {bench} printed a Rust value: {said}"
-        );
-        // Every report the run wrote, listed or not.
-        for e in std::fs::read_dir(&out).unwrap() {
-            let p = e.unwrap().path();
-            if p.extension().is_some_and(|x| x == "md") {
-                let name = p.file_name().unwrap().to_string_lossy().into_owned();
-                check_smoke_report(bench, &out, &name, &std::fs::read_to_string(&p).unwrap());
-            }
-        }
-        for f in files {
-            if f.ends_with(".svg") || f.ends_with(".png") {
-                let len = std::fs::metadata(out.join(f)).map_or(0, |m| m.len());
-                assert!(len > 0, "bench {bench}: {f} not written");
-                continue;
-            }
-            let text = std::fs::read_to_string(out.join(f))
-                .unwrap_or_else(|e| panic!("bench {bench}: {f}: {e}"));
-            if f.ends_with(".md") {
-                let md = f == &files[0];
-                assert!(
-                    !md || text.starts_with(title),
-                    "bench {bench}: {f} starts {:?}",
-                    text.lines().next()
-                );
-                // A table: a header row followed by its separator row.
-                let lines: Vec<&str> = text.lines().collect();
-                // Every profiled kernel names the CPU step it mirrors.
-                if bench == "gpu" {
-                    let blank: Vec<&&str> = lines
-                        .iter()
-                        .filter(|l| l.starts_with("| `") && l.contains("` |  |"))
-                        .collect();
-                    assert!(
-                        blank.is_empty(),
-                        "bench gpu: kernels without a CPU step: {blank:?}"
-                    );
-                }
-                assert!(
-                    lines.windows(2).any(|w| w[0].starts_with('|')
-                        && ["|-", "| -", "|:"].iter().any(|s| w[1].starts_with(s))),
-                    "bench {bench}: {f} has no table"
-                );
-            } else {
-                // CSV: a header line of several fields and at least one row.
-                let mut lines = text.lines();
-                let fields = lines.next().map_or(0, |h| h.split(',').count());
-                let rows: Vec<&str> = lines.collect();
-                assert!(
-                    fields > 1 && !rows.is_empty(),
-                    "bench {bench}: {f} is empty"
-                );
-            }
-        }
-    }
+    check_benches(&root, |b| b != ALONE, BENCHES.len() - 1);
+}
+
+/// The render bench's smoke run, tagged ([`every_bench_writes_its_tables_in_smoke_mode`] checks
+/// the others); and a tag that ends a strategy's name is refused.
+#[test]
+fn the_render_bench_writes_its_tables_and_tags_every_file_and_link() {
+    let root = common::scratch("bench-render");
+    check_benches(&root, |b| b == ALONE, 1);
+    // A tag that ends a strategy's name would overwrite that strategy's untagged image.
+    let o = meshletlab(&["-q", "bench", "render", "--smoke", "--tag", "parallel"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("overwrite"));
 }
 
 #[test]
@@ -222,37 +286,6 @@ fn smoke_runs_never_write_into_results() {
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--smoke") && err.contains("results"), "{err}");
-}
-
-#[test]
-fn a_tagged_run_names_every_file_and_link_with_its_tag() {
-    let root = common::scratch("bench-tag");
-    for bench in ["gpu", "render"] {
-        let out = root.join(bench);
-        smoke(bench, &["--tag", "t1"], &out);
-        let files: Vec<String> = std::fs::read_dir(&out)
-            .unwrap()
-            .map(|e| e.unwrap())
-            .filter(|e| e.file_type().unwrap().is_file())
-            .map(|e| e.file_name().to_string_lossy().into_owned())
-            .collect();
-        assert!(files.len() >= 3, "bench {bench}: {files:?}");
-        for f in &files {
-            assert!(f.contains("-t1."), "bench {bench}: untagged file {f}");
-        }
-        // Every plot and image the markdown links to is there, tagged.
-        let md = std::fs::read_to_string(out.join(format!("{bench}-t1.md"))).unwrap();
-        for link in md.split("](").skip(1).filter_map(|r| r.split(')').next()) {
-            assert!(link.contains("-t1."), "bench {bench}: untagged link {link}");
-            if link.ends_with(".svg") || link.ends_with(".png") {
-                assert!(out.join(link).is_file(), "bench {bench}: {link} missing");
-            }
-        }
-    }
-    // A tag that ends a strategy's name would overwrite that strategy's untagged image.
-    let o = meshletlab(&["-q", "bench", "render", "--smoke", "--tag", "parallel"]);
-    assert!(!o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).contains("overwrite"));
 }
 
 /// Options that would make a bench run nothing, or fail after the meshes load, are refused while
