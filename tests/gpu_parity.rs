@@ -170,6 +170,8 @@ fn randomised_generated_meshes_and_limits() {
     // its sizes (5 k to 18 k triangles): parity is a per-element property, and these still span
     // several sort blocks and, on the terrain, two regions of the default region size; the ten
     // shared meshes give the sizes up to 0.9 M.
+    let region = meshletlab::strategy::kmedoids::parallel::DEFAULT_REGION_TRIANGLES as usize;
+    assert!(generate::terrain(96, 1).triangle_count() > region);
     for seed in [1u64, 7, 42] {
         for (name, mesh) in [
             ("noisy-sphere", generate::noisy_sphere(4, 0.15, seed)),
