@@ -342,11 +342,7 @@ mod tests {
         ] {
             for base in ["nvidia", "greedy", "kmedoids", "meshopt"] {
                 let input = build(base, &mesh, limits);
-                // The max effort (seconds where the others take a fraction of one) at the default
-                // limits only: its global anneal and larger budget are the same code at any
-                // limits, and tests/refine.rs runs it at every count preset on the real meshes.
-                let max = (limits == Limits::DEFAULT).then_some(Effort::Max);
-                for effort in [Effort::Fast, Effort::Full].into_iter().chain(max) {
+                for effort in [Effort::Fast, Effort::Full, Effort::Max] {
                     let (out, st) = refine_with_stats(&mesh, &input, limits, Config::new(effort));
                     validate(&mesh, &out, limits)
                         .unwrap_or_else(|e| panic!("{base} {effort:?} {limits}: {e}"));
