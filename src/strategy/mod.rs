@@ -15,7 +15,7 @@
 //! | meshoptimizer 1.3 (the peer) | `meshopt`, `meshopt-scan`, `meshopt-spatial` | `meshopt.rs` | |
 //! | refinement of any strategy's output | `S+refine`, `S+refine-fast`, `S+refine-max` | [`refine`] | |
 //! | re-partition of any strategy's output | `partition`, `S+partition` | [`refine::partition`] (inside `refine/`, whose state it edits) | |
-//! | a clustering made elsewhere (per-triangle ids, `--labels`) | none: [`labels::from_labels`] | [`labels`] (`file.rs`: the label files) | |
+//! | a clustering made elsewhere (per-triangle ids, `--labels`) | none (not a named strategy) | [`labels`] (`labels/mod.rs`; `labels/file.rs`: the label files) | |
 //!
 //! Determinism: every strategy gives the same meshlets for the same input on every run and thread
 //! count.
