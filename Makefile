@@ -38,12 +38,13 @@ lint:
 # the examples run. Every step that shares a build takes the whole workspace, so cargo resolves
 # the dependencies' features once with the Python module (pyo3 adds features to shared crates:
 # resolved apart, nearly every crate would build twice), and the module's library is built here
-# with the tests; the examples run from the binaries the first step built (`cargo run` resolves
-# the root alone). `required-features` says what each example needs.
+# with the tests; the examples are built the same way and run from their binaries (`cargo run`
+# resolves the root alone; the test step builds them as test harnesses). `required-features` says what each example needs.
 test: setup lint $(VENV)/.deps
 	$(CARGO) test --workspace --all-targets --features meshletlab-python/gpu
 	$(CARGO) test --workspace --doc --features meshletlab-python/gpu
 	$(CARGO) test --lib --no-default-features
+	$(CARGO) build --workspace --examples --profile test --quiet --features meshletlab-python/gpu
 	for e in build_meshlets lod_cut laced_wires gpu_kmedoids gpu_draw; do \
 	  target/debug/examples/$$e || exit 1; done
 	$(MAKE) python-test
