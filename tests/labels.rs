@@ -3,13 +3,13 @@
 
 mod common;
 
+use common::{cli, ok};
 use meshletlab::mesh::{generate, Mesh};
 use meshletlab::meshlet::npz::{load_meshlets, save_npz};
 use meshletlab::meshlet::{validate, Limits, Meshlets};
 use meshletlab::strategy::labels::{from_labels, split_meshlets, triangle_labels, LabelsError};
 use meshletlab::strategy::{Kind, Options};
 use std::collections::BTreeSet;
-use std::process::{Command, Output};
 
 /// Each meshlet's triangles as a set of canonical triangles: what a clustering is, whatever
 /// order its meshlets list their triangles and vertices in.
@@ -156,23 +156,6 @@ fn meshlets_round_trip_through_npz_and_over_limit_ones_are_split() {
     assert!(e.starts_with(&path.display().to_string()), "{e}");
 }
 
-fn cli(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_meshletlab"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = cli(args);
-    assert!(
-        out.status.success(),
-        "{args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
 /// The `stats --json` rows by name: their metrics without the build time.
 fn rows(json: &str) -> Vec<(String, serde_json::Value)> {
     let v: serde_json::Value = serde_json::from_str(json).unwrap();
@@ -210,7 +193,7 @@ fn labels_out_then_labels_in_measures_the_same_meshlets_on_every_command() {
     let dir = common::scratch("labels");
     let d = |f: &str| dir.join(f).display().to_string();
     let mesh = "gen:cad-part-128";
-    // Text and .npy, from two strategies.
+    // The same clusters as text and as .npy.
     ok(&[
         "build",
         mesh,

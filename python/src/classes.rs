@@ -183,15 +183,7 @@ impl PyMeshlets {
                 })
             },
         )?;
-        let records = rows
-            .chunks_exact(4)
-            .map(|r| Meshlet {
-                vertex_offset: r[0],
-                triangle_offset: r[1],
-                vertex_count: r[2],
-                triangle_count: r[3],
-            })
-            .collect();
+        let records = Meshlet::from_rows(&rows);
         let m = &mesh.get().mesh;
         let ml = Meshlets::new(m, records, vertices, triangles)
             .map_err(|e| crate_error(Kind::Validation)(&e))?;
@@ -210,19 +202,7 @@ impl PyMeshlets {
     /// triangle count (a copy).
     #[getter]
     fn meshlets<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<u32>>> {
-        let rows: Vec<u32> = self
-            .meshlets
-            .meshlets()
-            .iter()
-            .flat_map(|m| {
-                [
-                    m.vertex_offset,
-                    m.triangle_offset,
-                    m.vertex_count,
-                    m.triangle_count,
-                ]
-            })
-            .collect();
+        let rows = self.meshlets.meshlet_rows().to_vec();
         PyArray1::from_vec(py, rows).reshape([self.meshlets.len(), 4])
     }
 

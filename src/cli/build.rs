@@ -35,7 +35,8 @@ pub struct BuildArgs {
 }
 
 pub(super) fn run(a: BuildArgs, quiet: bool) -> Result<()> {
-    a.clusters.check(a.strategy.is_some())?;
+    a.clusters
+        .check(a.strategy.is_some(), a.device.device == Device::Gpu)?;
     super::output::check_file(&a.output, "a meshlet file", &[])?;
     if let Some(p) = &a.labels_out {
         super::output::check_file(p, "a label file", &[])?;
@@ -67,45 +68,45 @@ pub(super) fn run(a: BuildArgs, quiet: bool) -> Result<()> {
         }
     };
     pb.finish_and_clear();
-    let file = save(&a, &m, name, ml)?;
-    say!(
-        "{}: {} meshlets from {} triangles with {name} at {} in {ms:.1} ms{on} -> {}",
-        a.mesh.display(),
-        file.meshlets.len(),
-        m.triangle_count(),
-        a.args.limits,
-        a.output.display()
-    );
-    Ok(())
+    save(
+        &a,
+        &m,
+        name,
+        ml,
+        &format!("with {name}"),
+        &format!("in {ms:.1} ms{on}"),
+    )
 }
 
 /// `build --labels`/`--meshlets`: the file's clusters, held to the limits, as a meshlet file.
 fn from_file(a: &BuildArgs, quiet: bool) -> Result<()> {
-    if a.device.device == Device::Gpu {
-        return Err(super::usage(
-            "--device gpu builds with a strategy, not with --labels or --meshlets",
-        ));
-    }
     let m = load(&a.mesh, quiet)?;
     let i = a
         .clusters
         .import(&m, a.args.limits)?
         .expect("a file is given");
-    let (name, note, ms) = (i.name.clone(), i.split_note(), i.ms);
-    let file = save(a, &m, &name, i.meshlets)?;
-    say!(
-        "{}: {} meshlets from {} triangles from {name}{note} at {} in {ms:.1} ms -> {}",
-        a.mesh.display(),
-        file.meshlets.len(),
-        m.triangle_count(),
-        a.args.limits,
-        a.output.display()
-    );
-    Ok(())
+    let how = format!("from {}{}", i.name, i.split_note());
+    let name = i.name.clone();
+    save(
+        a,
+        &m,
+        &name,
+        i.meshlets,
+        &how,
+        &format!("in {:.1} ms", i.ms),
+    )
 }
 
-/// Writes the meshlet file and, with `--labels-out`, the per-triangle ids.
-fn save(a: &BuildArgs, m: &crate::mesh::Mesh, name: &str, ml: Meshlets) -> Result<MeshletFile> {
+/// Writes the meshlet file (strategy `name`) and, with `--labels-out`, the per-triangle ids, then
+/// the summary line: how the meshlets were made and what it took.
+fn save(
+    a: &BuildArgs,
+    m: &crate::mesh::Mesh,
+    name: &str,
+    ml: Meshlets,
+    how: &str,
+    took: &str,
+) -> Result<()> {
     if let Some(p) = &a.labels_out {
         let labels = crate::strategy::labels::triangle_labels(m, &ml)?;
         crate::strategy::labels::file::write_labels(p, &labels)?;
@@ -119,5 +120,13 @@ fn save(a: &BuildArgs, m: &crate::mesh::Mesh, name: &str, ml: Meshlets) -> Resul
         meshlets: ml,
     };
     file.save(&a.output)?;
-    Ok(file)
+    say!(
+        "{}: {} meshlets from {} triangles {how} at {} {took} -> {}",
+        a.mesh.display(),
+        file.meshlets.len(),
+        m.triangle_count(),
+        a.args.limits,
+        a.output.display()
+    );
+    Ok(())
 }

@@ -65,11 +65,17 @@ impl ClusterArgs {
     }
 
     /// `--split` alone is a usage error; so is a strategy chosen beside a file, where the
-    /// command takes one or the other (`strategy_given`).
-    pub fn check(&self, strategy_given: bool) -> Result<()> {
+    /// command takes one or the other (`strategy_given`), and a file where the command builds on
+    /// the GPU (`on_gpu`).
+    pub fn check(&self, strategy_given: bool, on_gpu: bool) -> Result<()> {
         if self.split && self.file().is_none() {
             return Err(super::usage(
                 "--split divides clusters of --labels or --meshlets; give one",
+            ));
+        }
+        if on_gpu && self.file().is_some() {
+            return Err(super::usage(
+                "--device gpu builds with a strategy, not with --labels or --meshlets",
             ));
         }
         if strategy_given && self.file().is_some() {

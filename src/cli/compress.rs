@@ -74,7 +74,7 @@ pub(super) fn run(a: CompressArgs, quiet: bool) -> Result<()> {
         }
     };
     super::output::check_file(&a.output, "a compressed-meshlet file", &[])?;
-    a.clusters.check(a.strategy.is_some())?;
+    a.clusters.check(a.strategy.is_some(), false)?;
     let strategy = a.strategy.as_deref().unwrap_or("meshopt");
     crate::strategy::by_name(strategy, &a.args.options())?;
     let m = load(&a.mesh, quiet)?;

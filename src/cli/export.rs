@@ -29,14 +29,10 @@ pub struct ExportArgs {
 }
 
 pub(super) fn run(a: ExportArgs, quiet: bool) -> Result<()> {
-    a.clusters.check(a.strategy.is_some())?;
+    a.clusters
+        .check(a.strategy.is_some(), a.device.device == Device::Gpu)?;
     let strategy = a.strategy.as_deref().unwrap_or("meshopt");
     crate::strategy::by_name(strategy, &a.args.options())?;
-    if a.clusters.file().is_some() && a.device.device == Device::Gpu {
-        return Err(super::usage(
-            "--device gpu builds with a strategy, not with --labels or --meshlets",
-        ));
-    }
     // Binary glTF only: a `.gltf` would need its buffer as a second file beside it.
     super::output::check_file(&a.output, "binary glTF (one .glb file)", &["glb"])?;
     let gpu = match a.device.device {

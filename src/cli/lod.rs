@@ -45,7 +45,7 @@ struct Row {
 pub(super) fn run(a: LodArgs, quiet: bool) -> Result<()> {
     let s = crate::strategy::by_name(&a.strategy, &a.args.options())?;
     super::output::check_file(&a.output, "a LOD file", &[])?;
-    a.clusters.check(false)?;
+    a.clusters.check(false, false)?;
     let m = load(&a.mesh, quiet)?;
     let level0 = a.clusters.import(&m, a.args.limits)?;
     let cfg = lod::Config {

@@ -110,7 +110,8 @@ pub struct RenderArgs {
 
 /// Refuses the options the chosen mode would ignore, by name, before anything is loaded.
 fn refuse_unused_options(a: &RenderArgs, m: &clap::ArgMatches) -> Result<()> {
-    a.clusters.check(!a.lod && super::given(m, "strategy"))?;
+    a.clusters
+        .check(!a.lod && super::given(m, "strategy"), false)?;
     if a.clusters.file().is_some() {
         let other = [
             (a.occlusion, "--occlusion"),

@@ -37,7 +37,7 @@ pub struct StatsArgs {
 
 pub(super) fn run(a: StatsArgs, quiet: bool) -> Result<()> {
     let label = a.mesh.display().to_string();
-    a.clusters.check(false)?;
+    a.clusters.check(false, false)?;
     let scene = load_scene(&a.mesh, quiet)?;
     if scene.is_instanced() {
         if a.clusters.file().is_some() {

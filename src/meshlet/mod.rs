@@ -44,6 +44,22 @@ pub struct Meshlet {
     pub triangle_count: u32,
 }
 
+impl Meshlet {
+    /// Records from meshoptimizer's rows of four u32s (vertex offset, triangle offset, vertex
+    /// count, triangle count), as a `.npz` or a numpy array holds them; a partial last row is
+    /// dropped.
+    pub fn from_rows(rows: &[u32]) -> Vec<Meshlet> {
+        rows.chunks_exact(4)
+            .map(|r| Meshlet {
+                vertex_offset: r[0],
+                triangle_offset: r[1],
+                vertex_count: r[2],
+                triangle_count: r[3],
+            })
+            .collect()
+    }
+}
+
 /// A collection of meshlets over one mesh, consistent by construction: every meshlet's ranges lie
 /// inside the two arrays, it has at most 256 vertices and 256 triangles, and every corner names
 /// one of its vertices. The strategies build it; [`Meshlets::new`] checks arrays made elsewhere.
@@ -145,6 +161,12 @@ impl Meshlets {
     /// Local triangle corners (indices into the meshlet's vertex range), three per triangle.
     pub fn triangles(&self) -> &[u8] {
         &self.triangles
+    }
+
+    /// The meshlet records as meshoptimizer's rows of four u32s (the inverse of
+    /// [`Meshlet::from_rows`]), without a copy: a record is four u32s, `repr(C)`.
+    pub fn meshlet_rows(&self) -> &[u32] {
+        bytemuck::cast_slice(&self.meshlets)
     }
 
     /// The three arrays, moved out.

@@ -14,8 +14,7 @@ use std::path::Path;
 
 /// The `.npz` bytes of `ml` (stored, not compressed: numpy's `np.savez`).
 pub fn to_npz(ml: &Meshlets) -> Vec<u8> {
-    // A meshlet record is four u32s (`repr(C)`), the row numpy reads.
-    let rows: &[u32] = bytemuck::cast_slice(ml.meshlets());
+    let rows = ml.meshlet_rows();
     let arrays = [
         ("meshlets.npy", write(&[ml.len() as u64, 4], rows)),
         (
@@ -92,16 +91,7 @@ pub fn from_npz(bytes: &[u8], mesh: &Mesh) -> Result<Meshlets, String> {
         "triangles",
     )?;
     let rows: Vec<u32> = narrow(rows, "meshlets")?;
-    let meshlets = rows
-        .chunks_exact(4)
-        .map(|r| Meshlet {
-            vertex_offset: r[0],
-            triangle_offset: r[1],
-            vertex_count: r[2],
-            triangle_count: r[3],
-        })
-        .collect();
-    Meshlets::new(mesh, meshlets, vertices, triangles).map_err(|e| e.to_string())
+    Meshlets::new(mesh, Meshlet::from_rows(&rows), vertices, triangles).map_err(|e| e.to_string())
 }
 
 /// One array of the archive (`NAME.npy`, or `NAME` as some writers name it), 1-D or, for

@@ -3,6 +3,7 @@
 
 use meshletlab::mesh::{self, Mesh};
 use std::path::PathBuf;
+use std::process::{Command, Output};
 
 /// The shared real meshes: $MESHLETLAB_MESHES or ../shared/meshes next to the repository.
 pub fn meshes_dir() -> PathBuf {
@@ -67,4 +68,23 @@ pub fn scratch(name: &str) -> Scratch {
             .tempdir()
             .unwrap(),
     )
+}
+
+/// Runs the `meshletlab` binary with `args`.
+pub fn cli(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_meshletlab"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+/// [`cli`] that must succeed; its stdout.
+pub fn ok(args: &[&str]) -> String {
+    let out = cli(args);
+    assert!(
+        out.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
 }

@@ -22,7 +22,7 @@ use thiserror::Error;
 /// Meshlets made from a clustering.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Clustered {
-    /// The meshlets, validated against the mesh and the limits.
+    /// The meshlets: every triangle once, within the limits (by construction).
     pub meshlets: Meshlets,
     /// Distinct cluster ids in the labels.
     pub clusters: usize,
